@@ -1,0 +1,5 @@
+"""``dreamprint predict``, ``calibrate``, ``evaluate density-fit``, ``demo``."""
+
+from __future__ import annotations
+
+

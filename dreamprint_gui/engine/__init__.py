@@ -1,0 +1,1 @@
+"""Physics, calibration, tables, halftoning and pipelines. Never imports Qt."""

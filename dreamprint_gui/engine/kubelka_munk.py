@@ -1,0 +1,121 @@
+"""Kubelka-Munk two-flux model: reflectance and transmittance of a layer, and ink mixing.
+
+Defines
+-------
+- :func:`reflectance_transmittance`: R and T of a layer of thickness t (paper eqs. 3-4).
+- :func:`reflectance_infinite`: R_inf of an optically thick layer.
+- :func:`mix`: K and S of a mixture, linear in the concentrations (paper eq. 5).
+
+All functions broadcast over leading dimensions (mixtures x wavelengths). K and S are in 1/mm
+and t in mm; only the products K t and S t matter.
+
+References
+----------
+- Kubelka, P. (1948). New contributions to the optics of intensely light-scattering
+  materials. Part I. JOSA 38(5), 448-457.
+- Abdul-Rahman, Chen (2005). Spectral volume rendering based on the Kubelka-Munk theory.
+  (The paper's eqs. 3-4.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["reflectance_transmittance", "reflectance_infinite", "mix", "attenuation"]
+
+_SMALL_X = 1e-4
+
+
+def attenuation(K: ArrayLike, S: ArrayLike) -> NDArray[np.float64]:
+    """Asymptotic attenuation coefficient ``b S = sqrt(K^2 + 2 K S)`` in 1/mm.
+
+    Written without the ratio K/S so that it stays finite when S -> 0 (then it is K, the
+    Beer-Lambert coefficient).
+    """
+    K = np.asarray(K, dtype=np.float64)
+    S = np.asarray(S, dtype=np.float64)
+    return np.sqrt(K * K + 2.0 * K * S)
+
+
+def reflectance_transmittance(
+    K: ArrayLike, S: ArrayLike, t: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Reflectance and transmittance of a layer of thickness ``t`` (paper eqs. 3-4).
+
+    ``R = sinh(bSt) / (a sinh(bSt) + b cosh(bSt))``, ``T = b / (a sinh(bSt) + b cosh(bSt))``
+    with ``a = (S + K) / S`` and ``b = sqrt(a^2 - 1)``.
+
+    Evaluated in the algebraically equal form (divide by ``b cosh(bSt)`` and multiply by S)::
+
+        x = sqrt(K^2 + 2KS) t,   q = (S + K) t tanh(x)/x + 1
+        R = S t tanh(x)/x / q,   T = sech(x) / q
+
+    which has no division by S or b, so the limits are exact and free of NaN or overflow:
+    S -> 0 gives R = 0, T = exp(-K t) (Beer-Lambert); K -> 0 gives R = S t / (1 + S t),
+    T = 1 / (1 + S t); t -> 0 gives R = 0, T = 1; t = inf gives :func:`reflectance_infinite`
+    and T = 0; large b S t saturates to R_inf through tanh.
+
+    Parameters
+    ----------
+    K, S : array_like
+        Absorption and scattering coefficients in 1/mm, >= 0, broadcastable.
+    t : array_like
+        Layer thickness in mm, >= 0; ``np.inf`` allowed.
+
+    Returns
+    -------
+    R, T : ndarray
+        Broadcast shape of the inputs.
+    """
+    K = np.asarray(K, dtype=np.float64)
+    S = np.asarray(S, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    K, S, t = np.broadcast_arrays(K, S, t)
+    beta = attenuation(K, S)
+    infinite = np.isinf(t)
+    t_fin = np.where(infinite, 0.0, t)
+    x = beta * t_fin
+    small = x < _SMALL_X
+    with np.errstate(invalid="ignore", divide="ignore"):
+        tanhc = np.where(small, 1.0 - x * x / 3.0, np.tanh(x) / np.where(small, 1.0, x))
+    e = np.exp(-x)
+    sech = 2.0 * e / (1.0 + e * e)
+    q = (S + K) * t_fin * tanhc + 1.0
+    R = S * t_fin * tanhc / q
+    T = sech / q
+    if np.any(infinite):
+        R = np.where(infinite, reflectance_infinite(K, S), R)
+        empty = (K == 0.0) & (S == 0.0)  # an infinite layer of nothing transmits all
+        T = np.where(infinite, np.where(empty, 1.0, 0.0), T)
+    return R, T
+
+
+def reflectance_infinite(K: ArrayLike, S: ArrayLike) -> NDArray[np.float64]:
+    """Reflectance of an optically thick layer, ``R_inf = a - b = 1 + K/S - sqrt((K/S)^2 + 2K/S)``.
+
+    Evaluated as ``S / (S + K + sqrt(K^2 + 2KS))`` (equal to ``1 / (a + b)``), which is 0 for a
+    non-scattering medium and 1 for a non-absorbing one. ``K = S = 0`` (nothing there) gives 0.
+    """
+    K = np.asarray(K, dtype=np.float64)
+    S = np.asarray(S, dtype=np.float64)
+    denom = S + K + attenuation(K, S)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(denom > 0.0, S / np.where(denom > 0.0, denom, 1.0), 0.0)
+
+
+def mix(concentrations: ArrayLike, K_inks: ArrayLike, S_inks: ArrayLike
+        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """K and S of mixtures: ``K_C = sum_i c_i K_i``, ``S_C = sum_i c_i S_i`` (paper eq. 5).
+
+    Parameters
+    ----------
+    concentrations : array_like, shape (..., n_inks)
+    K_inks, S_inks : array_like, shape (n_inks, n_wavelengths)
+
+    Returns
+    -------
+    K, S : ndarray, shape (..., n_wavelengths)
+    """
+    c = np.asarray(concentrations, dtype=np.float64)
+    return c @ np.asarray(K_inks, dtype=np.float64), c @ np.asarray(S_inks, dtype=np.float64)

@@ -1,0 +1,1 @@
+"""Readers and writers: spectra, volumes, print jobs. Never imports Qt."""

@@ -1,0 +1,15 @@
+"""Shared test fixtures."""
+
+from pathlib import Path
+
+import pytest
+
+SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    """`../shared/data` beside the checkout (real sample files)."""
+    if not SHARED_DATA.is_dir():
+        pytest.fail(f"sample data folder missing: {SHARED_DATA}")
+    return SHARED_DATA
