@@ -12,6 +12,7 @@ APT_PACKAGES=(
   libxcb-image0 libxcb-randr0 libxcb-render0 libxcb-render-util0 libxcb-shape0 libxcb-shm0
   libxcb-sync1 libxcb-xfixes0 libxcb-xkb1 libxcb-glx0 libxcb-util1 libdbus-1-3 libfontconfig1
   libfreetype6 libglib2.0-0 xvfb xauth python3-openvdb python3-venv python3-pip
+  appstream desktop-file-utils
 )
 
 missing=()
@@ -38,7 +39,15 @@ fi
 
 case "$what" in
   app)
-    exec .venv/bin/dreamprint demo "$@"
+    if [ -z "${DISPLAY:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ]; then
+      # No screen: run the real application on a virtual one, screenshot it once the preview
+      # has rendered, and exit, so the command finishes and shows that it worked.
+      shot="${DREAMPRINT_SCREENSHOT:-$PWD/dreamprint-screenshot.png}"
+      echo "quickstart: no screen; running DreamPrint under Xvfb, screenshot -> $shot"
+      exec xvfb-run -a -s "-screen 0 1600x1000x24" \
+        .venv/bin/dreamprint-gui --screenshot "$shot" --quit-after 1 "$@"
+    fi
+    exec .venv/bin/dreamprint-gui "$@"
     ;;
   test)
     .venv/bin/ruff check .

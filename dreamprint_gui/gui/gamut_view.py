@@ -1,0 +1,266 @@
+"""The gamut page: printable gamut vs sRGB in CIELAB, the hexagon chart, a colour picker.
+
+Defines :class:`GamutPage`. Left, a pyvista view with two linked cameras: the printable gamut
+of the active profile (convex hull of predicted mixture colours, each vertex in its own colour)
+and the sRGB gamut with the printable gamut as a wireframe inside it. Right, a colour picker
+(any colour -> the table's C, M, Y, K, W concentrations, the reproduced colour and the dE2000;
+both colours are marked in the 3D view) and the paper's Fig. 7-style hexagon chart (target vs
+reproduced per cell), drawn by the engine's chart function on a Qt matplotlib canvas.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QColor
+from PySide6.QtWidgets import (
+    QColorDialog,
+    QFormLayout,
+    QGridLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QSpinBox,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
+)
+
+from ..engine.profile import COLOUR_INKS
+from .gamut_data import pick_colour, printable_gamut_mesh, srgb_gamut_mesh
+from .volume_view import make_plotter
+from .workers import Task, run_task
+
+__all__ = ["GamutPage"]
+
+log = logging.getLogger(__name__)
+
+
+def _swatch_style(rgb) -> str:
+    r, g, b = (int(round(255 * max(0.0, min(1.0, c)))) for c in rgb)
+    return f"background: rgb({r},{g},{b}); border: 1px solid #555;"
+
+
+class GamutPage(QWidget):
+    """Gamut of the active profile, hexagon chart and colour picker."""
+
+    rendered = Signal()
+    picked = Signal(dict)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.profile = None
+        self.tables = None
+        self.meshes = None
+        self.last_pick: dict | None = None
+        self._task: Task | None = None
+
+        self.plotter = make_plotter(self, (1, 2))
+        self.plotter.setMinimumSize(400, 300)
+
+        # colour picker
+        self.pick_button = QPushButton("Pick a colour...")
+        self.pick_button.clicked.connect(self._pick_dialog)
+        self.spins = []
+        rgb_row = QHBoxLayout()
+        for ch, v in zip("RGB", (200, 120, 60), strict=True):
+            s = QSpinBox(minimum=0, maximum=255, value=v, prefix=f"{ch} ")
+            s.valueChanged.connect(self._spins_changed)
+            self.spins.append(s)
+            rgb_row.addWidget(s)
+        self.target_swatch = QLabel()
+        self.repro_swatch = QLabel()
+        for w in (self.target_swatch, self.repro_swatch):
+            w.setMinimumSize(90, 60)
+        sw = QGridLayout()
+        sw.addWidget(QLabel("target"), 0, 0, Qt.AlignmentFlag.AlignHCenter)
+        sw.addWidget(QLabel("reproduced"), 0, 1, Qt.AlignmentFlag.AlignHCenter)
+        sw.addWidget(self.target_swatch, 1, 0)
+        sw.addWidget(self.repro_swatch, 1, 1)
+        self.de_label = QLabel("dE2000 -")
+        self.de_label.setObjectName("dE2000")
+        self.lab_label = QLabel("")
+        self.lab_label.setWordWrap(True)
+        self.bars = {}
+        conc_form = QFormLayout()
+        for ink in COLOUR_INKS:
+            bar = QProgressBar(minimum=0, maximum=1000, textVisible=True)
+            bar.setFormat("%p%")
+            self.bars[ink] = bar
+            conc_form.addRow(ink, bar)
+        picker = QWidget()
+        pl = QVBoxLayout(picker)
+        pl.addWidget(self.pick_button)
+        pl.addLayout(rgb_row)
+        pl.addLayout(sw)
+        pl.addWidget(self.de_label)
+        pl.addWidget(self.lab_label)
+        cbox = QGroupBox("Concentrations (table lookup)")
+        cbox.setLayout(conc_form)
+        pl.addWidget(cbox)
+        pl.addStretch(1)
+
+        # hexagon chart
+        from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+        from matplotlib.figure import Figure
+
+        self.chart_figure = Figure(figsize=(4, 4), layout="constrained")
+        self.chart_canvas = FigureCanvasQTAgg(self.chart_figure)
+        self.chart_status = QLabel("")
+        chart = QWidget()
+        cl = QVBoxLayout(chart)
+        cl.addWidget(self.chart_canvas, 1)
+        cl.addWidget(self.chart_status)
+
+        self.side = QTabWidget()
+        self.side.addTab(picker, "Colour picker")
+        self.side.addTab(chart, "Hexagon chart")
+        self.status = QLabel("")
+        self.status.setWordWrap(True)
+        right = QWidget()
+        rl = QVBoxLayout(right)
+        rl.addWidget(self.side, 1)
+        rl.addWidget(self.status)
+        right.setMinimumWidth(300)
+
+        split = QSplitter()
+        split.addWidget(self.plotter)
+        split.addWidget(right)
+        split.setStretchFactor(0, 3)
+        split.setStretchFactor(1, 1)
+        lay = QHBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(split)
+        self._spins_changed()
+
+    # inputs -----------------------------------------------------------------------------------
+    def set_profile(self, profile) -> None:
+        self.profile = profile
+        self.tables = None
+        self.status.setText("computing the printable gamut ...")
+
+        def job(report, cancel):
+            return printable_gamut_mesh(profile), srgb_gamut_mesh(profile)
+
+        if self._task is not None:
+            self._task.cancel()
+        task = Task(job, "gamut-mesh")
+        task.succeeded.connect(lambda m, p=profile: self._show_meshes(m, p))
+        task.failed.connect(lambda msg, _tb: self.status.setText(
+            f"<span style='color:#e55'>{msg}</span>"))
+        self._task = run_task(task)
+
+    def set_tables(self, tables) -> None:
+        self.tables = tables
+        self._spins_changed()
+        self._draw_chart()
+
+    # 3D view ----------------------------------------------------------------------------------
+    def _show_meshes(self, meshes, profile) -> None:
+        if profile is not self.profile:
+            return
+        self.meshes = meshes
+        printable, srgb = (m.to_pyvista() for m in meshes)
+        pl = self.plotter
+        pl.subplot(0, 0)
+        pl.add_mesh(printable, scalars="rgb", rgb=True, name="printable", smooth_shading=True)
+        pl.add_text(f"Printable gamut ({profile.name})", font_size=10, name="t0")
+        pl.show_axes()
+        pl.subplot(0, 1)
+        pl.add_mesh(srgb, scalars="rgb", rgb=True, name="srgb", opacity=0.55)
+        pl.add_mesh(printable, color="white", style="wireframe", name="printable_wire",
+                    line_width=1, opacity=0.6)
+        pl.add_text("sRGB gamut, printable as wireframe", font_size=10, name="t1")
+        for i in (0, 1):
+            pl.subplot(0, i)
+            pl.add_text("a* right, b* back, L* up", position="lower_left", font_size=7,
+                        name=f"axes{i}")
+        pl.subplot(0, 0)
+        pl.view_isometric()
+        pl.reset_camera()
+        self._mark_pick()
+        pl.render()
+        self.status.setText("CIELAB (D65); grey = achromatic axis at a* = b* = 0")
+        self.rendered.emit()
+
+    def _mark_pick(self) -> None:
+        if self.last_pick is None or self.meshes is None:
+            return
+        import pyvista as pv
+
+        pl = self.plotter
+        t = self.last_pick["target_Lab"]
+        r = self.last_pick["Lab"]
+        for i in (0, 1):
+            pl.subplot(0, i)
+            pl.add_mesh(pv.Sphere(radius=3.0, center=(t[1], t[2], t[0])),
+                        color=self.last_pick["rgb"], name=f"target{i}", reset_camera=False)
+            pl.add_mesh(pv.Cube(center=(r[1], r[2], r[0]), x_length=5, y_length=5, z_length=5),
+                        color=[max(0.0, min(1.0, c)) for c in self.last_pick["sRGB"]],
+                        name=f"repro{i}", reset_camera=False)
+            pl.add_mesh(pv.Line((t[1], t[2], t[0]), (r[1], r[2], r[0])), color="white",
+                        name=f"link{i}", reset_camera=False, line_width=2)
+        pl.render()
+
+    # colour picker ----------------------------------------------------------------------------
+    def _pick_dialog(self) -> None:
+        r, g, b = (s.value() for s in self.spins)
+        colour = QColorDialog.getColor(QColor(r, g, b), self, "Colour to reproduce")
+        if colour.isValid():
+            self.set_colour((colour.red() / 255, colour.green() / 255, colour.blue() / 255))
+
+    def set_colour(self, rgb) -> None:
+        for s, v in zip(self.spins, rgb, strict=True):
+            s.blockSignals(True)
+            s.setValue(int(round(255 * v)))
+            s.blockSignals(False)
+        self._spins_changed()
+
+    def _spins_changed(self) -> None:
+        rgb = [s.value() / 255 for s in self.spins]
+        self.target_swatch.setStyleSheet(_swatch_style(rgb))
+        if self.tables is None or self.profile is None:
+            self.de_label.setText("dE2000 - (colour tables not ready)")
+            return
+        try:
+            result = pick_colour(self.profile, self.tables, rgb)
+        except Exception as exc:  # noqa: BLE001 - shown inline
+            self.de_label.setText(f"<span style='color:#e55'>{exc}</span>")
+            return
+        self.last_pick = result
+        self.repro_swatch.setStyleSheet(_swatch_style(result["sRGB"]))
+        self.de_label.setText(f"<b>dE2000 {result['dE2000']:.2f}</b>")
+        lt, lr = result["target_Lab"], result["Lab"]
+        self.lab_label.setText(
+            f"target L*a*b* {lt[0]:.1f}, {lt[1]:.1f}, {lt[2]:.1f}<br>"
+            f"reproduced {lr[0]:.1f}, {lr[1]:.1f}, {lr[2]:.1f}<br>"
+            f"density sigma {result['sigma_per_mm']:.2f} /mm")
+        for ink, v in result["concentrations"].items():
+            self.bars[ink].setValue(int(round(1000 * v)))
+        self._mark_pick()
+        self.picked.emit(result)
+
+    # hexagon chart ----------------------------------------------------------------------------
+    def _draw_chart(self) -> None:
+        if self.tables is None or self.profile is None:
+            return
+        from ..engine.gamut.charts import draw_hexagon_chart
+
+        self.chart_figure.clear()
+        try:
+            draw_hexagon_chart(self.chart_figure, self.tables, self.profile)
+        except Exception as exc:  # noqa: BLE001 - shown inline
+            log.exception("hexagon chart")
+            self.chart_status.setText(f"<span style='color:#e55'>{exc}</span>")
+            return
+        self.chart_status.setText("each cell: target (outer) vs reproduced (inner)")
+        self.chart_canvas.draw_idle()
+
+    def shutdown(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+        self.plotter.close()

@@ -1,0 +1,377 @@
+"""The main window: preview and gamut pages, menus, recent files, drag and drop, state.
+
+Defines :class:`MainWindow` and :func:`classify_path` (what a dropped or opened file is: an ink
+profile, a calibration set, or a volume source). The window holds the active profile, its colour
+tables (``gamut.get_tables``, built on a worker thread and cached on disk by the engine) and the
+active source (``io.volumes.open_source``), and hands them to the pages. It starts on the
+built-in default profile and the demo volume.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+
+from PySide6.QtCore import Signal
+from PySide6.QtGui import QAction, QDragEnterEvent, QDropEvent, QIcon, QKeySequence
+from PySide6.QtWidgets import (
+    QFileDialog,
+    QLabel,
+    QMainWindow,
+    QMessageBox,
+    QProgressBar,
+    QTabWidget,
+)
+
+from ..errors import DreamPrintError
+from .settings import AppSettings
+from .workers import Task, run_task
+
+__all__ = ["MainWindow", "classify_path", "VOLUME_FILTER", "PROFILE_FILTER"]
+
+log = logging.getLogger(__name__)
+
+VOLUME_FILTER = ("Volumes (*.vdb *.nvdb *.vti *.vtk *.mhd *.mha *.nrrd *.nhdr *.npz *.exr "
+                 "*.ply *.spz *.vox);;All files (*)")
+PROFILE_FILTER = "Ink profiles (*.json);;All files (*)"
+
+
+def classify_path(path: str) -> str:
+    """``"profile"`` (ink profile JSON), ``"calibration-set"`` (TOML) or ``"volume"``."""
+    if path == "demo":
+        return "volume"
+    suffix = Path(path).suffix.lower()
+    if suffix == ".json":
+        return "profile"
+    if suffix == ".toml":
+        return "calibration-set"
+    return "volume"
+
+
+class MainWindow(QMainWindow):
+    """DreamPrint's main window."""
+
+    profileChanged = Signal(object)
+    sourceChanged = Signal(object)
+    tablesReady = Signal(object)
+    ready = Signal()  # the preview has rendered the current source with the current profile
+
+    def __init__(self, settings: AppSettings | None = None, table_size: int | None = None,
+                 with_gamut: bool = True) -> None:
+        super().__init__()
+        self.settings = settings or AppSettings()
+        self.table_size = table_size
+        self.profile = None
+        self.profile_path: str | None = None
+        self.tables = None
+        self.source = None
+        self.source_path: str | None = None
+        self.printer = None
+        self._tables_task: Task | None = None
+        self._tables_for: str | None = None
+        self.interactive = True  # False: no modal message boxes (screenshot runs, tests)
+
+        self.setWindowTitle("DreamPrint")
+        self.setAcceptDrops(True)
+        from ..resources import resource_path
+
+        try:
+            self.setWindowIcon(QIcon(str(resource_path("icons", "dreamprint.svg"))))
+        except DreamPrintError:
+            pass
+
+        from .preview import PreviewPage
+
+        self.tabs = QTabWidget()
+        self.preview = PreviewPage(self)
+        self.tabs.addTab(self.preview, "Preview")
+        self.gamut = None
+        if with_gamut:
+            from .gamut_view import GamutPage
+
+            self.gamut = GamutPage(self)
+            self.tabs.addTab(self.gamut, "Gamut")
+        self.setCentralWidget(self.tabs)
+        self.preview.rendered.connect(self.ready)
+        self.preview.failed.connect(lambda m: self.statusBar().showMessage(m))
+        self.preview.set_params(
+            height_mm=self.settings.get("preview/height_mm", 40.0, float),
+            density_scale=self.settings.get("preview/density_scale", 1.0, float),
+            background=self.settings.get("preview/background", "clear", str))
+
+        self.profile_label = QLabel()
+        self.source_label = QLabel()
+        self.progress = QProgressBar(maximumWidth=200)
+        self.progress.setVisible(False)
+        sb = self.statusBar()
+        sb.addPermanentWidget(self.source_label)
+        sb.addPermanentWidget(self.profile_label)
+        sb.addPermanentWidget(self.progress)
+        self._build_menus()
+
+        geo, state = self.settings.window_state()
+        if geo is not None:
+            self.restoreGeometry(geo)
+        else:
+            self.resize(1280, 800)
+        if state is not None:
+            self.restoreState(state)
+        idx = self.settings.get("window/tab", 0, int)
+        if 0 <= idx < self.tabs.count():
+            self.tabs.setCurrentIndex(idx)
+
+    # menus ------------------------------------------------------------------------------------
+    def _build_menus(self) -> None:
+        m = self.menuBar().addMenu("&File")
+        self.act_open = QAction("&Open volume...", self, shortcut=QKeySequence.StandardKey.Open)
+        self.act_open.triggered.connect(self.open_dialog)
+        m.addAction(self.act_open)
+        act = QAction("Open &demo volume", self)
+        act.triggered.connect(lambda: self.open_path("demo"))
+        m.addAction(act)
+        act = QAction("Open ink &profile...", self)
+        act.triggered.connect(self.open_profile_dialog)
+        m.addAction(act)
+        act = QAction("Use the &built-in profile", self)
+        act.triggered.connect(self.use_default_profile)
+        m.addAction(act)
+        self.recent_menu = m.addMenu("Open &recent")
+        self._fill_recent()
+        m.addSeparator()
+        self.act_export = QAction("&Export print job...", self, shortcut="Ctrl+E")
+        self.act_export.triggered.connect(self.export_dialog)
+        m.addAction(self.act_export)
+        m.addSeparator()
+        act = QAction("&Quit", self, shortcut=QKeySequence.StandardKey.Quit)
+        act.triggered.connect(self.close)
+        m.addAction(act)
+
+        c = self.menuBar().addMenu("&Calibration")
+        self.act_wizard = QAction("&Calibrate inks...", self)
+        self.act_wizard.triggered.connect(self.calibration_wizard)
+        c.addAction(self.act_wizard)
+
+        h = self.menuBar().addMenu("&Help")
+        act = QAction("&Log file", self)
+        act.triggered.connect(self._show_log_path)
+        h.addAction(act)
+        act = QAction("&About DreamPrint", self)
+        act.triggered.connect(self._about)
+        h.addAction(act)
+
+        tb = self.addToolBar("Main")
+        tb.setObjectName("mainToolbar")
+        tb.addAction(self.act_open)
+        tb.addAction(self.act_wizard)
+        tb.addAction(self.act_export)
+
+    def _fill_recent(self) -> None:
+        self.recent_menu.clear()
+        files = self.settings.recent_files()
+        for f in files:
+            act = QAction(f, self)
+            act.triggered.connect(lambda _=False, f=f: self.open_path(f))
+            self.recent_menu.addAction(act)
+        if files:
+            self.recent_menu.addSeparator()
+            act = QAction("Clear list", self)
+            act.triggered.connect(self._clear_recent)
+            self.recent_menu.addAction(act)
+        self.recent_menu.setEnabled(bool(files))
+
+    def _clear_recent(self) -> None:
+        self.settings.clear_recent()
+        self._fill_recent()
+
+    # opening ----------------------------------------------------------------------------------
+    def open_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open volume",
+                                              self.settings.last_folder("volume"), VOLUME_FILTER)
+        if path:
+            self.open_path(path)
+
+    def open_profile_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open ink profile",
+                                              self.settings.last_folder("profile"),
+                                              PROFILE_FILTER)
+        if path:
+            self.open_path(path)
+
+    def open_path(self, path: str | os.PathLike) -> bool:
+        """Open a volume, an ink profile or a calibration set; problems go to a message box."""
+        path = str(path)
+        kind = classify_path(path)
+        try:
+            if kind == "profile":
+                from ..engine.profile import load_profile
+
+                self.set_profile(load_profile(path), path)
+                self.settings.set_last_folder("profile", path)
+            elif kind == "calibration-set":
+                self.calibration_wizard(calibration_set=path)
+                return True
+            else:
+                self.set_source(path)
+                if path != "demo":
+                    self.settings.set_last_folder("volume", path)
+        except DreamPrintError as exc:
+            self._file_problem(str(exc))
+            return False
+        self.settings.add_recent(path)
+        self._fill_recent()
+        return True
+
+    def _file_problem(self, message: str) -> None:
+        self.statusBar().showMessage(message, 15000)
+        if self.isVisible() and self.interactive:
+            QMessageBox.warning(self, "DreamPrint: cannot open", message)
+
+    def set_source(self, path: str) -> None:
+        from ..io.volumes import open_source
+
+        source = open_source(path)
+        self.source, self.source_path = source, path
+        name = "demo volume" if path == "demo" else Path(path).name
+        self.source_label.setText(f"Source: {name}")
+        self.setWindowTitle(f"DreamPrint - {name}")
+        self.sourceChanged.emit(source)
+        self.preview.set_inputs(source=source, printer=self._ensure_printer())
+
+    def _ensure_printer(self):
+        if self.printer is None:
+            from ..engine.printer import DEFAULT_PRINTER, load_printer
+
+            name = self.settings.get("export/printer", DEFAULT_PRINTER, str)
+            try:
+                self.printer = load_printer(name)
+            except DreamPrintError:
+                self.printer = load_printer(DEFAULT_PRINTER)
+        return self.printer
+
+    def set_printer(self, printer) -> None:
+        self.printer = printer
+        self.preview.set_inputs(printer=printer)
+
+    def use_default_profile(self) -> None:
+        from ..engine.profile import default_profile
+
+        self.set_profile(default_profile(), None)
+
+    def set_profile(self, profile, path: str | None) -> None:
+        """Make ``profile`` active: rebuild (or fetch cached) tables, refresh every page."""
+        self.profile, self.profile_path = profile, path
+        self.tables = None
+        self.profile_label.setText(f"Profile: {profile.name}")
+        self.profileChanged.emit(profile)
+        self.preview.set_inputs(profile=profile)
+        if self.gamut is not None:
+            self.gamut.set_profile(profile)
+        self._build_tables(profile)
+
+    def _build_tables(self, profile) -> None:
+        if self._tables_task is not None and self._tables_task.outcome is None:
+            self._tables_task.cancel()
+        size = self.table_size
+
+        def job(report, cancel):
+            from ..engine.gamut import get_tables
+
+            kwargs = {} if size is None else {"size": size}
+            return get_tables(profile, progress=lambda f: report(float(f)), **kwargs)
+
+        task = Task(job, "tables")
+        self._tables_for = profile.fingerprint()
+        fp = self._tables_for
+        task.progress.connect(self._tables_progress)
+        task.succeeded.connect(lambda t, fp=fp: self._tables_done(t, fp))
+        task.failed.connect(self._tables_failed)
+        self.progress.setVisible(True)
+        self.progress.setValue(0)
+        self.statusBar().showMessage("Building the colour tables of the profile ...")
+        self._tables_task = run_task(task)
+
+    def _tables_progress(self, fraction: float) -> None:
+        self.progress.setValue(int(100 * fraction))
+
+    def _tables_done(self, tables, fingerprint: str) -> None:
+        if fingerprint != self._tables_for:
+            return  # a newer profile is being built
+        self.progress.setVisible(False)
+        self.tables = tables
+        what = "loaded from the cache" if getattr(tables, "cached", False) else (
+            f"built in {getattr(tables, 'build_seconds', 0):.1f} s")
+        self.statusBar().showMessage(f"Colour tables {what}", 8000)
+        self.tablesReady.emit(tables)
+        self.preview.set_inputs(tables=tables)
+        if self.gamut is not None:
+            self.gamut.set_tables(tables)
+
+    def _tables_failed(self, message: str, _tb: str) -> None:
+        self.progress.setVisible(False)
+        self._file_problem(f"Cannot build the colour tables: {message}")
+
+    # actions ----------------------------------------------------------------------------------
+    def calibration_wizard(self, calibration_set: str | None = None) -> None:
+        from .wizard import CalibrationWizard
+
+        wiz = CalibrationWizard(self, settings=self.settings, calibration_set=calibration_set)
+        wiz.profileSaved.connect(lambda prof, path: self.set_profile(prof, path))
+        wiz.open()
+        self._wizard = wiz
+
+    def export_dialog(self) -> None:
+        from .export import ExportDialog
+
+        if self.source is None or self.profile is None:
+            QMessageBox.information(self, "DreamPrint", "Open a volume first.")
+            return
+        dlg = ExportDialog(self, source=self.source, source_path=self.source_path,
+                           profile=self.profile, settings=self.settings,
+                           preview_params=self.preview.params())
+        dlg.printerChanged.connect(self.set_printer)
+        dlg.open()
+        self._export = dlg
+
+    def _show_log_path(self) -> None:
+        from .crash import log_file
+
+        QMessageBox.information(self, "DreamPrint log", f"The log file is\n{log_file()}")
+
+    def _about(self) -> None:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            v = version("dreamprint")
+        except PackageNotFoundError:
+            v = "development"
+        QMessageBox.about(self, "About DreamPrint",
+                          f"DreamPrint {v}\nRadiance volumes to full-colour PolyJet print jobs.")
+
+    # drag and drop ----------------------------------------------------------------------------
+    def dragEnterEvent(self, event: QDragEnterEvent) -> None:  # noqa: N802 - Qt override
+        if event.mimeData().hasUrls() and any(u.isLocalFile() for u in event.mimeData().urls()):
+            event.acceptProposedAction()
+
+    def dropEvent(self, event: QDropEvent) -> None:  # noqa: N802 - Qt override
+        for url in event.mimeData().urls():
+            if url.isLocalFile():
+                self.open_path(url.toLocalFile())
+        event.acceptProposedAction()
+
+    # state ------------------------------------------------------------------------------------
+    def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        self.settings.save_window_state(self.saveGeometry(), self.saveState())
+        self.settings.set("window/tab", self.tabs.currentIndex())
+        for k, v in self.preview.params().items():
+            self.settings.set(f"preview/{k}", v)
+        self.settings.sync()
+        from .workers import wait_all
+
+        if self._tables_task is not None:
+            self._tables_task.cancel()
+        self.preview.shutdown()
+        if self.gamut is not None:
+            self.gamut.shutdown()
+        wait_all(10000)
+        super().closeEvent(event)

@@ -1,0 +1,352 @@
+"""The preview page: the source and the predicted print side by side, cameras linked.
+
+Defines :class:`PreviewPage`. Left: the source sampled on a downsampled grid at the operator's
+physical size; right: each voxel's colour and density as the engine predicts them after table
+lookup and density alignment (``gamut.predicted_appearance``), so washed-out or too-opaque
+regions show before printing. Controls: physical height, density scale, background (clear or
+empty), and a slice scrubber showing the halftoned material labels of any printer layer
+(``pipeline.halftone_layer``) in the profile's ink colours. Sampling, prediction and
+halftoning run on worker threads (:mod:`.workers`); the page only draws.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtGui import QImage, QPixmap
+from PySide6.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QSizePolicy,
+    QSlider,
+    QSplitter,
+    QVBoxLayout,
+    QWidget,
+)
+
+from .preview_data import PreviewData, compute_preview
+from .volume_view import add_rgba_volume, make_plotter
+from .workers import Task, run_task
+
+__all__ = ["PreviewPage"]
+
+log = logging.getLogger(__name__)
+
+
+class PreviewPage(QWidget):
+    """Source vs predicted print, with the controls that change the print."""
+
+    rendered = Signal()  # both views drawn with current data
+    failed = Signal(str)
+    paramsChanged = Signal()
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.source = None
+        self.profile = None
+        self.tables = None
+        self.printer = None
+        self.data: PreviewData | None = None
+        self.slice_labels: np.ndarray | None = None
+        self.slice_image: QImage | None = None
+        self._task: Task | None = None
+        self._slice_task: Task | None = None
+        self._pending = False
+        self._slice_pending = False
+
+        self.plotter = make_plotter(self, (1, 2))
+        self.plotter.setMinimumSize(400, 300)
+
+        self.height_mm = QDoubleSpinBox(suffix=" mm", decimals=1, minimum=1.0, maximum=500.0,
+                                        value=40.0, singleStep=5.0)
+        self.height_mm.setToolTip("Physical height of the print (z); x and y keep the aspect")
+        self.density_scale = QDoubleSpinBox(decimals=3, minimum=0.001, maximum=1000.0,
+                                            value=1.0, singleStep=0.1)
+        self.density_scale.setToolTip("Multiplies the source's density (1/mm per source unit)")
+        self.background = QComboBox()
+        self.background.addItem("clear (fill with Clear resin)", "clear")
+        self.background.addItem("empty (no material)", "empty")
+        self.status = QLabel("no source")
+        self.status.setWordWrap(True)
+        self.note = QLabel("")
+        self.note.setWordWrap(True)
+        self.note.setObjectName("downsampleNote")
+
+        form = QFormLayout()
+        form.addRow("Height", self.height_mm)
+        form.addRow("Density scale", self.density_scale)
+        form.addRow("Background", self.background)
+        box = QGroupBox("Print")
+        box.setLayout(form)
+
+        self.slice_slider = QSlider(Qt.Orientation.Horizontal)
+        self.slice_slider.setEnabled(False)
+        self.slice_label = QLabel("layer -")
+        self.slice_view = QLabel()
+        self.slice_view.setMinimumSize(220, 160)
+        self.slice_view.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.slice_view.setSizePolicy(QSizePolicy.Policy.Expanding,
+                                      QSizePolicy.Policy.Expanding)
+        self.slice_view.setStyleSheet("background: #222;")
+        self.legend = QLabel("")
+        self.legend.setWordWrap(True)
+        sbox = QGroupBox("Halftoned layer (material labels)")
+        sl = QVBoxLayout(sbox)
+        sl.addWidget(self.slice_slider)
+        sl.addWidget(self.slice_label)
+        sl.addWidget(self.slice_view, 1)
+        sl.addWidget(self.legend)
+
+        side = QWidget()
+        side_l = QVBoxLayout(side)
+        side_l.addWidget(box)
+        side_l.addWidget(self.status)
+        side_l.addWidget(self.note)
+        side_l.addWidget(sbox, 1)
+        side.setMinimumWidth(260)
+
+        split = QSplitter()
+        split.addWidget(self.plotter)
+        split.addWidget(side)
+        split.setStretchFactor(0, 4)
+        split.setStretchFactor(1, 1)
+        lay = QHBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(split)
+
+        self._debounce = QTimer(self, singleShot=True, interval=300)
+        self._debounce.timeout.connect(self.recompute)
+        self._slice_debounce = QTimer(self, singleShot=True, interval=120)
+        self._slice_debounce.timeout.connect(self._compute_slice)
+        for w in (self.height_mm, self.density_scale):
+            w.valueChanged.connect(self._params_changed)
+        self.background.currentIndexChanged.connect(self._params_changed)
+        self.slice_slider.valueChanged.connect(self._slice_moved)
+
+    # inputs -----------------------------------------------------------------------------------
+    def params(self) -> dict:
+        return {"height_mm": float(self.height_mm.value()),
+                "density_scale": float(self.density_scale.value()),
+                "background": str(self.background.currentData())}
+
+    def set_params(self, height_mm: float | None = None, density_scale: float | None = None,
+                   background: str | None = None) -> None:
+        if height_mm is not None:
+            self.height_mm.setValue(height_mm)
+        if density_scale is not None:
+            self.density_scale.setValue(density_scale)
+        if background is not None:
+            i = self.background.findData(background)
+            if i >= 0:
+                self.background.setCurrentIndex(i)
+
+    def set_inputs(self, source=None, profile=None, tables=None, printer=None) -> None:
+        """Set what changed (None keeps the current one) and recompute when all are known."""
+        if source is not None:
+            self.source = source
+        if profile is not None:
+            self.profile = profile
+            self.tables = None  # tables belong to a profile
+        if tables is not None:
+            self.tables = tables
+        if printer is not None:
+            self.printer = printer
+        if self.source is not None and self.profile is not None and self.tables is not None:
+            self.recompute()
+        elif self.source is not None and self.tables is None:
+            self.status.setText("building the colour tables of the profile ...")
+
+    def _params_changed(self) -> None:
+        self.paramsChanged.emit()
+        self._debounce.start()
+
+    # computation ------------------------------------------------------------------------------
+    def recompute(self) -> None:
+        if self.source is None or self.tables is None or self.profile is None:
+            return
+        if self._task is not None and self._task.outcome is None:
+            self._pending = True  # one at a time; the latest settings win
+            self._task.cancel()
+            return
+        source, profile, tables, printer = self.source, self.profile, self.tables, self.printer
+        p = self.params()
+        threshold = _density_threshold()
+
+        def job(report, cancel):
+            return compute_preview(source, profile, tables, height_mm=p["height_mm"],
+                                   density_scale=p["density_scale"],
+                                   background=p["background"], printer=printer,
+                                   density_threshold=threshold)
+
+        self.status.setText(f"sampling {getattr(source, 'name', 'source')} ...")
+        task = Task(job, "preview")
+        task.succeeded.connect(self._show)
+        task.failed.connect(self._failed)
+        task.done.connect(self._task_done)
+        self._task = run_task(task)
+
+    def _task_done(self) -> None:
+        if self._pending:
+            self._pending = False
+            self._task = None
+            self.recompute()
+
+    def _failed(self, message: str, _tb: str) -> None:
+        self.status.setText(f"<span style='color:#e55'>Preview failed: {message}</span>")
+        self.failed.emit(message)
+
+    def _show(self, data: PreviewData) -> None:
+        if self._pending:
+            return
+        self.data = data
+        pl = self.plotter
+        first = not pl.renderers[0].actors
+        for i, (rgb, sigma, title) in enumerate((
+                (data.source_rgb, data.source_sigma, "Source"),
+                (data.print_rgb, data.print_sigma, "Predicted print"))):
+            pl.subplot(0, i)
+            add_rgba_volume(pl, rgb, sigma, data.voxel_mm, name=f"volume{i}")
+            box = _box(data.size_mm)
+            pl.add_mesh(box, color="#888888", style="wireframe", name=f"box{i}",
+                        reset_camera=False, line_width=1)
+            pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}")
+        pl.subplot(0, 0)
+        pl.add_text(data.downsample_note(), position="lower_left", font_size=7, name="note")
+        if first:
+            pl.subplot(0, 0)
+            pl.view_isometric()
+            pl.reset_camera()
+        pl.render()
+        sx, sy, sz = data.size_mm
+        self.status.setText(f"{getattr(self.source, 'name', 'source')}: "
+                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm")
+        self.note.setText(data.downsample_note())
+        self._setup_slider()
+        self.rendered.emit()
+
+    # slice scrubber ---------------------------------------------------------------------------
+    def _setup_slider(self) -> None:
+        if self.data is None or self.data.print_shape_xyz is None:
+            self.slice_slider.setEnabled(False)
+            return
+        nz = self.data.print_shape_xyz[2]
+        keep = self.slice_slider.value() if self.slice_slider.isEnabled() else nz // 2
+        self.slice_slider.blockSignals(True)
+        self.slice_slider.setRange(0, nz - 1)
+        self.slice_slider.setValue(min(keep, nz - 1))
+        self.slice_slider.blockSignals(False)
+        self.slice_slider.setEnabled(True)
+        self._slice_moved()
+
+    def _slice_moved(self) -> None:
+        nz = self.slice_slider.maximum() + 1
+        self.slice_label.setText(f"layer {self.slice_slider.value()} of {nz}")
+        self._slice_debounce.start()
+
+    def slice_settings(self):
+        """The job settings the export would use, for ``pipeline.halftone_layer``."""
+        from .export import convert_settings
+
+        p = self.params()
+        return convert_settings(self.source, self.profile, self.printer,
+                                height_mm=p["height_mm"], density_scale=p["density_scale"],
+                                background=p["background"], output=None)
+
+    def _compute_slice(self) -> None:
+        if self.data is None or self.tables is None:
+            return
+        if self._slice_task is not None and self._slice_task.outcome is None:
+            self._slice_pending = True
+            return
+        layer = int(self.slice_slider.value())
+        try:
+            settings = self.slice_settings()
+        except Exception as exc:  # noqa: BLE001 - shown inline
+            self.legend.setText(f"<span style='color:#e55'>{exc}</span>")
+            return
+
+        def job(report, cancel):
+            from ..engine.pipeline import halftone_layer
+
+            return layer, np.asarray(halftone_layer(settings, layer))
+
+        task = Task(job, "slice")
+        task.succeeded.connect(self._show_slice)
+        task.failed.connect(lambda m, _t: self.legend.setText(
+            f"<span style='color:#e55'>{m}</span>"))
+        task.done.connect(self._slice_done)
+        self._slice_task = run_task(task)
+
+    def _slice_done(self) -> None:
+        if self._slice_pending:
+            self._slice_pending = False
+            self._slice_task = None
+            self._compute_slice()
+
+    def _show_slice(self, result) -> None:
+        layer, labels = result
+        from .materials import label_colours
+
+        colours, names = label_colours(self.profile, self.printer)
+        self.slice_labels = labels
+        rgb = colours[np.clip(labels, 0, len(colours) - 1)]
+        h, w = labels.shape
+        img = QImage(np.ascontiguousarray(rgb).data, w, h, 3 * w,
+                     QImage.Format.Format_RGB888).copy()
+        # Voxels are anisotropic (e.g. 84 x 28 um): scale to physical proportions.
+        vx, vy = (self.printer.voxel_mm[0], self.printer.voxel_mm[1]) if self.printer else (1, 1)
+        self.slice_image = img  # rows as in the slice PNG
+        self._slice_aspect = (w * vx, h * vy)
+        self._update_slice_pixmap()
+        counts = np.bincount(labels.ravel(), minlength=len(names))
+        total = max(1, labels.size)
+        parts = []
+        for i, name in enumerate(names):
+            if counts[i]:
+                c = colours[i]
+                parts.append(f"<span style='background:rgb({c[0]},{c[1]},{c[2]})'>"
+                             f"&nbsp;&nbsp;&nbsp;</span> {name} {100 * counts[i] / total:.1f}%")
+        self.legend.setText(f"layer {layer}: " + " &nbsp;".join(parts))
+
+    def _update_slice_pixmap(self) -> None:
+        if self.slice_image is None:
+            return
+        box = self.slice_view.size()
+        pw, ph = self._slice_aspect
+        s = min(box.width() / pw, box.height() / ph)
+        w, h = max(1, int(pw * s)), max(1, int(ph * s))
+        self.slice_view.setPixmap(QPixmap.fromImage(self.slice_image).scaled(
+            w, h, Qt.AspectRatioMode.IgnoreAspectRatio,
+            Qt.TransformationMode.FastTransformation))
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        self._update_slice_pixmap()
+
+    def shutdown(self) -> None:
+        for t in (self._task, self._slice_task):
+            if t is not None:
+                t.cancel()
+        self.plotter.close()
+
+
+def _box(size_mm):
+    import pyvista as pv
+
+    sx, sy, sz = size_mm
+    return pv.Box(bounds=(0, sx, 0, sy, 0, sz))
+
+
+def _density_threshold() -> float | None:
+    """The job pipeline's background threshold (1/mm), so the preview matches the export."""
+    try:
+        from ..engine import pipeline
+    except ImportError:
+        return None
+    return getattr(pipeline, "DEFAULT_DENSITY_THRESHOLD", None)

@@ -1,0 +1,631 @@
+"""The calibration wizard: ink measurements (or a chart) -> a fitted, saved, active profile.
+
+Defines :class:`CalibrationWizard` (a QWizard) and its pages:
+
+1. :class:`MeasurementsPage`: per ink, the files holding its reflectance and transmittance (any
+   format ``io.spectra.read_spectra`` reads), the sample in each, and the swatch thickness; or a
+   calibration set (TOML, ``io.spectra.calibration_set``). Every parsed spectrum is plotted at
+   once, resampled onto the profile's grid; each file's problem shows on its own row.
+2. :class:`ChartPage` (optional): a mixture chart, recipes (``--mix-file`` CSV) and the measured
+   reflectance of each patch.
+3. :class:`FitPage`: runs ``calibration.calibrate_profile`` (and ``chart_calibration.fit_chart``)
+   on a worker thread and plots measured vs fitted R and T per ink, the residuals, and the
+   chart's cross-validated dE2000.
+4. :class:`SavePage`: name and file; saving makes the profile active (``profileSaved``).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import Signal
+from PySide6.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QGridLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QPushButton,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
+    QWizard,
+    QWizardPage,
+)
+
+from ..engine.profile import INKS
+from ..errors import DreamPrintError
+from .settings import AppSettings
+from .workers import Task, run_task
+
+__all__ = ["CalibrationWizard", "MeasurementsPage", "ChartPage", "FitPage", "SavePage",
+           "SPECTRA_FILTER"]
+
+log = logging.getLogger(__name__)
+
+SPECTRA_FILTER = ("Spectral measurements (*.csv *.txt *.ti3 *.cgats *.jdx *.dx *.jcamp *.spdx "
+                  "*.tsv);;All files (*)")
+INK_COLOURS = {"C": "#00a0d0", "M": "#d0007a", "Y": "#d8c000", "K": "#202020", "W": "#999999",
+               "Cl": "#60b0a0"}
+ERROR_STYLE = "color: #d33;"
+
+
+def _canvas(figsize=(6, 4)):
+    from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, layout="constrained")
+    return fig, FigureCanvasQTAgg(fig)
+
+
+@dataclass
+class _Channel:
+    """One file + sample giving R or T of one ink."""
+
+    path: str = ""
+    sample: str | int | None = None
+    names: list[str] = field(default_factory=list)
+    file = None  # SpectraFile
+    values: np.ndarray | None = None  # resampled onto the profile grid
+    error: str = ""
+
+
+class _InkRow:
+    """The widgets of one ink on the measurements page."""
+
+    def __init__(self, page: MeasurementsPage, ink: str, grid: QGridLayout, row: int) -> None:
+        self.page, self.ink = page, ink
+        self.channels = {"R": _Channel(), "T": _Channel()}
+        self.edits: dict[str, QLineEdit] = {}
+        self.combos: dict[str, QComboBox] = {}
+        name = QLabel(f"<b>{ink}</b>")
+        grid.addWidget(name, row, 0)
+        col = 1
+        for q in ("R", "T"):
+            edit = QLineEdit()
+            edit.setPlaceholderText(f"{ink} {'reflectance' if q == 'R' else 'transmittance'} file")
+            edit.editingFinished.connect(lambda q=q: self.load(q, self.edits[q].text()))
+            browse = QPushButton("...")
+            browse.setMaximumWidth(32)
+            browse.clicked.connect(lambda _=False, q=q: self.browse(q))
+            combo = QComboBox()
+            combo.setMinimumWidth(120)
+            combo.currentIndexChanged.connect(lambda _i, q=q: self.sample_changed(q))
+            self.edits[q], self.combos[q] = edit, combo
+            grid.addWidget(edit, row, col)
+            grid.addWidget(browse, row, col + 1)
+            grid.addWidget(combo, row, col + 2)
+            col += 3
+        self.thickness = QDoubleSpinBox(decimals=3, minimum=0.001, maximum=100.0, value=1.0,
+                                        suffix=" mm", singleStep=0.1)
+        self.thickness.valueChanged.connect(page.changed)
+        grid.addWidget(self.thickness, row, col)
+        self.error = QLabel("")
+        self.error.setStyleSheet(ERROR_STYLE)
+        self.error.setWordWrap(True)
+        self.error.setVisible(False)
+        grid.addWidget(self.error, row + 1, 1, 1, col)
+
+    def browse(self, q: str) -> None:
+        path, _ = QFileDialog.getOpenFileName(
+            self.page, f"{self.ink}: {'reflectance' if q == 'R' else 'transmittance'}",
+            self.page.settings.last_folder("spectra"), SPECTRA_FILTER)
+        if path:
+            self.page.settings.set_last_folder("spectra", path)
+            self.edits[q].setText(path)
+            self.load(q, path)
+
+    def load(self, q: str, path: str, sample: str | int | None = None) -> None:
+        """Read ``path`` as the ink's R or T; a problem is shown on this row."""
+        ch = self.channels[q]
+        path = path.strip()
+        if path == ch.path and sample is None and ch.file is not None:
+            return
+        self.channels[q] = ch = _Channel(path=path)
+        combo = self.combos[q]
+        combo.blockSignals(True)
+        combo.clear()
+        combo.blockSignals(False)
+        if self.edits[q].text() != path:
+            self.edits[q].setText(path)
+        if path:
+            from ..io.spectra import read_spectra
+
+            try:
+                ch.file = read_spectra(path, quantity="reflectance" if q == "R"
+                                       else "transmittance")
+                ch.names = list(ch.file.names)
+            except DreamPrintError as exc:
+                ch.error = str(exc)
+            except OSError as exc:
+                ch.error = f"{path}: {exc.strerror or exc}"
+            if ch.file is not None:
+                combo.blockSignals(True)
+                combo.addItems(ch.names)
+                combo.blockSignals(False)
+                idx = 0
+                if sample is not None:
+                    idx = sample if isinstance(sample, int) else max(0, ch.names.index(sample)
+                                                                     if sample in ch.names else 0)
+                elif self.ink in ch.names:
+                    idx = ch.names.index(self.ink)
+                combo.setCurrentIndex(idx)
+                self.sample_changed(q)
+                return
+        self.show_errors()
+        self.page.changed()
+
+    def sample_changed(self, q: str) -> None:
+        ch = self.channels[q]
+        ch.error = ""
+        ch.values = None
+        if ch.file is not None and self.combos[q].count():
+            i = self.combos[q].currentIndex()
+            ch.sample = ch.names[i]
+            try:
+                ch.values = np.asarray(ch.file.resample(i, self.page.wavelengths()))
+            except DreamPrintError as exc:
+                ch.error = str(exc)
+            if ch.values is not None and ch.file.problems:
+                ch.error = "; ".join(ch.file.problems[:2])
+                bad = ~np.isfinite(ch.values) | (ch.values < 0) | (ch.values > 1)
+                if bad.any():
+                    ch.values = None
+                else:
+                    ch.error = ""
+        self.show_errors()
+        self.page.changed()
+
+    def show_errors(self) -> None:
+        errors = [f"{q}: {c.error}" for q, c in self.channels.items() if c.error]
+        self.error.setText("\n".join(errors))
+        self.error.setVisible(bool(errors))
+
+    def measurement(self):
+        from ..engine.calibration_types import LayerMeasurement
+
+        R, T = self.channels["R"].values, self.channels["T"].values
+        if R is None and T is None:
+            return None
+        src = "; ".join(f"{q}: {c.path} [{c.sample}]" for q, c in self.channels.items()
+                        if c.values is not None)
+        return LayerMeasurement(self.ink, float(self.thickness.value()), R, T, src)
+
+    def has_error(self) -> bool:
+        return any(c.error for c in self.channels.values())
+
+
+class MeasurementsPage(QWizardPage):
+    """Per-ink R and T files (or a calibration set), plotted as soon as they are parsed."""
+
+    def __init__(self, wizard: CalibrationWizard) -> None:
+        super().__init__()
+        self.wiz = wizard
+        self.settings = wizard.settings
+        self.set_measurements: list | None = None
+        self.set_path: str | None = None
+        self.setTitle("Ink measurements")
+        self.setSubTitle("Choose, for each ink you measured, the file holding its reflectance "
+                         "(R) and transmittance (T) and the swatch thickness. Inks you leave "
+                         "empty keep the active profile's values. Or load a calibration set.")
+        grid = QGridLayout()
+        for c, text in enumerate(("ink", "R file", "", "R sample", "T file", "", "T sample",
+                                  "thickness")):
+            grid.addWidget(QLabel(f"<i>{text}</i>"), 0, c)
+        self.rows = {ink: _InkRow(self, ink, grid, 1 + 2 * i) for i, ink in enumerate(INKS)}
+        set_row = QHBoxLayout()
+        self.set_button = QPushButton("Load a calibration set (TOML)...")
+        self.set_button.clicked.connect(self._browse_set)
+        self.clear_set_button = QPushButton("Clear")
+        self.clear_set_button.clicked.connect(lambda: self.load_set(None))
+        self.set_label = QLabel("")
+        self.set_label.setWordWrap(True)
+        set_row.addWidget(self.set_button)
+        set_row.addWidget(self.clear_set_button)
+        set_row.addWidget(self.set_label, 1)
+        self.figure, self.canvas = _canvas((7, 3))
+        self.canvas.setMinimumHeight(220)
+        lay = QVBoxLayout(self)
+        lay.addLayout(grid)
+        lay.addLayout(set_row)
+        lay.addWidget(self.canvas, 1)
+        self.changed()
+
+    def wavelengths(self) -> np.ndarray:
+        return self.wiz.base_profile.wavelengths_nm
+
+    def _browse_set(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Calibration set",
+                                              self.settings.last_folder("spectra"),
+                                              "Calibration sets (*.toml);;All files (*)")
+        if path:
+            self.settings.set_last_folder("spectra", path)
+            self.load_set(path)
+
+    def load_set(self, path: str | None) -> None:
+        """Use the measurements a calibration set names (instead of the rows)."""
+        self.set_measurements, self.set_path = None, None
+        self.set_label.setStyleSheet("")
+        if path:
+            from ..io.spectra.calibration_set import load_calibration_set
+
+            try:
+                self.set_measurements = list(load_calibration_set(path, self.wavelengths()))
+                self.set_path = path
+                inks = sorted({m.ink for m in self.set_measurements}, key=INKS.index)
+                self.set_label.setText(f"{Path(path).name}: {len(self.set_measurements)} "
+                                       f"layers of {', '.join(inks)}")
+            except DreamPrintError as exc:
+                self.set_label.setText(str(exc))
+                self.set_label.setStyleSheet(ERROR_STYLE)
+        else:
+            self.set_label.setText("")
+        for row in self.rows.values():
+            for w in (*row.edits.values(), *row.combos.values(), row.thickness):
+                w.setEnabled(self.set_measurements is None)
+        self.changed()
+
+    def measurements(self) -> list:
+        if self.set_measurements is not None:
+            return list(self.set_measurements)
+        return [m for m in (row.measurement() for row in self.rows.values()) if m is not None]
+
+    def changed(self) -> None:
+        self._plot()
+        self.completeChanged.emit()
+
+    def isComplete(self) -> bool:  # noqa: N802 - Qt override
+        if self.set_measurements is None and any(r.has_error() for r in self.rows.values()):
+            return False
+        return bool(self.measurements())
+
+    def _plot(self) -> None:
+        fig = self.figure
+        fig.clear()
+        ax_r, ax_t = fig.subplots(1, 2, sharex=True)
+        wl = self.wavelengths()
+        for m in self.measurements():
+            colour = INK_COLOURS[m.ink]
+            label = f"{m.ink} {m.thickness_mm:g} mm"
+            if m.R is not None:
+                ax_r.plot(wl, m.R, color=colour, label=label)
+            if m.T is not None:
+                ax_t.plot(wl, m.T, color=colour, label=label)
+        for ax, title in ((ax_r, "reflectance R"), (ax_t, "transmittance T")):
+            ax.set_title(title, fontsize=9)
+            ax.set_xlabel("wavelength (nm)", fontsize=8)
+            ax.set_ylim(-0.02, 1.02)
+            ax.tick_params(labelsize=7)
+            if ax.lines:
+                ax.legend(fontsize=7)
+        self.canvas.draw_idle()
+
+
+class ChartPage(QWizardPage):
+    """Optional: a printed mixture chart to refit the inks jointly (minimising dE2000)."""
+
+    def __init__(self, wizard: CalibrationWizard) -> None:
+        super().__init__()
+        self.wiz = wizard
+        self.recipes = None
+        self.reflectance = None
+        self.setTitle("Mixture chart (optional)")
+        self.setSubTitle("A chart of printed mixtures refits the inks jointly to its measured "
+                         "reflectance and reports the cross-validated dE2000. Leave empty to "
+                         "skip.")
+        self.recipes_edit = QLineEdit()
+        self.recipes_edit.setPlaceholderText("recipes CSV: a header naming inks, one row per patch")
+        self.spectra_edit = QLineEdit()
+        self.spectra_edit.setPlaceholderText("measured reflectance of each patch, same order")
+        form = QFormLayout()
+        for label, edit, filt in (("Recipes", self.recipes_edit, "CSV (*.csv);;All files (*)"),
+                                  ("Reflectance", self.spectra_edit, SPECTRA_FILTER)):
+            row = QHBoxLayout()
+            row.addWidget(edit, 1)
+            b = QPushButton("...")
+            b.setMaximumWidth(32)
+            b.clicked.connect(lambda _=False, e=edit, f=filt: self._browse(e, f))
+            row.addWidget(b)
+            edit.editingFinished.connect(self.load)
+            form.addRow(label, row)
+        self.error = QLabel("")
+        self.error.setStyleSheet(ERROR_STYLE)
+        self.error.setWordWrap(True)
+        self.info = QLabel("")
+        self.figure, self.canvas = _canvas((6, 2.5))
+        lay = QVBoxLayout(self)
+        lay.addLayout(form)
+        lay.addWidget(self.error)
+        lay.addWidget(self.info)
+        lay.addWidget(self.canvas, 1)
+
+    def _browse(self, edit: QLineEdit, filt: str) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Chart file",
+                                              self.wiz.settings.last_folder("spectra"), filt)
+        if path:
+            edit.setText(path)
+            self.load()
+
+    def load(self) -> None:
+        """Parse both files; the problem of either shows on this page."""
+        self.recipes = self.reflectance = None
+        self.error.setText("")
+        self.info.setText("")
+        rp, sp = self.recipes_edit.text().strip(), self.spectra_edit.text().strip()
+        if rp or sp:
+            try:
+                if not (rp and sp):
+                    raise DreamPrintError("give both the recipes and the reflectance file")
+                from ..engine.recipes import read_recipes
+                from ..io.spectra import read_spectra
+
+                recipes = np.asarray(read_recipes(rp))
+                f = read_spectra(sp, quantity="reflectance")
+                wl = self.wiz.base_profile.wavelengths_nm
+                refl = np.vstack([f.resample(i, wl) for i in range(len(f.samples))])
+                if len(refl) != len(recipes):
+                    raise DreamPrintError(f"{len(refl)} spectra for {len(recipes)} recipes "
+                                          f"in {rp}", sp)
+                self.recipes, self.reflectance = recipes, refl
+                self.info.setText(f"{len(recipes)} patches")
+            except DreamPrintError as exc:
+                self.error.setText(str(exc))
+        self._plot()
+        self.completeChanged.emit()
+
+    def isComplete(self) -> bool:  # noqa: N802 - Qt override
+        return not self.error.text()
+
+    def _plot(self) -> None:
+        self.figure.clear()
+        if self.reflectance is not None:
+            ax = self.figure.subplots()
+            ax.plot(self.wiz.base_profile.wavelengths_nm, self.reflectance.T, lw=0.8)
+            ax.set_xlabel("wavelength (nm)", fontsize=8)
+            ax.set_title("patch reflectance", fontsize=9)
+            ax.tick_params(labelsize=7)
+        self.canvas.draw_idle()
+
+
+class FitPage(QWizardPage):
+    """Fits on a worker thread; plots measured vs fitted R and T, residuals, chart dE2000."""
+
+    fitted = Signal(object)
+
+    def __init__(self, wizard: CalibrationWizard) -> None:
+        super().__init__()
+        self.wiz = wizard
+        self.result = None  # (profile, fits, chart_fit)
+        self.error_text = ""
+        self._task: Task | None = None
+        self.setTitle("Fit")
+        self.setSubTitle("Kubelka-Munk K and S per wavelength, fitted to your measurements.")
+        self.status = QLabel("")
+        self.status.setWordWrap(True)
+        self.tabs = QTabWidget()
+        self.fit_fig, self.fit_canvas = _canvas((8, 4.5))
+        self.res_fig, self.res_canvas = _canvas((8, 3))
+        self.chart_fig, self.chart_canvas = _canvas((8, 3))
+        self.tabs.addTab(self.fit_canvas, "Measured vs fitted")
+        self.tabs.addTab(self.res_canvas, "Residuals")
+        self.tabs.addTab(self.chart_canvas, "Chart dE2000")
+        lay = QVBoxLayout(self)
+        lay.addWidget(self.status)
+        lay.addWidget(self.tabs, 1)
+
+    def initializePage(self) -> None:  # noqa: N802 - Qt override
+        self.result = None
+        self.error_text = ""
+        measurements = self.wiz.measurements_page.measurements()
+        chart = self.wiz.chart_page
+        recipes, refl = chart.recipes, chart.reflectance
+        base = self.wiz.base_profile
+        name = self.wiz.default_name
+
+        def job(report, cancel):
+            from ..engine.calibration import calibrate_profile
+
+            profile, fits = calibrate_profile(measurements, base, name=name)
+            chart_fit = None
+            if recipes is not None:
+                from ..engine.chart_calibration import fit_chart
+
+                chart_fit = fit_chart(profile, recipes, refl, name=name)
+                profile = chart_fit.profile
+            return profile, fits, chart_fit, measurements
+
+        self.status.setText("fitting ...")
+        self.status.setStyleSheet("")
+        task = Task(job, "calibration")
+        task.succeeded.connect(self._done)
+        task.failed.connect(self._failed)
+        task.done.connect(self.completeChanged)
+        self._task = run_task(task)
+
+    def cleanupPage(self) -> None:  # noqa: N802 - Qt override
+        if self._task is not None:
+            self._task.cancel()
+
+    def isComplete(self) -> bool:  # noqa: N802 - Qt override
+        return self.result is not None
+
+    def _failed(self, message: str, _tb: str) -> None:
+        self.error_text = message
+        self.status.setText(f"The fit failed: {message}")
+        self.status.setStyleSheet(ERROR_STYLE)
+
+    def _done(self, result) -> None:
+        profile, fits, chart_fit, measurements = result
+        self.result = (profile, fits, chart_fit)
+        lines = []
+        for f in fits:
+            s = f.summary()
+            parts = [f"<b>{f.ink}</b> ({s['method']})"]
+            for key in ("max_rms_R", "max_rms_T"):
+                if s.get(key) is not None:
+                    parts.append(f"worst rms {key[-1]} {s[key]:.4f}")
+            lines.append(", ".join(parts))
+        if chart_fit is not None:
+            cv = chart_fit.report()["cross_validated_dE2000"]
+            lines.append(f"<b>chart</b>: cross-validated dE2000 mean {cv['mean']:.2f}, "
+                         f"p95 {cv['p95']:.2f}, max {cv['max']:.2f}")
+        self.status.setText("<br>".join(lines))
+        self._plot_fit(profile, measurements)
+        self._plot_residuals(fits)
+        self._plot_chart(chart_fit)
+        self.tabs.setTabEnabled(2, chart_fit is not None)
+        self.fitted.emit(self.result)
+
+    def _plot_fit(self, profile, measurements) -> None:
+        from ..engine.kubelka_munk import reflectance_transmittance
+
+        fig = self.fit_fig
+        fig.clear()
+        inks = [ink for ink in INKS if any(m.ink == ink for m in measurements)]
+        axes = np.atleast_1d(fig.subplots(2, max(1, len(inks)), sharex=True, sharey="row",
+                                          squeeze=False))
+        wl = profile.wavelengths_nm
+        for j, ink in enumerate(inks):
+            i = INKS.index(ink)
+            for m in (m for m in measurements if m.ink == ink):
+                R, T = reflectance_transmittance(profile.K[i], profile.S[i], m.thickness_mm)
+                for row, meas, fit in ((0, m.R, R), (1, m.T, T)):
+                    ax = axes[row, j]
+                    if meas is not None:
+                        ax.plot(wl, meas, "o", ms=2.5, color=INK_COLOURS[ink], alpha=0.7)
+                        ax.plot(wl, fit, "-", lw=1.2, color="#333")
+            axes[0, j].set_title(ink, fontsize=9)
+        for row, q in enumerate(("R", "T")):
+            axes[row, 0].set_ylabel(f"{q} (dots measured, line fitted)", fontsize=7)
+            for ax in axes[row]:
+                ax.tick_params(labelsize=6)
+        for ax in axes[1]:
+            ax.set_xlabel("nm", fontsize=7)
+        self.fit_canvas.draw_idle()
+
+    def _plot_residuals(self, fits) -> None:
+        fig = self.res_fig
+        fig.clear()
+        ax_r, ax_t = fig.subplots(1, 2, sharey=True)
+        wl = self.wiz.base_profile.wavelengths_nm
+        for f in fits:
+            if np.isfinite(f.rms_R).any():
+                ax_r.plot(wl, f.rms_R, color=INK_COLOURS[f.ink], label=f.ink)
+            if np.isfinite(f.rms_T).any():
+                ax_t.plot(wl, f.rms_T, color=INK_COLOURS[f.ink], label=f.ink)
+        for ax, q in ((ax_r, "R"), (ax_t, "T")):
+            ax.set_title(f"rms residual of {q} per wavelength", fontsize=9)
+            ax.set_xlabel("wavelength (nm)", fontsize=8)
+            ax.tick_params(labelsize=7)
+            if ax.lines:
+                ax.legend(fontsize=7)
+        self.res_canvas.draw_idle()
+
+    def _plot_chart(self, chart_fit) -> None:
+        fig = self.chart_fig
+        fig.clear()
+        if chart_fit is None:
+            self.chart_canvas.draw_idle()
+            return
+        ax = fig.subplots()
+        x = np.arange(chart_fit.cv_dE2000.size)
+        ax.bar(x - 0.2, chart_fit.fit_dE2000, 0.4, label="fit (own patches)")
+        ax.bar(x + 0.2, chart_fit.cv_dE2000, 0.4, label=f"cross-validated ({chart_fit.folds} "
+               "folds)")
+        ax.set_xlabel("patch", fontsize=8)
+        ax.set_ylabel("dE2000", fontsize=8)
+        ax.legend(fontsize=7)
+        self.chart_canvas.draw_idle()
+
+
+class SavePage(QWizardPage):
+    """Name and file of the new profile; saving makes it active."""
+
+    def __init__(self, wizard: CalibrationWizard) -> None:
+        super().__init__()
+        self.wiz = wizard
+        self.saved_path: str | None = None
+        self.setTitle("Save the profile")
+        self.setSubTitle("The saved profile becomes the active one.")
+        self.name_edit = QLineEdit(wizard.default_name)
+        self.path_edit = QLineEdit(str(Path(wizard.settings.last_folder("profile"))
+                                       / f"{wizard.default_name}.json"))
+        browse = QPushButton("...")
+        browse.setMaximumWidth(32)
+        browse.clicked.connect(self._browse)
+        row = QHBoxLayout()
+        row.addWidget(self.path_edit, 1)
+        row.addWidget(browse)
+        self.error = QLabel("")
+        self.error.setStyleSheet(ERROR_STYLE)
+        self.error.setWordWrap(True)
+        form = QFormLayout(self)
+        form.addRow("Name", self.name_edit)
+        form.addRow("File", row)
+        form.addRow(self.error)
+        self.setFinalPage(True)
+
+    def _browse(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Save ink profile", self.path_edit.text(),
+                                              "Ink profiles (*.json)")
+        if path:
+            self.path_edit.setText(path)
+
+    def validatePage(self) -> bool:  # noqa: N802 - Qt override
+        from ..engine.profile import save_profile
+
+        fit = self.wiz.fit_page.result
+        if fit is None:
+            self.error.setText("nothing fitted yet")
+            return False
+        name = self.name_edit.text().strip() or self.wiz.default_name
+        path = self.path_edit.text().strip()
+        if not path:
+            self.error.setText("choose a file")
+            return False
+        if not path.lower().endswith(".json"):
+            path += ".json"
+        profile = fit[0].with_settings(name=name)
+        try:
+            save_profile(profile, path)
+        except DreamPrintError as exc:
+            self.error.setText(str(exc))
+            return False
+        self.saved_path = path
+        self.wiz.settings.set_last_folder("profile", path)
+        self.wiz.profileSaved.emit(profile, path)
+        return True
+
+
+class CalibrationWizard(QWizard):
+    """From measurements to an active profile, without a terminal."""
+
+    profileSaved = Signal(object, str)
+
+    def __init__(self, parent: QWidget | None = None, settings: AppSettings | None = None,
+                 base_profile=None, calibration_set: str | None = None) -> None:
+        super().__init__(parent)
+        from ..engine.profile import default_profile
+
+        self.settings = settings or AppSettings()
+        self.base_profile = base_profile or getattr(parent, "profile", None) or default_profile()
+        self.default_name = f"calibrated-{_dt.date.today().isoformat()}"
+        self.setWindowTitle("DreamPrint: calibrate inks")
+        self.setWizardStyle(QWizard.WizardStyle.ClassicStyle)
+        self.setOption(QWizard.WizardOption.NoBackButtonOnLastPage, False)
+        self.measurements_page = MeasurementsPage(self)
+        self.chart_page = ChartPage(self)
+        self.fit_page = FitPage(self)
+        self.save_page = SavePage(self)
+        for p in (self.measurements_page, self.chart_page, self.fit_page, self.save_page):
+            self.addPage(p)
+        self.resize(1000, 720)
+        if calibration_set:
+            self.measurements_page.load_set(calibration_set)

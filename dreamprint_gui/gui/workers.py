@@ -1,0 +1,133 @@
+"""Background work for the GUI: run engine generators and callbacks off the GUI thread.
+
+Defines :class:`Task` (a QObject whose signals carry progress, the result, a failure or a
+cancellation back to the GUI thread) and :func:`run_task` (starts one on its own QThread).
+
+The engine's long operations are generators yielding progress (``pipeline.run_conversion``)
+or functions taking a progress callback (``gamut.get_tables``); both are driven by the same
+code as on the command line. Cancel is a :class:`threading.Event` the engine checks, plus a
+check between yields, so a cancelled generator is closed (its ``finally`` clean-up runs).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import traceback
+from collections.abc import Callable, Generator
+from typing import Any
+
+from PySide6.QtCore import QObject, QThread, Signal, Slot
+
+from ..errors import DreamPrintError
+
+__all__ = ["Task", "Cancelled", "run_task", "generator_job"]
+
+log = logging.getLogger(__name__)
+
+
+class Cancelled(Exception):
+    """Raised inside a job when the operator pressed Cancel."""
+
+
+# A job is fn(report, cancel) -> result: `report(item)` sends progress to the GUI thread.
+Job = Callable[[Callable[[Any], None], threading.Event], Any]
+
+
+def generator_job(make: Callable[[threading.Event], Generator[Any, None, Any]]) -> Job:
+    """Turn ``make(cancel) -> generator`` (yields progress, returns the result) into a job."""
+
+    def job(report: Callable[[Any], None], cancel: threading.Event) -> Any:
+        gen = make(cancel)
+        try:
+            while True:
+                if cancel.is_set():
+                    raise Cancelled()
+                try:
+                    item = next(gen)
+                except StopIteration as stop:
+                    if cancel.is_set():
+                        raise Cancelled() from None
+                    return stop.value
+                report(item)
+        finally:
+            gen.close()  # runs the engine's clean-up (e.g. removes a partial job folder)
+
+    return job
+
+
+class Task(QObject):
+    """One job on a worker thread. Signals are delivered in the GUI thread (queued)."""
+
+    progress = Signal(object)
+    succeeded = Signal(object)
+    failed = Signal(str, str)  # one-line message for the operator, full traceback for the log
+    cancelled = Signal()
+    done = Signal()  # after any of the three outcomes
+
+    def __init__(self, job: Job, name: str = "task") -> None:
+        super().__init__()
+        self.name = name
+        self._job = job
+        self.cancel_event = threading.Event()
+        self.thread: QThread | None = None
+        self.outcome: str | None = None  # "succeeded" | "failed" | "cancelled"
+
+    def cancel(self) -> None:
+        self.cancel_event.set()
+
+    @Slot()
+    def run(self) -> None:
+        try:
+            result = self._job(self.progress.emit, self.cancel_event)
+        except Cancelled:
+            self.outcome = "cancelled"
+            self.cancelled.emit()
+        except DreamPrintError as exc:
+            self.outcome = "failed"
+            self.failed.emit(str(exc), traceback.format_exc())
+        except Exception as exc:  # noqa: BLE001 - reported to the operator, logged in full
+            if self.cancel_event.is_set():
+                self.outcome = "cancelled"
+                self.cancelled.emit()
+            else:
+                self.outcome = "failed"
+                tb = traceback.format_exc()
+                log.error("%s failed:\n%s", self.name, tb)
+                self.failed.emit(f"{type(exc).__name__}: {exc}", tb)
+        else:
+            if self.cancel_event.is_set():
+                self.outcome = "cancelled"
+                self.cancelled.emit()
+            else:
+                self.outcome = "succeeded"
+                self.succeeded.emit(result)
+        finally:
+            self.done.emit()
+
+
+_live: set[Task] = set()  # keeps running tasks (and their threads) alive until they finish
+
+
+def run_task(task: Task) -> Task:
+    """Start ``task`` on a new QThread; the thread quits and is released when it is done."""
+    thread = QThread()  # no Qt parent: `_live` owns it until finished, whatever closes first
+    thread.setObjectName(f"dreamprint-{task.name}")
+    task.thread = thread
+    task.moveToThread(thread)
+    thread.started.connect(task.run)
+    task.done.connect(thread.quit)
+    thread.finished.connect(lambda: _live.discard(task))
+    thread.finished.connect(thread.deleteLater)
+    _live.add(task)
+    thread.start()
+    return task
+
+
+def wait_all(timeout_ms: int = 30000) -> None:
+    """Cancel and join every running task (window closing, tests)."""
+    for task in list(_live):
+        task.cancel()
+    for task in list(_live):
+        if task.thread is not None:
+            task.thread.wait(timeout_ms)
