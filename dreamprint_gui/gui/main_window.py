@@ -84,7 +84,7 @@ class MainWindow(QMainWindow):
         from .preview import PreviewPage
 
         self.tabs = QTabWidget()
-        self.preview = PreviewPage(self)
+        self.preview = PreviewPage(self, table_size=table_size)
         self.tabs.addTab(self.preview, "Preview")
         self.gamut = None
         if with_gamut:
@@ -236,7 +236,7 @@ class MainWindow(QMainWindow):
         self.source_label.setText(f"Source: {name}")
         self.setWindowTitle(f"DreamPrint - {name}")
         self.sourceChanged.emit(source)
-        self.preview.set_inputs(source=source, printer=self._ensure_printer())
+        self.preview.set_inputs(source_path=path, printer=self._ensure_printer())
 
     def _ensure_printer(self):
         if self.printer is None:
@@ -250,8 +250,16 @@ class MainWindow(QMainWindow):
         return self.printer
 
     def set_printer(self, printer) -> None:
+        """A printer with another layer thickness needs other tables (sigma is per layer)."""
+        old = self._ensure_printer()
         self.printer = printer
-        self.preview.set_inputs(printer=printer)
+        if self.profile is not None and old.layer_thickness_mm != printer.layer_thickness_mm:
+            self.tables = None
+            self.preview.set_inputs(profile=self.profile, profile_path=self.profile_path,
+                                    printer=printer)
+            self._build_tables(self.profile)
+        else:
+            self.preview.set_inputs(printer=printer)
 
     def use_default_profile(self) -> None:
         from ..engine.profile import default_profile
@@ -264,21 +272,25 @@ class MainWindow(QMainWindow):
         self.tables = None
         self.profile_label.setText(f"Profile: {profile.name}")
         self.profileChanged.emit(profile)
-        self.preview.set_inputs(profile=profile)
+        self.preview.set_inputs(profile=profile, profile_path=path)
         if self.gamut is not None:
-            self.gamut.set_profile(profile)
+            self.gamut.set_profile(profile.with_settings(
+                layer_thickness_mm=self._ensure_printer().layer_thickness_mm))
         self._build_tables(profile)
 
     def _build_tables(self, profile) -> None:
         if self._tables_task is not None and self._tables_task.outcome is None:
             self._tables_task.cancel()
         size = self.table_size
+        # The tables of the job: the profile at the printer's layer thickness (the density
+        # of eq. 9 is per layer), so the preview, the gamut page and the export share them.
+        eff = profile.with_settings(layer_thickness_mm=self._ensure_printer().layer_thickness_mm)
 
         def job(report, cancel):
             from ..engine.gamut import get_tables
 
             kwargs = {} if size is None else {"size": size}
-            return get_tables(profile, progress=lambda f: report(float(f)), **kwargs)
+            return get_tables(eff, progress=lambda f: report(float(f)), **kwargs)
 
         task = Task(job, "tables")
         self._tables_for = profile.fingerprint()
@@ -326,9 +338,10 @@ class MainWindow(QMainWindow):
         if self.source is None or self.profile is None:
             QMessageBox.information(self, "DreamPrint", "Open a volume first.")
             return
-        dlg = ExportDialog(self, source=self.source, source_path=self.source_path,
-                           profile=self.profile, settings=self.settings,
-                           preview_params=self.preview.params())
+        dlg = ExportDialog(self, source_path=self.source_path, profile_path=self.profile_path,
+                           settings=self.settings, preview_params=self.preview.params(),
+                           source_name="demo" if self.source_path == "demo" else None,
+                           table_size=self.table_size)
         dlg.printerChanged.connect(self.set_printer)
         dlg.open()
         self._export = dlg

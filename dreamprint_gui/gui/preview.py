@@ -12,6 +12,7 @@ halftoning run on worker threads (:mod:`.workers`); the page only draws.
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import Qt, QTimer, Signal
@@ -30,7 +31,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from .preview_data import PreviewData, compute_preview
+from .preview_data import PreviewData, compute_preview, job_context
 from .volume_view import add_rgba_volume, make_plotter
 from .workers import Task, run_task
 
@@ -46,12 +47,16 @@ class PreviewPage(QWidget):
     failed = Signal(str)
     paramsChanged = Signal()
 
-    def __init__(self, parent: QWidget | None = None) -> None:
+    def __init__(self, parent: QWidget | None = None, table_size: int | None = None) -> None:
         super().__init__(parent)
-        self.source = None
-        self.profile = None
+        self.source_path: str | None = None
+        self.profile = None  # the active InkProfile
+        self.profile_path: str | None = None  # its file (None: the built-in one)
+        self.profile_eff = None  # the profile at the printer's layer thickness
         self.tables = None
         self.printer = None
+        self.ctx = None  # the engine's JobContext of the current settings
+        self.table_size = table_size
         self.data: PreviewData | None = None
         self.slice_labels: np.ndarray | None = None
         self.slice_image: QImage | None = None
@@ -146,45 +151,71 @@ class PreviewPage(QWidget):
             if i >= 0:
                 self.background.setCurrentIndex(i)
 
-    def set_inputs(self, source=None, profile=None, tables=None, printer=None) -> None:
-        """Set what changed (None keeps the current one) and recompute when all are known."""
-        if source is not None:
-            self.source = source
+    _UNSET = object()
+
+    def set_inputs(self, source_path: str | None = None, profile=None,
+                   profile_path=_UNSET, printer=None, tables=None) -> None:
+        """Set what changed and recompute once the source, profile and tables are known.
+
+        ``tables`` is the main window's signal that the profile's colour tables are built (and
+        cached on disk), so the job context below loads them instead of building them twice.
+        """
+        if source_path is not None:
+            self.source_path = source_path
         if profile is not None:
             self.profile = profile
             self.tables = None  # tables belong to a profile
+        if profile_path is not self._UNSET:
+            self.profile_path = profile_path
         if tables is not None:
             self.tables = tables
         if printer is not None:
             self.printer = printer
-        if self.source is not None and self.profile is not None and self.tables is not None:
+        if self.ready_to_compute():
             self.recompute()
-        elif self.source is not None and self.tables is None:
+        elif self.source_path is not None and self.tables is None:
             self.status.setText("building the colour tables of the profile ...")
+
+    def ready_to_compute(self) -> bool:
+        return (self.source_path is not None and self.profile is not None
+                and self.tables is not None and self.printer is not None)
 
     def _params_changed(self) -> None:
         self.paramsChanged.emit()
         self._debounce.start()
 
     # computation ------------------------------------------------------------------------------
+    def job_settings(self, output=None):
+        """The job settings the export would use with the current controls."""
+        from .export import convert_settings
+
+        p = self.params()
+        return convert_settings(self.source_path, self.profile_path, self.printer,
+                                height_mm=p["height_mm"], density_scale=p["density_scale"],
+                                background=p["background"], output=output,
+                                table_size=self.table_size)
+
     def recompute(self) -> None:
-        if self.source is None or self.tables is None or self.profile is None:
+        if not self.ready_to_compute():
             return
         if self._task is not None and self._task.outcome is None:
             self._pending = True  # one at a time; the latest settings win
             self._task.cancel()
             return
-        source, profile, tables, printer = self.source, self.profile, self.tables, self.printer
-        p = self.params()
-        threshold = _density_threshold()
+        try:
+            settings = self.job_settings()
+        except Exception as exc:  # noqa: BLE001 - shown inline
+            self._failed(str(exc), "")
+            return
+        previous = self.ctx
+        profile = self.profile.with_settings(
+            layer_thickness_mm=self.printer.layer_thickness_mm)  # as the job's tables
 
         def job(report, cancel):
-            return compute_preview(source, profile, tables, height_mm=p["height_mm"],
-                                   density_scale=p["density_scale"],
-                                   background=p["background"], printer=printer,
-                                   density_threshold=threshold)
+            ctx = job_context(settings, previous)
+            return ctx, profile, compute_preview(ctx, profile)
 
-        self.status.setText(f"sampling {getattr(source, 'name', 'source')} ...")
+        self.status.setText(f"sampling {Path(str(self.source_path)).name} ...")
         task = Task(job, "preview")
         task.succeeded.connect(self._show)
         task.failed.connect(self._failed)
@@ -201,9 +232,10 @@ class PreviewPage(QWidget):
         self.status.setText(f"<span style='color:#e55'>Preview failed: {message}</span>")
         self.failed.emit(message)
 
-    def _show(self, data: PreviewData) -> None:
+    def _show(self, result) -> None:
         if self._pending:
             return
+        self.ctx, self.profile_eff, data = result
         self.data = data
         pl = self.plotter
         first = not pl.renderers[0].actors
@@ -224,8 +256,8 @@ class PreviewPage(QWidget):
             pl.reset_camera()
         pl.render()
         sx, sy, sz = data.size_mm
-        self.status.setText(f"{getattr(self.source, 'name', 'source')}: "
-                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm")
+        self.status.setText(f"{Path(str(self.source_path)).name}: print "
+                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {self.printer.name}")
         self.note.setText(data.downsample_note())
         self._setup_slider()
         self.rendered.emit()
@@ -249,32 +281,19 @@ class PreviewPage(QWidget):
         self.slice_label.setText(f"layer {self.slice_slider.value()} of {nz}")
         self._slice_debounce.start()
 
-    def slice_settings(self):
-        """The job settings the export would use, for ``pipeline.halftone_layer``."""
-        from .export import convert_settings
-
-        p = self.params()
-        return convert_settings(self.source, self.profile, self.printer,
-                                height_mm=p["height_mm"], density_scale=p["density_scale"],
-                                background=p["background"], output=None)
-
     def _compute_slice(self) -> None:
-        if self.data is None or self.tables is None:
+        if self.data is None or self.ctx is None:
             return
         if self._slice_task is not None and self._slice_task.outcome is None:
             self._slice_pending = True
             return
         layer = int(self.slice_slider.value())
-        try:
-            settings = self.slice_settings()
-        except Exception as exc:  # noqa: BLE001 - shown inline
-            self.legend.setText(f"<span style='color:#e55'>{exc}</span>")
-            return
+        ctx = self.ctx
 
         def job(report, cancel):
             from ..engine.pipeline import halftone_layer
 
-            return layer, np.asarray(halftone_layer(settings, layer))
+            return layer, np.asarray(halftone_layer(ctx.settings, layer, context=ctx))
 
         task = Task(job, "slice")
         task.succeeded.connect(self._show_slice)
@@ -293,7 +312,7 @@ class PreviewPage(QWidget):
         layer, labels = result
         from .materials import label_colours
 
-        colours, names = label_colours(self.profile, self.printer)
+        colours, names = label_colours(self.profile_eff, self.printer)
         self.slice_labels = labels
         rgb = colours[np.clip(labels, 0, len(colours) - 1)]
         h, w = labels.shape

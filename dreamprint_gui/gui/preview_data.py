@@ -1,22 +1,24 @@
 """What the preview shows, computed by the engine on a coarse grid (no Qt here).
 
-Defines :class:`PreviewData` and :func:`compute_preview`: the source sampled on a downsampled,
-isotropic grid of the operator's physical size (``VolumeSource.sample_slab``), and the predicted
-print of the same voxels after table lookup and density alignment
-(``gamut.predicted_appearance``), both as sRGB colour and density in 1/mm, plus
+Defines :class:`PreviewData`, :func:`job_context` (the export's own ``pipeline.prepare_job``
+context, reused while only the size, density scale or background change) and
+:func:`compute_preview`: the source sampled on a downsampled, isotropic grid of the job's
+physical size (``VolumeSource.sample_slab``), and the predicted print of the same voxels after
+table lookup and density alignment (``gamut.predicted_appearance``) and the job's background
+rule, both as sRGB colour and density in 1/mm, plus
 :func:`opacity_per_voxel` (Beer-Lambert: alpha = 1 - exp(-sigma * voxel size)), which is how the
 volume view turns densities into per-voxel opacity.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["PreviewData", "compute_preview", "opacity_per_voxel", "PREVIEW_VOXELS"]
+__all__ = ["PreviewData", "compute_preview", "job_context", "opacity_per_voxel",
+           "PREVIEW_VOXELS"]
 
 PREVIEW_VOXELS = 96  # voxels along the longest axis of the preview grid (interaction stays smooth)
 
@@ -57,44 +59,69 @@ def opacity_per_voxel(sigma_per_mm: NDArray, voxel_mm: float) -> NDArray[np.floa
     return (-np.expm1(-s * voxel_mm)).astype(np.float32)
 
 
-def preview_voxel_mm(bounds: tuple[tuple[float, float, float], tuple[float, float, float]],
-                     height_mm: float, n: int = PREVIEW_VOXELS) -> float:
-    """Isotropic voxel edge giving ``n`` voxels along the longest physical axis."""
-    lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
-    ext = hi - lo
-    if not (ext[2] > 0 and math.isfinite(ext[2])):
-        raise ValueError("the source has no height")
-    size = ext * (height_mm / ext[2])
-    return float(size.max() / n)
+def job_context(settings, previous=None):
+    """The engine's ``JobContext`` for ``settings`` (``pipeline.prepare_job``).
 
-
-def compute_preview(source, profile, tables, *, height_mm: float, density_scale: float = 1.0,
-                    background: str = "clear", printer=None,
-                    density_threshold: float | None = None,
-                    n: int = PREVIEW_VOXELS) -> PreviewData:
-    """Sample ``source`` on a coarse grid and predict the print (engine calls only).
-
-    ``background``: voxels whose source density is below ``density_threshold`` become Clear
-    (``"clear"``, whatever the alignment predicts for a zero target) or nothing (``"empty"``),
-    as the job pipeline does.
+    When only the size, density scale or background changed since ``previous`` (same source,
+    profile, printer, halftoning and seed), the open source, the tables and the background
+    threshold are reused and only the printer grid and the background label are redone, so
+    dragging a control does not reopen a large file.
     """
-    from ..engine import gamut
+    from dataclasses import replace
+
+    from ..engine.halftone import Halftoner
+    from ..engine.pipeline import prepare_job
+    from ..engine.printer import EMPTY_LABEL
+    from ..engine.profile import INKS
     from ..io.volumes import grid_for_source
 
-    v = preview_voxel_mm(source.bounds, height_mm, n)
-    grid = grid_for_source(source, (v, v, v), height_mm=height_mm)
+    same = ("source", "profile", "printer", "halftone", "seed", "table_size", "objective",
+            "source_options", "density_threshold")
+    if previous is None or any(getattr(previous.settings, k) != getattr(settings, k)
+                               for k in same):
+        return prepare_job(settings)
+    p = previous.printer
+    grid = grid_for_source(previous.source, p.voxel_mm, height_mm=settings.height_mm,
+                           size_mm=None if settings.size_mm is None else tuple(settings.size_mm))
+    bg = INKS.index("Cl") if settings.background == "clear" else EMPTY_LABEL
+    ht = Halftoner.create(settings.halftone, settings.seed, p.voxel_mm,
+                          threshold=previous.halftoner.threshold, bg_label=bg)
+    return replace(previous, settings=settings, grid=grid, halftoner=ht)
+
+
+def compute_preview(ctx, profile, *, n: int = PREVIEW_VOXELS) -> PreviewData:
+    """Sample the job's source on a coarse grid and predict the print (engine calls only).
+
+    ``ctx`` is the job's context (:func:`job_context`): its open source, its colour tables
+    (built for ``profile`` at the printer's layer thickness), its background threshold.
+    Voxels whose density is below the threshold become Clear (``background="clear"``) or
+    nothing (``"empty"``), as the job pipeline labels them.
+    """
+    from ..engine import gamut
+    from ..engine.mixture import predict
+    from ..engine.profile import INKS
+    from ..io.volumes import grid_for_source
+
+    s = ctx.settings
+    source = ctx.source
+    print_shape = tuple(int(v) for v in ctx.grid.shape_xyz)
+    vx, vy, vz = ctx.printer.voxel_mm
+    size = (print_shape[0] * vx, print_shape[1] * vy, print_shape[2] * vz)
+    v = max(size) / n
+    grid = grid_for_source(source, (v, v, v), height_mm=size[2])
     nx, ny, nz = grid.shape_xyz
-    rgb, sigma = source.sample_slab(grid, 0, nz, density_scale=density_scale)
+    rgb, sigma = source.sample_slab(grid, 0, nz, density_scale=s.density_scale)
     rgb = np.asarray(rgb, dtype=np.float32)
     sigma = np.asarray(sigma, dtype=np.float32)
-    p_rgb, p_sigma = gamut.predicted_appearance(tables, profile, rgb, sigma)
-    p_rgb = np.clip(np.asarray(p_rgb, dtype=np.float32), 0.0, 1.0)
+    p_rgb, p_sigma = gamut.predicted_appearance(ctx.tables, profile, rgb, sigma)
+    p_rgb = np.clip(np.asarray(p_rgb, dtype=np.float32), 0.0, 1.0).copy()
     p_sigma = np.asarray(p_sigma, dtype=np.float32).copy()
-    if background == "empty" and density_threshold is not None:
-        p_sigma[sigma < density_threshold] = 0.0
-    print_shape = None
-    if printer is not None:
-        pgrid = grid_for_source(source, tuple(printer.voxel_mm), height_mm=height_mm)
-        print_shape = tuple(int(s) for s in pgrid.shape_xyz)
-    return PreviewData(rgb, sigma, p_rgb, p_sigma, v,
-                       (nx * v, ny * v, nz * v), print_shape, background)
+    below = sigma < ctx.halftoner.threshold
+    if s.background == "empty":
+        p_sigma[below] = 0.0
+    else:
+        clear = predict(profile, np.eye(len(INKS))[INKS.index("Cl")])
+        p_rgb[below] = np.clip(np.asarray(clear.sRGB, dtype=np.float32), 0, 1)
+        p_sigma[below] = float(clear.sigma_per_mm)
+    return PreviewData(rgb, sigma, p_rgb, p_sigma, v, (nx * v, ny * v, nz * v), print_shape,
+                       s.background)
