@@ -59,5 +59,7 @@ def main(argv: list[str] | None = None) -> int:
 # Command modules register themselves on `cli` when imported.
 from . import physics  # noqa: E402,F401
 
+from . import jobs  # noqa: E402,F401  # isort: skip
+
 if __name__ == "__main__":
     sys.exit(main())
