@@ -35,11 +35,19 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
+from .profile import INKS
+
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
            "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS", "MASK_VERSION"]
 
 HALFTONE_METHODS = ("blue-noise", "random")
 MASK_VERSION = 1
+_NO_MASK = np.zeros((1, 1, 1), np.float32)
+# Order of the inks along the threshold axis. The first band [0, c) of a void-and-cluster mask
+# is its best blue-noise set; the last band is the complement of one (also blue); middle bands
+# are differences of two. Black, the most visible speck, goes first; Clear, usually the largest
+# share, last.
+INK_ORDER: tuple[int, ...] = (3, 0, 1, 2, 4, 5)  # K, C, M, Y, W, Cl
 _MASK_VOXELS = 32768  # 32^3: generation is O(N^2) ~ 2 s once, then cached
 _SIGMA_VOXELS = 1.5   # Ulichney's filter width, in geometric-mean voxel sizes
 
@@ -229,7 +237,7 @@ def blue_noise_mask(voxel_mm: tuple[float, float, float],
 # ----------------------------------------------------------------------------- kernel
 @njit(cache=True, nogil=True)
 def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy, oz, seed,
-                    x0, y0, out, counts, conc_sums):
+                    x0, y0, order, out, counts, conc_sums):
     ny, nx = out.shape
     mz, my, mx = mask.shape
     mzz = (z + oz) % mz
@@ -251,19 +259,21 @@ def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy,
             else:
                 t = _uniform(seed, x0 + i, y0 + j, z)
             t *= s
-            lab = 5
+            lab = -1
             c = 0.0
-            for m in range(6):
+            for q in range(6):
+                m = order[q]
                 c += conc[p, m]
                 if t < c:
                     lab = m
                     break
-            # t*s can round onto the total: take the last ink with a non-zero share.
-            if lab == 5 and conc[p, 5] <= 0.0:
-                for m in range(5, -1, -1):
-                    if conc[p, m] > 0.0:
-                        lab = m
+            if lab < 0:  # t*s rounded onto the total: take the last ink with a non-zero share
+                for q in range(5, -1, -1):
+                    if conc[p, order[q]] > 0.0:
+                        lab = order[q]
                         break
+            if lab < 0:  # all-zero concentrations cannot come from the tables; be safe
+                lab = bg_label
             out[j, i] = lab
             counts[lab] += 1
 
@@ -278,6 +288,8 @@ class Halftoner:
     threshold: float = 0.0   # density (1/mm) below which a voxel is background
     bg_label: int = 5        # 5 = Clear, 6 = empty
     mask: np.ndarray | None = None
+    order: tuple[int, ...] = INK_ORDER
+    offset_xyz: tuple[int, int, int] = (0, 0, 0)
 
     @classmethod
     def create(cls, method: str, seed: int, voxel_mm: tuple[float, float, float],
@@ -285,15 +297,13 @@ class Halftoner:
         if method not in HALFTONE_METHODS:
             raise ValueError(f"unknown halftoning {method!r} (use {', '.join(HALFTONE_METHODS)})")
         mask = blue_noise_mask(voxel_mm) if method == "blue-noise" else None
-        return cls(method, int(seed), tuple(voxel_mm), float(threshold), int(bg_label), mask)
-
-    def offsets(self) -> tuple[int, int, int]:
-        """Seed-dependent toroidal offset (x, y, z) of the mask."""
-        if self.mask is None:
-            return (0, 0, 0)
-        mz, my, mx = self.mask.shape
-        u = uniform_hash(self.seed, (1, 1, 3), (0, 0, 2**20))[0, 0]
-        return (int(u[0] * mx), int(u[1] * my), int(u[2] * mz))
+        off = (0, 0, 0)
+        if mask is not None:  # seed-dependent toroidal offset of the mask
+            mz, my, mx = mask.shape
+            u = uniform_hash(int(seed), (1, 1, 3), (0, 0, 2**20))[0, 0]
+            off = (int(u[0] * mx), int(u[1] * my), int(u[2] * mz))
+        return cls(method, int(seed), tuple(voxel_mm), float(threshold), int(bg_label), mask,
+                   INK_ORDER, off)
 
     def describe(self) -> dict:
         d = {"method": self.method, "seed": self.seed}
@@ -304,6 +314,7 @@ class Halftoner:
                      mask_sigma_voxels=_SIGMA_VOXELS)
         else:
             d.update(generator="splitmix64(seed, x, y, z)")
+        d["ink_order"] = [INKS[i] for i in self.order]
         return d
 
     def layer_into(self, conc: np.ndarray, density: np.ndarray, z: int, out: np.ndarray,
@@ -313,12 +324,12 @@ class Halftoner:
         ``counts`` (7,) int64 and ``conc_sums`` (7,) float64 are accumulated (labels and
         intended concentrations, background voxels counting 1 for the background label).
         """
-        mask = self.mask if self.mask is not None else np.zeros((1, 1, 1), np.float32)
-        ox, oy, oz = self.offsets()
+        mask = self.mask if self.mask is not None else _NO_MASK
+        ox, oy, oz = self.offset_xyz
         _halftone_layer(conc, density, np.float32(self.threshold), self.bg_label, z,
                         0 if self.method == "blue-noise" else 1, mask, ox, oy, oz,
-                        np.uint64(self.seed & 0xFFFFFFFFFFFFFFFF), x0, y0, out, counts,
-                        conc_sums)
+                        np.uint64(self.seed & 0xFFFFFFFFFFFFFFFF), x0, y0,
+                        np.asarray(self.order, dtype=np.int64), out, counts, conc_sums)
 
     def block(self, conc: np.ndarray, origin_xyz: tuple[int, int, int] = (0, 0, 0)) -> np.ndarray:
         """Labels of a (nz, ny, nx, 6) concentration block (no background) - for tests/metrics."""
