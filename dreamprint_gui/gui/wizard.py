@@ -363,7 +363,7 @@ class ChartPage(QWizardPage):
             try:
                 if not (rp and sp):
                     raise DreamPrintError("give both the recipes and the reflectance file")
-                from ..engine.recipes import read_recipes
+                from ..io.recipes import read_recipes
                 from ..io.spectra import read_spectra
 
                 recipes = np.asarray(read_recipes(rp))

@@ -1,0 +1,121 @@
+"""The calibration wizard end to end: measurement files -> fit -> saved, active profile.
+
+The measurements are generated from a known profile with the engine's forward model (eqs. 3-4)
+and written in two instrument formats, so the fitted K and S have a known answer; a real sample
+file from ../shared/data and a damaged file check parsing and the inline errors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PySide6.QtWidgets import QWizard
+
+from dreamprint_gui.engine.kubelka_munk import reflectance_transmittance
+from dreamprint_gui.engine.profile import INKS, default_profile, load_profile
+from dreamprint_gui.gui.wizard import CalibrationWizard
+from dreamprint_gui.io.spectra import Sample, write_spectra
+
+THICKNESS_MM = 0.4
+
+
+@pytest.fixture
+def truth():
+    """A profile differing from the default one, so a fit that ignored the files would fail."""
+    base = default_profile()
+    scale = np.linspace(0.7, 1.3, base.wavelengths_nm.size)
+    return base.with_settings(name="truth", K=base.K * scale, S=base.S * scale[::-1])
+
+
+@pytest.fixture
+def measurement_files(tmp_path, truth):
+    wl = truth.wavelengths_nm
+    R, T = reflectance_transmittance(truth.K, truth.S, THICKNESS_MM)
+    r_samples = [Sample(ink, wl, R[i]) for i, ink in enumerate(INKS)]
+    t_samples = [Sample(ink, wl, T[i]) for i, ink in enumerate(INKS)]
+    r_path, t_path = tmp_path / "inks_R.csv", tmp_path / "inks_T.csv"
+    write_spectra(r_path, r_samples, quantity="reflectance", format="csv-rows")
+    write_spectra(t_path, t_samples, quantity="transmittance", format="csv-columns")
+    return r_path, t_path
+
+
+def _load_rows(wiz, r_path, t_path, inks=INKS):
+    page = wiz.measurements_page
+    for ink in inks:
+        row = page.rows[ink]
+        row.thickness.setValue(THICKNESS_MM)
+        row.load("R", str(r_path))
+        row.load("T", str(t_path))
+    return page
+
+
+def test_wizard_end_to_end(qtbot, tmp_path, truth, measurement_files):
+    r_path, t_path = measurement_files
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    page = _load_rows(wiz, r_path, t_path)
+    # each row picked the sample named after its ink, and every spectrum is plotted
+    assert [page.rows[i].combos["R"].currentText() for i in INKS] == list(INKS)
+    axes = page.figure.axes
+    assert len(axes[0].lines) == len(INKS) and len(axes[1].lines) == len(INKS)
+    assert page.isComplete()
+
+    wiz.next()  # chart page (left empty)
+    assert wiz.currentPage() is wiz.chart_page and wiz.chart_page.isComplete()
+    wiz.next()  # fit page: the fit runs on a worker thread
+    fit_page = wiz.fit_page
+    with qtbot.waitSignal(fit_page.fitted, timeout=60000):
+        pass
+    profile, fits, chart_fit = fit_page.result
+    assert chart_fit is None and {f.ink for f in fits} == set(INKS)
+    # noise-free forward data: the inversion recovers K and S (closed form round trip)
+    for i, ink in enumerate(INKS[:5]):
+        np.testing.assert_allclose(profile.K[i], truth.K[i], rtol=2e-3, err_msg=ink)
+        np.testing.assert_allclose(profile.S[i], truth.S[i], rtol=2e-3, err_msg=ink)
+    R_fit, T_fit = reflectance_transmittance(profile.K, profile.S, THICKNESS_MM)
+    R_true, T_true = reflectance_transmittance(truth.K, truth.S, THICKNESS_MM)
+    np.testing.assert_allclose(R_fit, R_true, atol=1e-5)
+    np.testing.assert_allclose(T_fit, T_true, atol=1e-5)
+    # plots, not tables: measured dots and fitted lines per ink, residual curves
+    assert len(fit_page.fit_fig.axes) == 2 * len(INKS)
+    assert sum(len(ax.lines) for ax in fit_page.res_fig.axes) == 2 * len(INKS)
+
+    wiz.next()
+    save = wiz.save_page
+    out = tmp_path / "my-inks.json"
+    save.name_edit.setText("my inks")
+    save.path_edit.setText(str(out))
+    with qtbot.waitSignal(wiz.profileSaved, timeout=5000) as blocker:
+        wiz.button(QWizard.WizardButton.FinishButton).click()
+    saved, path = blocker.args
+    assert path == str(out) and saved.name == "my inks"
+    loaded = load_profile(out)
+    np.testing.assert_allclose(loaded.K, profile.K)
+    assert loaded.provenance["measurements"]
+
+
+def test_real_instrument_file_and_inline_errors(qtbot, tmp_path, shared_data):
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    page = wiz.measurements_page
+    row = page.rows["C"]
+    xrite = shared_data / "spectra" / "formats" / "X-Rite_Digital_Colour_Checker.txt"
+    row.load("R", str(xrite))
+    assert row.combos["R"].count() == 10  # every patch of the file is offered
+    assert row.channels["R"].values is not None and not row.error.isVisibleTo(page)
+    assert len(page.figure.axes[0].lines) == 1
+
+    bad = tmp_path / "garbled.csv"
+    bad.write_bytes(b"\x00\x01garbage,,,\nnot,a,spectrum\n")
+    row_m = page.rows["M"]
+    row_m.load("T", str(bad))  # no exception: the problem shows on the row
+    assert row_m.error.isVisibleTo(page)
+    assert "garbled.csv" in row_m.error.text()
+    assert not page.isComplete()
+    row_m.load("T", "")  # clearing the file clears the problem
+    assert not row_m.error.isVisibleTo(page) and page.isComplete()
+
+    missing = tmp_path / "absent.csv"
+    row_m.load("R", str(missing))
+    assert "absent.csv" in row_m.error.text()

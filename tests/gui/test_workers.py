@@ -1,0 +1,72 @@
+"""The worker that drives engine generators off the GUI thread."""
+
+from __future__ import annotations
+
+import threading
+
+from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.gui.workers import Task, generator_job, run_task
+
+
+def _counting(n: int, closed: list, gate: threading.Event | None = None):
+    def make(cancel):
+        def gen():
+            try:
+                for i in range(n):
+                    if gate is not None:
+                        gate.wait(5)
+                    yield i
+                return "result"
+            finally:
+                closed.append(True)  # the engine's clean-up ran
+        return gen()
+    return make
+
+
+def test_progress_then_result(qtbot):
+    closed: list = []
+    task = Task(generator_job(_counting(5, closed)), "count")
+    seen: list = []
+    task.progress.connect(seen.append)
+    with qtbot.waitSignal(task.succeeded, timeout=5000) as blocker:
+        run_task(task)
+    assert blocker.args == ["result"]
+    qtbot.waitUntil(lambda: seen == [0, 1, 2, 3, 4], timeout=2000)
+    assert closed == [True]
+    assert task.outcome == "succeeded"
+    task.thread.wait(2000)
+
+
+def test_cancel_closes_the_generator(qtbot):
+    closed: list = []
+    gate = threading.Event()
+    task = Task(generator_job(_counting(1000, closed, gate)), "count")
+    task.progress.connect(lambda i: task.cancel() if i == 2 else None)
+    task.progress.connect(lambda i: gate.set() if i == 0 else None)
+    gate.set()
+    with qtbot.waitSignal(task.cancelled, timeout=5000):
+        run_task(task)
+    assert task.outcome == "cancelled"
+    assert closed == [True]
+
+
+def test_failure_gives_one_line(qtbot):
+    def job(report, cancel):
+        raise DreamPrintError("cannot read", "/some/file.vdb")
+
+    task = Task(job, "bad")
+    with qtbot.waitSignal(task.failed, timeout=5000) as blocker:
+        run_task(task)
+    message, tb = blocker.args
+    assert message == "/some/file.vdb: cannot read"
+    assert "Traceback" in tb
+
+
+def test_unexpected_failure_names_the_type(qtbot):
+    def job(report, cancel):
+        return 1 / 0
+
+    task = Task(job, "bad")
+    with qtbot.waitSignal(task.failed, timeout=5000) as blocker:
+        run_task(task)
+    assert blocker.args[0].startswith("ZeroDivisionError")
