@@ -71,6 +71,7 @@ def main(argv: list[str] | None = None) -> int:
     from ..resources import resource_path
     from .crash import install_exception_hook, log_file
     from .main_window import MainWindow
+    from .workers import wait_all
 
     app = QApplication.instance() or QApplication([sys.argv[0]])
     app.setApplicationName("DreamPrint")
@@ -80,6 +81,7 @@ def main(argv: list[str] | None = None) -> int:
         app.setWindowIcon(QIcon(str(resource_path("icons", "dreamprint.svg"))))
     except DreamPrintError:
         pass
+    app.aboutToQuit.connect(lambda: wait_all(30000))  # no worker thread outlives the app
     headless = args.screenshot is not None or args.quit_after is not None
     install_exception_hook(interactive=not headless)
     log.info("dreamprint-gui starting; log file %s", log_file())

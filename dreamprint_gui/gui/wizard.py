@@ -33,6 +33,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QLineEdit,
     QPushButton,
+    QSpinBox,
     QTabWidget,
     QVBoxLayout,
     QWidget,
@@ -282,9 +283,10 @@ class MeasurementsPage(QWizardPage):
         self.completeChanged.emit()
 
     def isComplete(self) -> bool:  # noqa: N802 - Qt override
-        if self.set_measurements is None and any(r.has_error() for r in self.rows.values()):
-            return False
-        return bool(self.measurements())
+        # Measurements are optional when a chart is given on the next page; a row with a
+        # problem must be fixed or cleared first.
+        return self.set_measurements is not None or not any(
+            r.has_error() for r in self.rows.values())
 
     def _plot(self) -> None:
         fig = self.figure
@@ -335,6 +337,10 @@ class ChartPage(QWizardPage):
             row.addWidget(b)
             edit.editingFinished.connect(self.load)
             form.addRow(label, row)
+        self.folds = QSpinBox(minimum=2, maximum=20, value=5)
+        self.folds.setToolTip("k-fold cross-validation: each patch's dE2000 is predicted by a "
+                              "fit that did not see it")
+        form.addRow("Cross-validation folds", self.folds)
         self.error = QLabel("")
         self.error.setStyleSheet(ERROR_STYLE)
         self.error.setWordWrap(True)
@@ -425,19 +431,23 @@ class FitPage(QWizardPage):
         self.error_text = ""
         measurements = self.wiz.measurements_page.measurements()
         chart = self.wiz.chart_page
-        recipes, refl = chart.recipes, chart.reflectance
+        recipes, refl, folds = chart.recipes, chart.reflectance, int(chart.folds.value())
         base = self.wiz.base_profile
         name = self.wiz.default_name
 
         def job(report, cancel):
             from ..engine.calibration import calibrate_profile
 
-            profile, fits = calibrate_profile(measurements, base, name=name)
+            if not measurements and recipes is None:
+                raise DreamPrintError("nothing to fit: choose ink measurements (first page) or "
+                                      "a mixture chart (second page)")
+            profile, fits = (calibrate_profile(measurements, base, name=name) if measurements
+                             else (base.with_settings(name=name), []))
             chart_fit = None
             if recipes is not None:
                 from ..engine.chart_calibration import fit_chart
 
-                chart_fit = fit_chart(profile, recipes, refl, name=name)
+                chart_fit = fit_chart(profile, recipes, refl, name=name, folds=folds)
                 profile = chart_fit.profile
             return profile, fits, chart_fit, measurements
 

@@ -26,6 +26,9 @@ def _isolated(tmp_path_factory, monkeypatch):
     monkeypatch.setenv("DREAMPRINT_SETTINGS", str(d / "settings.ini"))
     monkeypatch.setenv("DREAMPRINT_LOG_DIR", str(d / "log"))
     yield d
+    from dreamprint_gui.gui.workers import wait_all
+
+    wait_all(120000)  # no worker thread outlives its test
 
 
 @pytest.fixture

@@ -119,3 +119,53 @@ def test_real_instrument_file_and_inline_errors(qtbot, tmp_path, shared_data):
     missing = tmp_path / "absent.csv"
     row_m.load("R", str(missing))
     assert "absent.csv" in row_m.error.text()
+
+
+def test_chart_only_calibration(qtbot, tmp_path, truth):
+    """A mixture chart alone: the refit brings the prediction closer to the measured patches
+    than the base profile, and the cross-validated dE2000 is reported and plotted."""
+    from dreamprint_gui.engine.mixture import predict
+
+    rng = np.random.default_rng(3)
+    recipes = rng.dirichlet(np.ones(5) * 0.6, size=14)
+    R = predict(truth, recipes, thickness_mm=np.inf).R
+    rec_path = tmp_path / "recipes.csv"
+    rec_path.write_text("C,M,Y,K,W\n" + "\n".join(",".join(f"{v:.10f}" for v in r)
+                                                 for r in recipes) + "\n")
+    spec_path = tmp_path / "patches.csv"
+    wl = truth.wavelengths_nm
+    write_spectra(spec_path, [Sample(f"P{i}", wl, R[i]) for i in range(len(R))],
+                  quantity="reflectance", format="csv-rows")
+
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    assert wiz.measurements_page.isComplete()  # measurements are optional with a chart
+    wiz.next()
+    chart = wiz.chart_page
+    chart.recipes_edit.setText(str(rec_path))
+    chart.spectra_edit.setText(str(spec_path))
+    chart.folds.setValue(2)  # the refit is slow (about a second per fit); keep the test short
+    chart.load()
+    assert not chart.error.text() and chart.info.text() == "14 patches"
+    wiz.next()
+    with qtbot.waitSignal(wiz.fit_page.fitted, timeout=120000):
+        pass
+    _, fits, chart_fit = wiz.fit_page.result
+    assert fits == [] and chart_fit is not None
+    report = chart_fit.report()
+    assert report["fit_dE2000"]["mean"] < report["base_dE2000"]["mean"]
+    assert "cross-validated dE2000" in wiz.fit_page.status.text()
+    assert len(wiz.fit_page.chart_fig.axes[0].patches) == 2 * 14  # fit and CV bars
+
+
+def test_chart_file_problem_is_inline(qtbot, tmp_path):
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    chart = wiz.chart_page
+    bad = tmp_path / "recipes.csv"
+    bad.write_text("C,M,Q\n0.5,0.5,0\n")
+    chart.recipes_edit.setText(str(bad))
+    chart.spectra_edit.setText(str(tmp_path / "absent.csv"))
+    chart.load()
+    assert chart.error.text() and not chart.isComplete()
