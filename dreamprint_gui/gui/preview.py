@@ -64,6 +64,7 @@ class PreviewPage(QWidget):
         self._slice_task: Task | None = None
         self._pending = False
         self._slice_pending = False
+        self._await_slice = False
 
         self.plotter = make_plotter(self, (1, 2))
         self.plotter.setMinimumSize(400, 300)
@@ -75,8 +76,10 @@ class PreviewPage(QWidget):
                                             value=1.0, singleStep=0.1)
         self.density_scale.setToolTip("Multiplies the source's density (1/mm per source unit)")
         self.background = QComboBox()
-        self.background.addItem("clear (fill with Clear resin)", "clear")
-        self.background.addItem("empty (no material)", "empty")
+        self.background.addItem("clear resin", "clear")
+        self.background.addItem("empty", "empty")
+        self.background.setToolTip("What voxels below the density threshold become: Clear "
+                                   "resin, or no material at all")
         self.status = QLabel("no source")
         self.status.setWordWrap(True)
         self.note = QLabel("")
@@ -259,7 +262,13 @@ class PreviewPage(QWidget):
         self.status.setText(f"{Path(str(self.source_path)).name}: print "
                             f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {self.printer.name}")
         self.note.setText(data.downsample_note())
+        self._await_slice = True  # `rendered` once the halftoned layer is shown too
         self._setup_slider()
+        if not self.slice_slider.isEnabled():
+            self._emit_rendered()
+
+    def _emit_rendered(self) -> None:
+        self._await_slice = False
         self.rendered.emit()
 
     # slice scrubber ---------------------------------------------------------------------------
@@ -297,10 +306,14 @@ class PreviewPage(QWidget):
 
         task = Task(job, "slice")
         task.succeeded.connect(self._show_slice)
-        task.failed.connect(lambda m, _t: self.legend.setText(
-            f"<span style='color:#e55'>{m}</span>"))
+        task.failed.connect(self._slice_failed)
         task.done.connect(self._slice_done)
         self._slice_task = run_task(task)
+
+    def _slice_failed(self, message: str, _tb: str) -> None:
+        self.legend.setText(f"<span style='color:#e55'>{message}</span>")
+        if self._await_slice:
+            self._emit_rendered()
 
     def _slice_done(self) -> None:
         if self._slice_pending:
@@ -332,6 +345,8 @@ class PreviewPage(QWidget):
                 parts.append(f"<span style='background:rgb({c[0]},{c[1]},{c[2]})'>"
                              f"&nbsp;&nbsp;&nbsp;</span> {name} {100 * counts[i] / total:.1f}%")
         self.legend.setText(f"layer {layer}: " + " &nbsp;".join(parts))
+        if self._await_slice:
+            self._emit_rendered()
 
     def _update_slice_pixmap(self) -> None:
         if self.slice_image is None:

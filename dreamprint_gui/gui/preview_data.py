@@ -113,10 +113,17 @@ def compute_preview(ctx, profile, *, n: int = PREVIEW_VOXELS) -> PreviewData:
     rgb, sigma = source.sample_slab(grid, 0, nz, density_scale=s.density_scale)
     rgb = np.asarray(rgb, dtype=np.float32)
     sigma = np.asarray(sigma, dtype=np.float32)
-    p_rgb, p_sigma = gamut.predicted_appearance(ctx.tables, profile, rgb, sigma)
-    p_rgb = np.clip(np.asarray(p_rgb, dtype=np.float32), 0.0, 1.0).copy()
-    p_sigma = np.asarray(p_sigma, dtype=np.float32).copy()
     below = sigma < ctx.halftoner.threshold
+    # Only voxels above the background threshold are printed from the tables; the rest follow
+    # the background rule below, so the (full-model) prediction is spent where it matters.
+    p_rgb = np.zeros_like(rgb)
+    p_sigma = np.zeros_like(sigma)
+    inside = ~below
+    if inside.any():
+        a_rgb, a_sigma = gamut.predicted_appearance(ctx.tables, profile, rgb[inside],
+                                                    sigma[inside])
+        p_rgb[inside] = np.clip(np.asarray(a_rgb, dtype=np.float32), 0.0, 1.0)
+        p_sigma[inside] = np.asarray(a_sigma, dtype=np.float32)
     if s.background == "empty":
         p_sigma[below] = 0.0
     else:

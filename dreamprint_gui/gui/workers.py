@@ -1,7 +1,8 @@
 """Background work for the GUI: run engine generators and callbacks off the GUI thread.
 
-Defines :class:`Task` (a QObject whose signals carry progress, the result, a failure or a
-cancellation back to the GUI thread) and :func:`run_task` (starts one on its own QThread).
+Defines :class:`Task` (a QObject living in the GUI thread whose signals, emitted from the worker
+thread, carry progress, the result, a failure or a cancellation back to the GUI thread),
+:func:`run_task` (starts one on its own QThread), :func:`generator_job` and :func:`wait_all`.
 
 The engine's long operations are generators yielding progress (``pipeline.run_conversion``)
 or functions taking a progress callback (``gamut.get_tables``); both are driven by the same
@@ -17,7 +18,7 @@ import traceback
 from collections.abc import Callable, Generator
 from typing import Any
 
-from PySide6.QtCore import QObject, QThread, Signal, Slot
+from PySide6.QtCore import QObject, QThread, Signal
 
 from ..errors import DreamPrintError
 
@@ -76,7 +77,6 @@ class Task(QObject):
     def cancel(self) -> None:
         self.cancel_event.set()
 
-    @Slot()
     def run(self) -> None:
         try:
             result = self._job(self.progress.emit, self.cancel_event)
@@ -106,26 +106,41 @@ class Task(QObject):
             self.done.emit()
 
 
+class _Runner(QThread):
+    """The worker thread of one task. The task object itself stays in the GUI thread, so its
+    signals reach the GUI thread queued, whatever they are connected to (lambdas included)."""
+
+    def __init__(self, task: Task) -> None:
+        super().__init__()
+        self.task = task
+
+    def run(self) -> None:
+        self.task.run()
+
+
 _live: set[Task] = set()  # keeps running tasks (and their threads) alive until they finish
 
 
 def run_task(task: Task) -> Task:
-    """Start ``task`` on a new QThread; the thread quits and is released when it is done."""
-    thread = QThread()  # no Qt parent: `_live` owns it until finished, whatever closes first
+    """Start ``task`` on a new worker thread; it is released when it has finished."""
+    thread = _Runner(task)
     thread.setObjectName(f"dreamprint-{task.name}")
     task.thread = thread
-    task.moveToThread(thread)
-    thread.started.connect(task.run)
-    task.done.connect(thread.quit)
-    thread.finished.connect(lambda: _live.discard(task))
-    thread.finished.connect(thread.deleteLater)
     _live.add(task)
+
+    def finished() -> None:  # in the GUI thread
+        # Join before letting go: a QThread object destroyed while its thread is still
+        # unwinding aborts the process (garbage collection may run in any thread).
+        thread.wait()
+        _live.discard(task)
+
+    thread.finished.connect(finished)
     thread.start()
     return task
 
 
 def wait_all(timeout_ms: int = 30000) -> None:
-    """Cancel and join every running task (window closing, tests)."""
+    """Cancel and join every running task (window closing, application quitting, tests)."""
     for task in list(_live):
         task.cancel()
     for task in list(_live):

@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
-import threading
-
 from dreamprint_gui.errors import DreamPrintError
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
 
-def _counting(n: int, closed: list, gate: threading.Event | None = None):
+def _counting(n: int, closed: list, block_at: int | None = None):
     def make(cancel):
         def gen():
             try:
                 for i in range(n):
-                    if gate is not None:
-                        gate.wait(5)
+                    if i == block_at:
+                        cancel.wait(10)  # the GUI cancels on receiving item block_at - 1
                     yield i
                 return "result"
             finally:
@@ -39,15 +37,15 @@ def test_progress_then_result(qtbot):
 
 def test_cancel_closes_the_generator(qtbot):
     closed: list = []
-    gate = threading.Event()
-    task = Task(generator_job(_counting(1000, closed, gate)), "count")
+    task = Task(generator_job(_counting(1000, closed, block_at=3)), "count")
+    seen: list = []
+    task.progress.connect(seen.append)
     task.progress.connect(lambda i: task.cancel() if i == 2 else None)
-    task.progress.connect(lambda i: gate.set() if i == 0 else None)
-    gate.set()
     with qtbot.waitSignal(task.cancelled, timeout=5000):
         run_task(task)
     assert task.outcome == "cancelled"
     assert closed == [True]
+    assert max(seen) <= 3
 
 
 def test_failure_gives_one_line(qtbot):
