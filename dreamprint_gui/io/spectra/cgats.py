@@ -238,14 +238,17 @@ def _table_spectra(t: _Table, path: str) -> RawSpectra | None:
             raise DreamPrintError(f"SPECTRAL_NORM {scale} must be positive", path)
     quantity = _QUANTITY.get(kw.get("MEAS_TYPE", "").upper())
     notes = []
-    if quantity is None and kw.get("DEVICE_CLASS", "").upper() == "DISPLAY":
+    implied = False
+    device = kw.get("DEVICE_CLASS", "").upper()
+    if quantity is None and device == "DISPLAY":
         quantity = "spd"
     elif quantity is None and (
             "WHITEBASE" in kw.get("MEASUREMENT_SOURCE", "").upper().replace(" ", "")
-            or re.fullmatch(r"M[0-3]", kw.get("MEASUREMENT_CONDITION", "").strip().upper())):
-        # A white base (paper / absolute) and the ISO 13655 conditions M0-M3 exist only for
-        # reflectance measurements.
-        quantity = "reflectance"
+            or re.fullmatch(r"M[0-3]", kw.get("MEASUREMENT_CONDITION", "").strip().upper())
+            or device in ("OUTPUT", "INPUT")):
+        # A white base (paper / absolute), the ISO 13655 conditions M0-M3 and ArgyllCMS's
+        # printer/scanner charts are reflectance measurements, unless the caller says otherwise.
+        quantity, implied = "reflectance", True
         notes.append("reflectance, as the measurement conditions imply")
 
     writer = t.ident or "CGATS"
@@ -255,7 +258,8 @@ def _table_spectra(t: _Table, path: str) -> RawSpectra | None:
         writer = "X-Rite i1Profiler"
     elif t.ident and t.ident.upper() in ("CTI3", "CTI2", "CTI1", "SPECT", "CCSS"):
         writer = f"ArgyllCMS {t.ident}"
-    return RawSpectra(format=f"CGATS.17 ({writer})", samples=samples, quantity=quantity,
+    label = "CGATS.17" if writer.upper() in ("CGATS", "CGATS.17") else f"CGATS.17 ({writer})"
+    return RawSpectra(format=label, samples=samples, quantity=quantity, implied=implied,
                       scale=scale, wavelength_unit="nm", notes=notes,
                       metadata={k.lower(): v for k, v in kw.items()})
 

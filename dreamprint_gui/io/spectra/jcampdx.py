@@ -12,7 +12,8 @@ ABSORBANCE, REFLECTANCE, LOG(EPSILON), ``##XYPOINTS=(XY..XY)``, ``LINK`` blocks)
 
 Why not the ``jcamp`` package (1.3.2, installed, the maintained Python reader): checked on files
 compressed here to the specification, it raises ``IndexError`` on a DUP count that follows an
-SQZ value (e.g. ``@T``, legal and common for flat baselines), only *prints* failed Y-value and
+SQZ value (e.g. ``@T``, legal and common for flat baselines), misreads DUP counts of two or more
+digits (``%S1`` = eleven zero differences), only *prints* failed Y-value and
 X checks and length mismatches (a damaged file reads silently wrong) and gives no line numbers.
 Its output is used in the tests as an independent cross-check on files it does read.
 
