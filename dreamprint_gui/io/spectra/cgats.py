@@ -83,11 +83,20 @@ def _tokens(line: str, lineno: int, path: str) -> list[str]:
         elif c == "#":
             break
         elif c == '"':
-            j = line.find('"', i + 1)
-            if j < 0:
-                raise DreamPrintError("unterminated quoted string", path, lineno)
-            out.append(line[i + 1:j])
-            i = j + 1
+            # A doubled quote inside a string stands for one quote character.
+            buf, j = [], i + 1
+            while True:
+                k = line.find('"', j)
+                if k < 0:
+                    raise DreamPrintError("unterminated quoted string", path, lineno)
+                buf.append(line[j:k])
+                if line.startswith('""', k):
+                    buf.append('"')
+                    j = k + 2
+                    continue
+                break
+            out.append("".join(buf))
+            i = k + 1
         else:
             j = i
             while j < n and line[j] not in " \t\r\f\v\"":
@@ -295,7 +304,7 @@ def read_cgats(text: str, path: str) -> RawSpectra:
 
 
 def _quote(s: str) -> str:
-    return '"' + s.replace('"', "'") + '"'
+    return '"' + s.replace('"', '""').replace("\n", " ").replace("\r", " ") + '"'
 
 
 def write_cgats(path: str | os.PathLike, samples: Sequence[Sample], quantity: str) -> None:
@@ -324,8 +333,8 @@ def write_cgats(path: str | os.PathLike, samples: Sequence[Sample], quantity: st
         'ORIGINATOR "DreamPrint"',
         f"MEAS_TYPE {_quote(meas[quantity])}",
         'KEYWORD "SPECTRAL_BANDS"', f'SPECTRAL_BANDS "{wl.size}"',
-        'KEYWORD "SPECTRAL_START_NM"', f'SPECTRAL_START_NM "{wl[0]!r}"',
-        'KEYWORD "SPECTRAL_END_NM"', f'SPECTRAL_END_NM "{wl[-1]!r}"',
+        'KEYWORD "SPECTRAL_START_NM"', f'SPECTRAL_START_NM "{float(wl[0])!r}"',
+        'KEYWORD "SPECTRAL_END_NM"', f'SPECTRAL_END_NM "{float(wl[-1])!r}"',
         'KEYWORD "SPECTRAL_NORM"', 'SPECTRAL_NORM "1"',
         f"NUMBER_OF_FIELDS {len(names) + 2}",
         "BEGIN_DATA_FORMAT",

@@ -412,8 +412,8 @@ def write_jcamp(path: str | os.PathLike, samples: Sequence[Sample], quantity: st
             "##ORIGIN=DreamPrint", "##OWNER=public domain",
             "##XUNITS=NANOMETERS", f"##YUNITS={yunits[quantity]}",
             "##XFACTOR=1", f"##YFACTOR={yfactor!r}",
-            f"##FIRSTX={w[0]!r}", f"##LASTX={w[-1]!r}", f"##NPOINTS={w.size}",
-            f"##FIRSTY={v[0]!r}", "##XYDATA=(X++(Y..Y))", *body, "##END="])
+            f"##FIRSTX={float(w[0])!r}", f"##LASTX={float(w[-1])!r}", f"##NPOINTS={w.size}",
+            f"##FIRSTY={float(v[0])!r}", "##XYDATA=(X++(Y..Y))", *body, "##END="])
     if len(blocks) == 1:
         lines = blocks[0]
     else:
