@@ -49,10 +49,10 @@ R_OK = 'R = { file = "reflectance_i1profiler.txt", sample = "M 0.1 mm" }'
     ('name = "x"\n', "no \\[\\[layer\\]\\]"),
     (f'[[layer]]\nink = "M"\nthickness_mm = 1\n{R_OK[:-2]}, extrapolate_nm = -3 }}\n',
      "extrapolate_nm must be"),
-    (f'[[layer]]\nink = "M"\nthickness_mm = 1\nR = {{ file = "reflectance_i1profiler.txt" }}\n',
+    ('[[layer]]\nink = "M"\nthickness_mm = 1\nR = { file = "reflectance_i1profiler.txt" }\n',
      "holds 12 samples; say which"),
-    (f'[[layer]]\nink = "M"\nthickness_mm = 1\nR = {{ file = "reflectance_i1profiler.txt", '
-     f'sample = 13 }}\n', "position 13 is outside 1-12"),
+    ('[[layer]]\nink = "M"\nthickness_mm = 1\nR = { file = "reflectance_i1profiler.txt", '
+     'sample = 13 }\n', "position 13 is outside 1-12"),
 ])
 def test_set_errors_name_the_set_and_layer(tmp_path, calibration_set_dir, body, match):
     p = _set(tmp_path, calibration_set_dir, body)
