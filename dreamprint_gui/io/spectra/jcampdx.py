@@ -51,6 +51,8 @@ _DIF = {"%": 0, **{c: i + 1 for i, c in enumerate("JKLMNOPQR")},
         **{c: -(i + 1) for i, c in enumerate("jklmnopqr")}}
 _DUP = {c: i + 1 for i, c in enumerate("STUVWXYZs")}
 _COMPRESSED = set(_SQZ) | set(_DIF) | set(_DUP)
+# DUP counts expand text into many values: a damaged count must not allocate without bound.
+MAX_POINTS = 10_000_000
 _AFFN = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([Ee][+-]?\d+)?")
 _DIGITS = re.compile(r"\d*\.?\d*")
 
@@ -111,9 +113,12 @@ def _lex(line: str, lineno: int, path: str) -> list[_Token]:
     return toks
 
 
-def decode_asdf_line(line: str, lineno: int = 0, path: str = "") -> tuple[float, list[float],
-                                                                          bool]:
-    """Decode one ``(X++(Y..Y))`` line: (X, ordinates, whether the last ordinate was DIF)."""
+def decode_asdf_line(line: str, lineno: int = 0, path: str = "", limit: int = MAX_POINTS
+                     ) -> tuple[float, list[float], bool]:
+    """Decode one ``(X++(Y..Y))`` line: (X, ordinates, whether the last ordinate was DIF).
+
+    More than ``limit`` ordinates (a damaged DUP count) is an error.
+    """
     toks = _lex(line, lineno, path)
     if not toks or toks[0].kind != "abs":
         raise DreamPrintError("a data line must start with its X value", path, lineno)
@@ -135,6 +140,9 @@ def decode_asdf_line(line: str, lineno: int = 0, path: str = "") -> tuple[float,
             count = int(t.text)
             if count < 1:
                 raise DreamPrintError("a DUP count of zero", path, lineno)
+            if len(ys) + count - 1 > limit:
+                raise DreamPrintError(f"DUP count {count} makes more ordinates than NPOINTS",
+                                      path, lineno)
             for _ in range(count - 1):
                 ys.append(ys[-1] + float(last.text) if last.kind == "dif" else ys[-1])
             continue
@@ -238,6 +246,9 @@ def _x_unit(xunits: str) -> str | None:
 def _xydata(rec: dict, data: list, path: str) -> tuple[np.ndarray, np.ndarray]:
     firstx, lastx = _num(rec, "FIRSTX", path), _num(rec, "LASTX", path)
     npoints = int(_num(rec, "NPOINTS", path))
+    if npoints > MAX_POINTS:
+        raise DreamPrintError(f"NPOINTS={npoints} is beyond any spectrometer (limit "
+                              f"{MAX_POINTS})", path, rec["NPOINTS"][1])
     xf, yf = _num(rec, "XFACTOR", path, 1.0), _num(rec, "YFACTOR", path, 1.0)
     if npoints < 2:
         raise DreamPrintError(f"NPOINTS is {npoints}", path, rec["NPOINTS"][1])
@@ -245,7 +256,7 @@ def _xydata(rec: dict, data: list, path: str) -> tuple[np.ndarray, np.ndarray]:
     ys: list[float] = []
     prev_dif = False
     for lineno, line in data:
-        x, vals, ended_dif = decode_asdf_line(line, lineno, path)
+        x, vals, ended_dif = decode_asdf_line(line, lineno, path, npoints + 1 - len(ys))
         first_index = len(ys)
         if prev_dif:
             if not vals:

@@ -101,3 +101,15 @@ def test_impossible_values_refused(tmp_path, calibration_set_dir):
                                         "380,0.9\n550,1.08\n730,0.9\n")
     with pytest.raises(DreamPrintError, match="reflectance above 100 % 1.08 at 550 nm"):
         load_calibration_set(p, GRID)
+
+
+def test_documented_example_is_valid_toml():
+    import re
+    import tomllib
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[3] / "docs/calibration-set.md").read_text()
+    example = re.search(r"```toml\n(.*?)```", doc, re.S).group(1)
+    d = tomllib.loads(example)
+    assert [layer["ink"] for layer in d["layer"]] == ["C", "C", "W"]
+    assert d["layer"][2]["thickness_mm"] == float("inf")

@@ -99,8 +99,15 @@ def test_kubelka_munk_table_refused(shared_data):
     assert exc.value.line == 1 and exc.value.path == str(path)
 
 
-@pytest.mark.parametrize("name", sorted(p.name for p in (
-    Path(__file__).resolve().parents[3].parent / "shared/data/spectra/formats").glob("*")))
+SHARED_FORMATS = sorted(p.name for p in (
+    Path(__file__).resolve().parents[3].parent / "shared/data/spectra/formats").glob("*"))
+
+
+def test_shared_samples_present():
+    assert len(SHARED_FORMATS) >= 6, SHARED_FORMATS
+
+
+@pytest.mark.parametrize("name", SHARED_FORMATS)
 def test_every_shared_sample_reads_or_is_refused_clearly(shared_data, name):
     path = shared_data / "spectra/formats" / name
     try:

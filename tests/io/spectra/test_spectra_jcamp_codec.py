@@ -76,6 +76,7 @@ def test_two_line_difdup_file(tmp_path):
     ("400 A0J0%\n420 B0%N%J0\n", "without ##END=", 13),
     ("400 A0J0%\n420 B0%N%*0\n##END=\n", "unexpected character", 13),
     ("400 A0J0%\n420 B0%N%J0K0K0\n##END=\n", "more ordinates", 13),
+    ("400 A0J0%\n420 B0%S99999999999\n##END=\n", "DUP count 199999999999", 13),
 ])
 def test_damaged_compressed_files(tmp_path, body, match, line):
     p = _write(tmp_path, body)
