@@ -123,3 +123,30 @@ def test_calibrate_bad_csv(tmp_path, capsys, content, message):
     f.write_text(content)
     code, _, err = run(capsys, "calibrate", str(f), "-o", str(tmp_path / "x.json"))
     assert code == 2 and message in err and not (tmp_path / "x.json").exists()
+
+
+def test_calibrate_from_instrument_calibration_set(tmp_path, capsys):
+    """The shipped example set (CGATS R, Cary T, JCAMP-DX absorbance) gives back the profile
+    its files were generated from (tests/data/spectra/make_test_files.py)."""
+    from pathlib import Path
+
+    toml = Path(__file__).resolve().parents[1] / "data" / "calibration_set" / "set.toml"
+    out = tmp_path / "set.json"
+    code, stdout, err = run(capsys, "calibrate", str(toml), "-o", str(out), "--json")
+    assert code == 0, err
+    assert {i["ink"] for i in json.loads(stdout)["inks"]} == set(INKS)
+    got, ref = load_profile(out), default_profile()
+    np.testing.assert_allclose(got.K, ref.K, rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(got.S, ref.S, rtol=1e-4, atol=1e-6)
+
+
+def test_optically_thick_reflectance_joins_the_fit():
+    from dreamprint_gui.engine.calibration import fit_ink
+    from dreamprint_gui.engine.calibration_types import LayerMeasurement
+
+    K, S = np.full(36, 2.0), np.full(36, 5.0)
+    layers = [LayerMeasurement("W", 0.2, None, reflectance_transmittance(K, S, 0.2)[1], "t"),
+              LayerMeasurement("W", np.inf, reflectance_infinite(K, S), None, "r")]
+    fit = fit_ink(layers, 36)
+    np.testing.assert_allclose(fit.K, K, rtol=1e-6)
+    np.testing.assert_allclose(fit.S, S, rtol=1e-6)
