@@ -3,8 +3,9 @@
 Defines
 -------
 - :func:`invert_closed_form`: Kubelka's explicit inversion of one layer's R, T at thickness t.
-- :func:`fit_ink`: Levenberg-Marquardt over one or several layers (thicknesses, R and/or T),
-  started from the closed form; per-wavelength residuals.
+- :func:`fit_ink`: Levenberg-Marquardt over one or several layers (thicknesses, R and/or T;
+  an optically thick patch, thickness inf, contributes R_inf), started from the closed form;
+  per-wavelength residuals.
 - :func:`calibrate_profile`: all measured inks -> an :class:`InkProfile` plus a fit report; inks
   without measurements keep the base profile's K and S (and the report says so).
 
@@ -124,9 +125,12 @@ def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
     ink = layers[0].ink
     t, R, T, hasR, hasT = _layer_arrays(layers, n_wavelengths)
     for i, m in enumerate(layers):
-        if m.thickness_mm <= 0 or not np.isfinite(m.thickness_mm):
+        if not m.thickness_mm > 0:
             raise DreamPrintError(f"ink {ink}: thickness must be > 0 mm, got {m.thickness_mm}",
                                   m.source or None)
+        if np.isinf(m.thickness_mm) and m.T is not None:
+            raise DreamPrintError(f"ink {ink}: an optically thick layer (thickness inf) has no "
+                                  "transmittance; give its R only", m.source or None)
         if not (hasR[i].any() or hasT[i].any()):
             raise DreamPrintError(f"ink {ink}: a layer has neither R nor T", m.source or None)
     if not hasT.any():
@@ -134,7 +138,7 @@ def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
                               "separated from reflectance of one thickness alone")
     K = np.empty(n_wavelengths)
     S = np.empty(n_wavelengths)
-    both = hasR.all(axis=1) & hasT.all(axis=1)
+    both = hasR.all(axis=1) & hasT.all(axis=1) & np.isfinite(t)
     single_exact = len(layers) == 1 and both[0]
     for j in range(n_wavelengths):
         starts = []
@@ -145,7 +149,7 @@ def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
         if starts:
             k0, s0 = np.median(np.asarray(starts), axis=0)
         else:
-            sel = hasT[:, j] & (T[:, j] > 0)
+            sel = hasT[:, j] & (T[:, j] > 0) & np.isfinite(t)
             k0 = float(np.median(-np.log(np.clip(T[sel, j], 1e-12, 1)) / t[sel])) if sel.any() \
                 else 1.0
             s0 = 0.1 * k0

@@ -60,7 +60,7 @@ def read_measurements_csv(path: Path, wavelengths_nm: NDArray) -> list[LayerMeas
             values = np.array([float(c) for c in row[3:]])
         except ValueError:
             raise DreamPrintError("a cell is not a number", path, line) from None
-        if not (t > 0 and np.isfinite(t)):
+        if not t > 0:
             raise DreamPrintError(f"thickness must be > 0 mm, got {row[2]}", path, line)
         if not np.all(np.isfinite(values)):
             raise DreamPrintError("non-finite value", path, line)

@@ -1,8 +1,8 @@
 """Recipe and spectra-row CSV files used by ``predict --mix-file`` and chart calibration.
 
 Recipes: a header row naming inks (any of C, M, Y, K, W, Cl, case-insensitive; absent inks are
-0), one row per mixture, fractions or percent (a row is read as percent when every row of the
-file sums to 100). Other columns named ``id``, ``name`` or ``sample`` are ignored.
+0), one row per mixture, fractions or percent (a row summing to 100 is read as percent).
+Other columns named ``id``, ``name`` or ``sample`` are ignored.
 
 Spectra rows: a header of wavelengths in nm (other leading columns such as ``id`` or ``name``
 ignored), one row per spectrum, values as fractions or percent (percent when any value > 1.5).
@@ -78,9 +78,9 @@ def read_recipes(path: Path) -> NDArray[np.float64]:
         r = int(np.argwhere(c < 0)[0][0])
         raise DreamPrintError("negative concentration", path, rows[r + 1][0])
     sums = c.sum(axis=1)
-    if np.allclose(sums, 100.0, atol=1e-4):
-        c /= 100.0
-        sums = sums / 100.0
+    percent = np.abs(sums - 100.0) <= 1e-4
+    c[percent] /= 100.0
+    sums[percent] /= 100.0
     bad = np.flatnonzero(np.abs(sums - 1.0) > 1e-4)
     if bad.size:
         r = int(bad[0])

@@ -62,8 +62,11 @@ def looks_like_cary(text_head: str) -> bool:
     rows = _rows("\n".join(lines[:2]))
     if len(rows) < 2 or len(rows[1]) < 2:
         return False
-    return (_x_unit(rows[1][0]) is not None and not is_number(rows[0][0])
-            and rows[1][1].strip().lower() in _Y_MODES)
+    names, head = rows
+    # Cary's name row puts each name over its (X, Y) column pair, the second cell empty.
+    paired = len(names) >= 2 and all(not c.strip() for c in names[1::2])
+    return (paired and _x_unit(head[0]) is not None and not is_number(names[0])
+            and not names[0].lstrip().startswith("#") and not is_number(head[1]))
 
 
 def read_cary(text: str, path: str) -> RawSpectra:

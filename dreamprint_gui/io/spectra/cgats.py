@@ -83,11 +83,20 @@ def _tokens(line: str, lineno: int, path: str) -> list[str]:
         elif c == "#":
             break
         elif c == '"':
-            j = line.find('"', i + 1)
-            if j < 0:
-                raise DreamPrintError("unterminated quoted string", path, lineno)
-            out.append(line[i + 1:j])
-            i = j + 1
+            # A doubled quote inside a string stands for one quote character.
+            buf, j = [], i + 1
+            while True:
+                k = line.find('"', j)
+                if k < 0:
+                    raise DreamPrintError("unterminated quoted string", path, lineno)
+                buf.append(line[j:k])
+                if line.startswith('""', k):
+                    buf.append('"')
+                    j = k + 2
+                    continue
+                break
+            out.append("".join(buf))
+            i = k + 1
         else:
             j = i
             while j < n and line[j] not in " \t\r\f\v\"":
@@ -238,14 +247,17 @@ def _table_spectra(t: _Table, path: str) -> RawSpectra | None:
             raise DreamPrintError(f"SPECTRAL_NORM {scale} must be positive", path)
     quantity = _QUANTITY.get(kw.get("MEAS_TYPE", "").upper())
     notes = []
-    if quantity is None and kw.get("DEVICE_CLASS", "").upper() == "DISPLAY":
+    implied = False
+    device = kw.get("DEVICE_CLASS", "").upper()
+    if quantity is None and device == "DISPLAY":
         quantity = "spd"
     elif quantity is None and (
             "WHITEBASE" in kw.get("MEASUREMENT_SOURCE", "").upper().replace(" ", "")
-            or re.fullmatch(r"M[0-3]", kw.get("MEASUREMENT_CONDITION", "").strip().upper())):
-        # A white base (paper / absolute) and the ISO 13655 conditions M0-M3 exist only for
-        # reflectance measurements.
-        quantity = "reflectance"
+            or re.fullmatch(r"M[0-3]", kw.get("MEASUREMENT_CONDITION", "").strip().upper())
+            or device in ("OUTPUT", "INPUT")):
+        # A white base (paper / absolute), the ISO 13655 conditions M0-M3 and ArgyllCMS's
+        # printer/scanner charts are reflectance measurements, unless the caller says otherwise.
+        quantity, implied = "reflectance", True
         notes.append("reflectance, as the measurement conditions imply")
 
     writer = t.ident or "CGATS"
@@ -255,7 +267,8 @@ def _table_spectra(t: _Table, path: str) -> RawSpectra | None:
         writer = "X-Rite i1Profiler"
     elif t.ident and t.ident.upper() in ("CTI3", "CTI2", "CTI1", "SPECT", "CCSS"):
         writer = f"ArgyllCMS {t.ident}"
-    return RawSpectra(format=f"CGATS.17 ({writer})", samples=samples, quantity=quantity,
+    label = "CGATS.17" if writer.upper() in ("CGATS", "CGATS.17") else f"CGATS.17 ({writer})"
+    return RawSpectra(format=label, samples=samples, quantity=quantity, implied=implied,
                       scale=scale, wavelength_unit="nm", notes=notes,
                       metadata={k.lower(): v for k, v in kw.items()})
 
@@ -291,7 +304,7 @@ def read_cgats(text: str, path: str) -> RawSpectra:
 
 
 def _quote(s: str) -> str:
-    return '"' + s.replace('"', "'") + '"'
+    return '"' + s.replace('"', '""').replace("\n", " ").replace("\r", " ") + '"'
 
 
 def write_cgats(path: str | os.PathLike, samples: Sequence[Sample], quantity: str) -> None:
@@ -320,8 +333,8 @@ def write_cgats(path: str | os.PathLike, samples: Sequence[Sample], quantity: st
         'ORIGINATOR "DreamPrint"',
         f"MEAS_TYPE {_quote(meas[quantity])}",
         'KEYWORD "SPECTRAL_BANDS"', f'SPECTRAL_BANDS "{wl.size}"',
-        'KEYWORD "SPECTRAL_START_NM"', f'SPECTRAL_START_NM "{wl[0]!r}"',
-        'KEYWORD "SPECTRAL_END_NM"', f'SPECTRAL_END_NM "{wl[-1]!r}"',
+        'KEYWORD "SPECTRAL_START_NM"', f'SPECTRAL_START_NM "{float(wl[0])!r}"',
+        'KEYWORD "SPECTRAL_END_NM"', f'SPECTRAL_END_NM "{float(wl[-1])!r}"',
         'KEYWORD "SPECTRAL_NORM"', 'SPECTRAL_NORM "1"',
         f"NUMBER_OF_FIELDS {len(names) + 2}",
         "BEGIN_DATA_FORMAT",

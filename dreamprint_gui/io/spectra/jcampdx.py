@@ -12,7 +12,8 @@ ABSORBANCE, REFLECTANCE, LOG(EPSILON), ``##XYPOINTS=(XY..XY)``, ``LINK`` blocks)
 
 Why not the ``jcamp`` package (1.3.2, installed, the maintained Python reader): checked on files
 compressed here to the specification, it raises ``IndexError`` on a DUP count that follows an
-SQZ value (e.g. ``@T``, legal and common for flat baselines), only *prints* failed Y-value and
+SQZ value (e.g. ``@T``, legal and common for flat baselines), misreads DUP counts of two or more
+digits (``%S1`` = eleven zero differences), only *prints* failed Y-value and
 X checks and length mismatches (a damaged file reads silently wrong) and gives no line numbers.
 Its output is used in the tests as an independent cross-check on files it does read.
 
@@ -50,6 +51,8 @@ _DIF = {"%": 0, **{c: i + 1 for i, c in enumerate("JKLMNOPQR")},
         **{c: -(i + 1) for i, c in enumerate("jklmnopqr")}}
 _DUP = {c: i + 1 for i, c in enumerate("STUVWXYZs")}
 _COMPRESSED = set(_SQZ) | set(_DIF) | set(_DUP)
+# DUP counts expand text into many values: a damaged count must not allocate without bound.
+MAX_POINTS = 10_000_000
 _AFFN = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([Ee][+-]?\d+)?")
 _DIGITS = re.compile(r"\d*\.?\d*")
 
@@ -110,9 +113,12 @@ def _lex(line: str, lineno: int, path: str) -> list[_Token]:
     return toks
 
 
-def decode_asdf_line(line: str, lineno: int = 0, path: str = "") -> tuple[float, list[float],
-                                                                          bool]:
-    """Decode one ``(X++(Y..Y))`` line: (X, ordinates, whether the last ordinate was DIF)."""
+def decode_asdf_line(line: str, lineno: int = 0, path: str = "", limit: int = MAX_POINTS
+                     ) -> tuple[float, list[float], bool]:
+    """Decode one ``(X++(Y..Y))`` line: (X, ordinates, whether the last ordinate was DIF).
+
+    More than ``limit`` ordinates (a damaged DUP count) is an error.
+    """
     toks = _lex(line, lineno, path)
     if not toks or toks[0].kind != "abs":
         raise DreamPrintError("a data line must start with its X value", path, lineno)
@@ -134,6 +140,9 @@ def decode_asdf_line(line: str, lineno: int = 0, path: str = "") -> tuple[float,
             count = int(t.text)
             if count < 1:
                 raise DreamPrintError("a DUP count of zero", path, lineno)
+            if len(ys) + count - 1 > limit:
+                raise DreamPrintError(f"DUP count {count} makes more ordinates than NPOINTS",
+                                      path, lineno)
             for _ in range(count - 1):
                 ys.append(ys[-1] + float(last.text) if last.kind == "dif" else ys[-1])
             continue
@@ -237,6 +246,9 @@ def _x_unit(xunits: str) -> str | None:
 def _xydata(rec: dict, data: list, path: str) -> tuple[np.ndarray, np.ndarray]:
     firstx, lastx = _num(rec, "FIRSTX", path), _num(rec, "LASTX", path)
     npoints = int(_num(rec, "NPOINTS", path))
+    if npoints > MAX_POINTS:
+        raise DreamPrintError(f"NPOINTS={npoints} is beyond any spectrometer (limit "
+                              f"{MAX_POINTS})", path, rec["NPOINTS"][1])
     xf, yf = _num(rec, "XFACTOR", path, 1.0), _num(rec, "YFACTOR", path, 1.0)
     if npoints < 2:
         raise DreamPrintError(f"NPOINTS is {npoints}", path, rec["NPOINTS"][1])
@@ -244,7 +256,7 @@ def _xydata(rec: dict, data: list, path: str) -> tuple[np.ndarray, np.ndarray]:
     ys: list[float] = []
     prev_dif = False
     for lineno, line in data:
-        x, vals, ended_dif = decode_asdf_line(line, lineno, path)
+        x, vals, ended_dif = decode_asdf_line(line, lineno, path, npoints + 1 - len(ys))
         first_index = len(ys)
         if prev_dif:
             if not vals:
@@ -411,8 +423,8 @@ def write_jcamp(path: str | os.PathLike, samples: Sequence[Sample], quantity: st
             "##ORIGIN=DreamPrint", "##OWNER=public domain",
             "##XUNITS=NANOMETERS", f"##YUNITS={yunits[quantity]}",
             "##XFACTOR=1", f"##YFACTOR={yfactor!r}",
-            f"##FIRSTX={w[0]!r}", f"##LASTX={w[-1]!r}", f"##NPOINTS={w.size}",
-            f"##FIRSTY={v[0]!r}", "##XYDATA=(X++(Y..Y))", *body, "##END="])
+            f"##FIRSTX={float(w[0])!r}", f"##LASTX={float(w[-1])!r}", f"##NPOINTS={w.size}",
+            f"##FIRSTY={float(v[0])!r}", "##XYDATA=(X++(Y..Y))", *body, "##END="])
     if len(blocks) == 1:
         lines = blocks[0]
     else:

@@ -22,7 +22,6 @@ extrapolation is allowed.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -33,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from ...errors import DreamPrintError
 
 __all__ = ["QUANTITIES", "FRACTION_QUANTITIES", "Sample", "SpectraFile", "RawSample",
-           "RawSpectra", "finish", "ValueScale"]
+           "RawSpectra", "finish", "check_sample", "ValueScale"]
 
 QUANTITIES: tuple[str, ...] = ("reflectance", "transmittance", "absorbance", "log_epsilon", "spd")
 FRACTION_QUANTITIES: tuple[str, ...] = ("reflectance", "transmittance")
@@ -175,7 +174,9 @@ class RawSample:
 class RawSpectra:
     """What a format reader found, and what the file states about it.
 
-    ``quantity`` is ``None`` when the file does not say; ``scale`` is the stated full scale of
+    ``quantity`` is ``None`` when the file does not say; ``implied`` marks a quantity the file
+    only implies (e.g. by reflectance measurement conditions), which a caller may overrule;
+    ``scale`` is the stated full scale of
     reflectance/transmittance values (100 for percent, 1 for fractions) or ``None``;
     ``wavelength_unit`` is ``"nm"``, ``"um"``, ``"angstrom"``, ``"cm-1"`` or ``None``.
     """
@@ -183,6 +184,7 @@ class RawSpectra:
     format: str
     samples: list[RawSample]
     quantity: str | None = None
+    implied: bool = False
     scale: float | None = None
     wavelength_unit: str | None = None
     notes: list[str] = field(default_factory=list)
@@ -262,25 +264,29 @@ def _ascending(s: RawSample, path: str, notes: list[str]) -> Sample:
     return Sample(s.name, w, v)
 
 
-def _check(samples: Sequence[Sample], quantity: str) -> list[str]:
-    problems = []
-    for s in samples:
-        v, w = s.values, s.wavelengths_nm
-        checks = [(~np.isfinite(v), "non-finite value")]
+def check_sample(s: Sample, quantity: str) -> list[str]:
+    """Physically impossible values of one sample, one line per kind (empty when none)."""
+    v, w = s.values, s.wavelengths_nm
+    checks = [(~np.isfinite(v), "non-finite value")]
+    with np.errstate(invalid="ignore"):
         if quantity in FRACTION_QUANTITIES:
             checks += [(v < -RANGE_TOLERANCE, f"negative {quantity}"),
                        (v > 1 + RANGE_TOLERANCE, f"{quantity} above 100 %")]
         elif quantity == "spd":
-            checks.append((v < -RANGE_TOLERANCE * max(1.0, float(np.nanmax(np.abs(v)))),
-                           "negative spectral power"))
-        for mask, what in checks:
-            idx = np.flatnonzero(mask)
-            if idx.size:
-                i = int(idx[0])
-                more = f" (and {idx.size - 1} more wavelength(s))" if idx.size > 1 else ""
-                problems.append(f"sample '{s.name}': {what} {_fmt(v[i])} at "
-                                f"{_fmt(w[i])} nm{more}")
+            peak = float(np.max(np.abs(v[np.isfinite(v)]), initial=1.0))
+            checks.append((v < -RANGE_TOLERANCE * peak, "negative spectral power"))
+    problems = []
+    for mask, what in checks:
+        idx = np.flatnonzero(mask)
+        if idx.size:
+            i = int(idx[0])
+            more = f" (and {idx.size - 1} more wavelength(s))" if idx.size > 1 else ""
+            problems.append(f"sample '{s.name}': {what} {_fmt(v[i])} at {_fmt(w[i])} nm{more}")
     return problems
+
+
+def _check(samples: Sequence[Sample], quantity: str) -> list[str]:
+    return [p for s in samples for p in check_sample(s, quantity)]
 
 
 def finish(raw: RawSpectra, path: str, *, quantity: str | None = None,
@@ -301,6 +307,11 @@ def finish(raw: RawSpectra, path: str, *, quantity: str | None = None,
     notes: list[str] = []
 
     held = raw.quantity
+    if held is not None and raw.implied:
+        wanted = file_quantity or quantity
+        if wanted in FRACTION_QUANTITIES and wanted != held:
+            notes.append(f"the file implies {held}; read as {wanted} as the caller states")
+            held = wanted
     if held is not None and file_quantity is not None and file_quantity != held:
         raise DreamPrintError(f"the file states {held}, not {file_quantity}", path)
     if held is None:
@@ -331,6 +342,10 @@ def finish(raw: RawSpectra, path: str, *, quantity: str | None = None,
             pct = "percent" if scale == 100 else f"a 0-{_fmt(scale)} scale"
             notes.append(f"{pct} to fraction (divided by {_fmt(scale)}, {why})")
             samples = [Sample(s.name, s.wavelengths_nm, s.values / scale) for s in samples]
+    elif held is None and raw.scale not in (None, 1.0):
+        # A stated percent scale (e.g. SPECTRAL_PCT) means reflectance or transmittance.
+        notes.append(f"percent to fraction (divided by {_fmt(raw.scale)}, as the file states)")
+        samples = [Sample(s.name, s.wavelengths_nm, s.values / raw.scale) for s in samples]
 
     out_q = held if held is not None else UNSTATED
     if quantity is not None and quantity != held:
@@ -382,7 +397,3 @@ def is_number(text: str) -> bool:
     except ValueError:
         return False
     return True
-
-
-def finite_or_nan(x: float) -> float:
-    return x if math.isfinite(x) else math.nan
