@@ -5,7 +5,7 @@ of the active profile (convex hull of predicted mixture colours, each vertex in 
 and the sRGB gamut with the printable gamut as a wireframe inside it. Right, a colour picker
 (any colour -> the table's C, M, Y, K, W concentrations, the reproduced colour and the dE2000;
 both colours are marked in the 3D view) and the paper's Fig. 7-style hexagon chart (target vs
-reproduced per cell), drawn by the engine's chart function on a Qt matplotlib canvas.
+reproduced per cell), drawn by the engine's ``gamut.charts.hexagon_chart`` on a worker thread.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import logging
 
 from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QColor
+from PySide6.QtGui import QColor, QImage, QPixmap
 from PySide6.QtWidgets import (
     QColorDialog,
     QFormLayout,
@@ -23,6 +23,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QProgressBar,
     QPushButton,
+    QSizePolicy,
     QSpinBox,
     QSplitter,
     QTabWidget,
@@ -50,6 +51,7 @@ class GamutPage(QWidget):
 
     rendered = Signal()
     picked = Signal(dict)
+    chartReady = Signal()
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -104,16 +106,18 @@ class GamutPage(QWidget):
         pl.addWidget(cbox)
         pl.addStretch(1)
 
-        # hexagon chart
-        from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
-        from matplotlib.figure import Figure
-
-        self.chart_figure = Figure(figsize=(4, 4), layout="constrained")
-        self.chart_canvas = FigureCanvasQTAgg(self.chart_figure)
+        # hexagon chart (the engine draws it: gamut.charts.hexagon_chart)
+        self.chart_view = QLabel("the chart appears once the colour tables are ready")
+        self.chart_view.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.chart_view.setMinimumSize(280, 200)
+        self.chart_view.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
+        self.chart_image: QImage | None = None
+        self.chart_stats: dict | None = None
         self.chart_status = QLabel("")
+        self.chart_status.setWordWrap(True)
         chart = QWidget()
         cl = QVBoxLayout(chart)
-        cl.addWidget(self.chart_canvas, 1)
+        cl.addWidget(self.chart_view, 1)
         cl.addWidget(self.chart_status)
 
         self.side = QTabWidget()
@@ -248,17 +252,45 @@ class GamutPage(QWidget):
     def _draw_chart(self) -> None:
         if self.tables is None or self.profile is None:
             return
-        from ..engine.gamut.charts import draw_hexagon_chart
+        tables, profile = self.tables, self.profile
 
-        self.chart_figure.clear()
-        try:
-            draw_hexagon_chart(self.chart_figure, self.tables, self.profile)
-        except Exception as exc:  # noqa: BLE001 - shown inline
-            log.exception("hexagon chart")
-            self.chart_status.setText(f"<span style='color:#e55'>{exc}</span>")
+        def job(report, cancel):
+            import tempfile
+
+            from ..engine.gamut.charts import hexagon_chart
+
+            with tempfile.TemporaryDirectory() as d:
+                path = f"{d}/hexagon.png"
+                stats = hexagon_chart(tables, profile, path)
+                image = QImage(path)
+                return stats, image.copy()
+
+        self.chart_status.setText("drawing the hexagon chart ...")
+        task = Task(job, "hexagon-chart")
+        task.succeeded.connect(self._show_chart)
+        task.failed.connect(lambda msg, _tb: self.chart_status.setText(
+            f"<span style='color:#e55'>{msg}</span>"))
+        self._chart_task = run_task(task)
+
+    def _show_chart(self, result) -> None:
+        self.chart_stats, self.chart_image = result
+        parts = [f"HSV value {k.split('_')[1]}: mean dE2000 {v['mean']:.2f}, max {v['max']:.2f}"
+                 for k, v in self.chart_stats.items()]
+        self.chart_status.setText("Target colour vs reproduced colour per cell (paper Fig. 7). "
+                                  + "; ".join(parts))
+        self._update_chart_pixmap()
+        self.chartReady.emit()
+
+    def _update_chart_pixmap(self) -> None:
+        if self.chart_image is None:
             return
-        self.chart_status.setText("each cell: target (outer) vs reproduced (inner)")
-        self.chart_canvas.draw_idle()
+        self.chart_view.setPixmap(QPixmap.fromImage(self.chart_image).scaled(
+            self.chart_view.size(), Qt.AspectRatioMode.KeepAspectRatio,
+            Qt.TransformationMode.SmoothTransformation))
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        self._update_chart_pixmap()
 
     def shutdown(self) -> None:
         if self._task is not None:

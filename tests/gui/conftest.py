@@ -1,8 +1,9 @@
 """Qt test set-up shared by the GUI tests.
 
-One QApplication serves the whole pytest process (pytest-qt creates it after collection), so
-the Qt platform is chosen once, here: pytest-xvfb has started Xvfb and set DISPLAY by the time
-this file is imported, and the X11 platform then serves plain widgets and the VTK views alike
+One QApplication serves the whole pytest process (pytest-qt creates it for the first test that
+needs it), so the Qt platform is chosen once, by the session fixture below, which runs before:
+pytest-xvfb has started Xvfb and set DISPLAY by then (pytest_configure), and the X11 platform
+then serves plain widgets and the VTK views alike
 (MEASURED.md: a QtInteractor cannot create a GL context on the offscreen platform). Without a
 display (``pytest --no-xvfb`` on a headless machine) plain widget tests still run offscreen and
 the tests that render with VTK fail with a message saying why (fixture ``gl_display``).
@@ -14,15 +15,30 @@ import os
 
 import pytest
 
-if not os.environ.get("QT_QPA_PLATFORM"):
-    os.environ["QT_QPA_PLATFORM"] = "xcb" if os.environ.get("DISPLAY") else "offscreen"
 TABLE_SIZE = 9  # small colour tables keep the suite fast; the code path is the full one
 
 
+@pytest.fixture(scope="session")
+def table_size() -> int:
+    return TABLE_SIZE
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _qt_platform():
+    if not os.environ.get("QT_QPA_PLATFORM"):
+        os.environ["QT_QPA_PLATFORM"] = "xcb" if os.environ.get("DISPLAY") else "offscreen"
+
+
+@pytest.fixture(scope="session")
+def _table_cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("cache")
+
+
 @pytest.fixture(autouse=True)
-def _isolated(tmp_path_factory, monkeypatch):
-    """Settings, log and colour-table cache of each test in a private folder."""
+def _isolated(_qt_platform, tmp_path_factory, monkeypatch, _table_cache):
+    """Settings and log of each test in a private folder; colour tables cached per session."""
     d = tmp_path_factory.mktemp("gui-home")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(_table_cache))
     monkeypatch.setenv("DREAMPRINT_SETTINGS", str(d / "settings.ini"))
     monkeypatch.setenv("DREAMPRINT_LOG_DIR", str(d / "log"))
     yield d

@@ -1,0 +1,110 @@
+"""The main window: starts on the default profile and the demo volume, previewed; the preview
+renders pixels, follows its controls, scrubs halftoned layers; files open by drag and drop."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PySide6.QtCore import QMimeData, QPointF, Qt, QUrl
+from PySide6.QtGui import QDropEvent
+
+from dreamprint_gui.engine.printer import EMPTY_LABEL
+from dreamprint_gui.engine.profile import default_profile
+from dreamprint_gui.gui.main_window import MainWindow, classify_path
+from dreamprint_gui.gui.volume_view import frame_statistics
+
+
+@pytest.fixture
+def window(qtbot, gl_display, table_size):
+    w = MainWindow(table_size=table_size)
+    w.interactive = False
+    qtbot.addWidget(w)
+    w.preview.set_params(height_mm=6.0)  # a small print keeps the halftoned layers small
+    w.show()
+    with qtbot.waitSignal(w.ready, timeout=180000):
+        w.use_default_profile()
+        w.open_path("demo")
+    yield w
+    w.close()
+
+
+def _volume_only_frame(plotter):
+    """A frame with only the volumes drawn (box outlines and labels hidden)."""
+    hidden = []
+    for r in plotter.renderers:
+        for name, actor in r.actors.items():
+            if not name.startswith("volume"):
+                actor.SetVisibility(False)
+                hidden.append(actor)
+    plotter.render()
+    img = plotter.screenshot(return_img=True)
+    for a in hidden:
+        a.SetVisibility(True)
+    plotter.render()
+    return img
+
+
+def test_preview_renders_source_and_print(window):
+    img = _volume_only_frame(window.preview.plotter)
+    h, w = img.shape[:2]
+    left, right = frame_statistics(img[:, : w // 2]), frame_statistics(img[:, w // 2:])
+    assert left["non_background_fraction"] > 0.02, left
+    assert right["non_background_fraction"] > 0.02, right
+    assert "downsampled" in window.preview.note.text()
+    assert window.preview.data.print_shape_xyz == tuple(window.preview.ctx.grid.shape_xyz)
+
+
+def test_slice_scrubber_shows_halftoned_labels(window, qtbot):
+    p = window.preview
+    nx, ny, nz = p.data.print_shape_xyz
+    labels = p.slice_labels
+    assert labels.shape == (ny, nx) and labels.max() <= EMPTY_LABEL
+    assert p.slice_image is not None and "layer" in p.legend.text()
+    p.slice_slider.setValue(0)  # the bottom layer of a cloud is mostly background
+    qtbot.waitUntil(lambda: p.legend.text().startswith("layer 0:"), timeout=30000)
+
+
+def test_density_scale_and_background_follow_the_engine(window, qtbot):
+    p = window.preview
+    base = p.data
+    with qtbot.waitSignal(p.rendered, timeout=60000):
+        p.set_params(density_scale=3.0)
+    # the source's density rule: sigma = density * scale / mm per unit
+    np.testing.assert_allclose(p.data.source_sigma, 3.0 * base.source_sigma, rtol=1e-5)
+    with qtbot.waitSignal(p.rendered, timeout=60000):
+        p.set_params(background="empty")
+    below = p.data.source_sigma < p.ctx.halftoner.threshold
+    assert below.any() and np.all(p.data.print_sigma[below] == 0)
+    assert np.all(p.data.print_sigma[~below] > 0)
+
+
+def test_drop_a_profile_and_a_bad_file(window, qtbot, tmp_path):
+    prof = default_profile().to_json_dict()
+    prof["name"] = "dropped-profile"
+    path = tmp_path / "dropped.json"
+    path.write_text(json.dumps(prof))
+    bad = tmp_path / "broken.json"
+    bad.write_text("{ not json")
+
+    def drop(p):
+        mime = QMimeData()
+        mime.setUrls([QUrl.fromLocalFile(str(p))])
+        ev = QDropEvent(QPointF(10, 10), Qt.DropAction.CopyAction, mime,
+                        Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier)
+        window.dropEvent(ev)
+
+    drop(path)
+    assert window.profile.name == "dropped-profile"
+    assert window.settings.recent_files()[0] == str(path.resolve())
+    drop(bad)  # the problem is reported, the active profile stays
+    assert window.profile.name == "dropped-profile"
+    assert "broken.json" in window.statusBar().currentMessage()
+    qtbot.waitUntil(lambda: window.tables is not None, timeout=120000)
+
+
+def test_classify_path():
+    assert classify_path("a/b.json") == "profile"
+    assert classify_path("set.TOML") == "calibration-set"
+    assert classify_path("cloud.vdb") == "volume" and classify_path("demo") == "volume"
