@@ -333,7 +333,6 @@ def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
     from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
     import dask
-    from dask.callbacks import Callback
 
     stop = threading.Event()
 
@@ -361,7 +360,8 @@ def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
     else:
         pool = ThreadPoolExecutor(workers)
         get = dask.threaded.get
-    cb = Callback(pretask=pretask, posttask=posttask)
+    # dask.local's callback tuple: (start, start_state, pretask, posttask, finish).
+    cb = (None, None, pretask, posttask, None)
 
     def drive():
         try:
@@ -383,7 +383,7 @@ def _distributed_results(ctx, slabs, slices_dir, address, out_q, cancel):
     from distributed import Client, as_completed
 
     try:
-        client = Client(address, timeout="10s", set_as_default=False)
+        client = Client(address, timeout="10s")
     except (OSError, TimeoutError) as exc:
         raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     stop = threading.Event()
