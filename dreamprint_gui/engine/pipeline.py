@@ -183,7 +183,10 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
     check_tray(shape, printer)  # before any expensive work
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
                                   s.table_size)
-    thr = s.density_threshold if s.density_threshold is not None else 0.5 * _clear_sigma(profile)
+    sigma_clear = getattr(tables, "sigma_clear", None)
+    if sigma_clear is None:
+        sigma_clear = _clear_sigma(profile)
+    thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
     bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
     return JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
