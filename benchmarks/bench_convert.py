@@ -33,10 +33,11 @@ def height_for(n_voxels: float) -> float:
     return (n_voxels * VOXEL[0] * VOXEL[1] * VOXEL[2]) ** (1 / 3)
 
 
-def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None) -> dict:
+def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
+        source: str = "demo") -> dict:
     from dreamprint_gui.engine.pipeline import ConvertSettings, run_conversion
 
-    s = ConvertSettings(source="demo", output=out, height_mm=height_for(n), workers=workers,
+    s = ConvertSettings(source=source, output=out, height_mm=height_for(n), workers=workers,
                         halftone=halftone, scheduler=scheduler, overwrite=True)
     # Warm the caches (tables, mask, numba) outside the timed run.
     from dreamprint_gui.engine.pipeline import prepare_job
@@ -59,11 +60,11 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None) 
             "job_mb": sum(f.stat().st_size for f in Path(out, "slices").iterdir()) / 1e6}
 
 
-def child(n: float, workers: int, halftone: str, scheduler: str | None) -> dict:
+def child(n: float, workers: int, halftone: str, scheduler: str | None, source: str) -> dict:
     tmp = tempfile.mkdtemp(prefix="dp-bench-", dir=os.environ.get("BENCH_DIR"))
     try:
         cmd = [sys.executable, __file__, "--one", str(n), "--workers", str(workers),
-               "--out", os.path.join(tmp, "JOB"), "--halftone", halftone]
+               "--out", os.path.join(tmp, "JOB"), "--halftone", halftone, "--source", source]
         if scheduler:
             cmd += ["--scheduler", scheduler]
         res = subprocess.run(cmd, capture_output=True, text=True, check=False)
@@ -83,15 +84,18 @@ def main() -> None:
     ap.add_argument("--halftone", default="blue-noise")
     ap.add_argument("--scheduler", default=None)
     ap.add_argument("--no-speedup", action="store_true")
+    ap.add_argument("--source", default="demo", help="demo, or a volume file (a cube-ish one: "
+                    "the job size assumes equal extents)")
     a = ap.parse_args()
     if a.one:
-        print(json.dumps(one(a.one, a.workers, a.out, a.halftone, a.scheduler)))
+        print(json.dumps(one(a.one, a.workers, a.out, a.halftone, a.scheduler, a.source)))
         return
-    print(f"machine: {os.cpu_count()} cores; demo source on j850-paper; halftone {a.halftone}")
+    print(f"machine: {os.cpu_count()} cores; source {a.source} on j850-paper; "
+          f"halftone {a.halftone}")
     print(f"{'voxels':>12} {'grid (x,y,z)':>20} {'workers':>7} {'wall s':>8} {'Mvox/s':>8} "
           f"{'peak RSS MB':>11} {'job MB':>8}")
     for n in (float(x) for x in a.sizes.split(",")):
-        r = child(n, a.workers, a.halftone, a.scheduler)
+        r = child(n, a.workers, a.halftone, a.scheduler, a.source)
         print(f"{r['voxels']:>12,} {str(tuple(r['grid'])):>20} {a.workers:>7} "
               f"{r['wall_s']:>8.1f} {r['voxels_per_s'] / 1e6:>8.1f} {r['peak_rss_mb']:>11.0f} "
               f"{r['job_mb']:>8.0f}", flush=True)
@@ -100,8 +104,8 @@ def main() -> None:
               f"{st['lookup_halftone']:.1f}, png {st['png']:.1f}, write {st['write']:.1f}",
               flush=True)
     if not a.no_speedup:
-        r1 = child(1e8, 1, a.halftone, a.scheduler)
-        r2 = child(1e8, 2, a.halftone, a.scheduler)
+        r1 = child(1e8, 1, a.halftone, a.scheduler, a.source)
+        r2 = child(1e8, 2, a.halftone, a.scheduler, a.source)
         print(f"1 -> 2 workers on {r1['voxels']:,} voxels: {r1['voxels_per_s'] / 1e6:.1f} -> "
               f"{r2['voxels_per_s'] / 1e6:.1f} Mvox/s, speed-up "
               f"{r2['voxels_per_s'] / r1['voxels_per_s']:.2f}x")

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from ..errors import DreamPrintError
 from .halftone import HALFTONE_METHODS, Halftoner
@@ -182,7 +183,10 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
     check_tray(shape, printer)  # before any expensive work
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
                                   s.table_size)
-    thr = s.density_threshold if s.density_threshold is not None else 0.5 * _clear_sigma(profile)
+    sigma_clear = getattr(tables, "sigma_clear", None)
+    if sigma_clear is None:
+        sigma_clear = _clear_sigma(profile)
+    thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
     bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
     return JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
@@ -215,6 +219,28 @@ def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
             acc[k] = acc.get(k, 0.0) + v
 
 
+@njit(cache=True, nogil=True)
+def _gather_foreground(rgb, dens, threshold, idx, rgb_fg, dens_fg):
+    n = 0
+    for i in range(dens.shape[0]):
+        if dens[i] >= threshold:
+            idx[n] = i
+            rgb_fg[n, 0] = rgb[i, 0]
+            rgb_fg[n, 1] = rgb[i, 1]
+            rgb_fg[n, 2] = rgb[i, 2]
+            dens_fg[n] = dens[i]
+            n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _scatter_conc(idx, n, conc_fg, conc):
+    for k in range(n):
+        i = idx[k]
+        for m in range(6):
+            conc[i, m] = conc_fg[k, m]
+
+
 def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
                      conc: np.ndarray, labels: np.ndarray, counts: np.ndarray,
                      sums: np.ndarray, clamped: dict[str, float]) -> None:
@@ -223,18 +249,20 @@ def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
     _, tables = ctx.resources()
     rgb = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32)
     d = np.ascontiguousarray(dens.reshape(-1), dtype=np.float32)
-    fg = d >= np.float32(ctx.halftoner.threshold)
-    n_fg = int(np.count_nonzero(fg))
-    if n_fg == d.size:
+    # Background voxels skip the lookup: faster, and they are not "clamped" (they become
+    # background by choice, not for want of a reachable density).
+    n = d.size
+    idx = np.empty(n, dtype=np.int64)
+    rgb_fg = np.empty((n, 3), dtype=np.float32)
+    d_fg = np.empty(n, dtype=np.float32)
+    n_fg = _gather_foreground(rgb, d, np.float32(ctx.halftoner.threshold), idx, rgb_fg, d_fg)
+    if n_fg == n:
         _merge_clamped(clamped, _counts_dict(lookup_and_align_into(tables, rgb, d, conc)))
     elif n_fg:
-        # Background voxels skip the lookup: faster, and they are not "clamped" (they become
-        # background by choice, not for want of a reachable density).
-        idx = np.flatnonzero(fg)
         sub = np.empty((n_fg, 6), dtype=np.float32)
         _merge_clamped(clamped, _counts_dict(
-            lookup_and_align_into(tables, rgb[idx], d[idx], sub)))
-        conc[idx] = sub
+            lookup_and_align_into(tables, rgb_fg[:n_fg], d_fg[:n_fg], sub)))
+        _scatter_conc(idx, n_fg, sub, conc)
     ctx.halftoner.layer_into(conc, d, z, labels, counts, sums)
 
 
@@ -333,7 +361,6 @@ def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
     from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
     import dask
-    from dask.callbacks import Callback
 
     stop = threading.Event()
 
@@ -361,7 +388,8 @@ def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
     else:
         pool = ThreadPoolExecutor(workers)
         get = dask.threaded.get
-    cb = Callback(pretask=pretask, posttask=posttask)
+    # dask.local's callback tuple: (start, start_state, pretask, posttask, finish).
+    cb = (None, None, pretask, posttask, None)
 
     def drive():
         try:
@@ -383,7 +411,7 @@ def _distributed_results(ctx, slabs, slices_dir, address, out_q, cancel):
     from distributed import Client, as_completed
 
     try:
-        client = Client(address, timeout="10s", set_as_default=False)
+        client = Client(address, timeout="10s")
     except (OSError, TimeoutError) as exc:
         raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     stop = threading.Event()
