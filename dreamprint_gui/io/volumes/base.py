@@ -32,7 +32,8 @@ import numpy as np
 from ...errors import DreamPrintError
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
-           "sniff_format", "open_source", "FORMATS"]
+           "uniform_rgb",
+           "sniff_format", "open_source", "inspect_file", "FORMATS"]
 
 
 @dataclass(frozen=True)
@@ -112,6 +113,15 @@ def linear_to_srgb(c: np.ndarray) -> np.ndarray:
     return out.astype(np.float32, copy=False)
 
 
+def uniform_rgb(shape: tuple[int, ...], colour) -> np.ndarray:
+    """float32 ``shape + (3,)`` filled with one colour (per-channel fill: numpy's broadcast
+    copy of a length-3 vector is several times slower)."""
+    out = np.empty(tuple(shape) + (3,), np.float32)
+    for k in range(3):
+        out[..., k] = colour[k]
+    return out
+
+
 def check_slab(grid: PrintGrid, z0: int, z1: int) -> None:
     """Refuse a slab outside the grid (a programming error upstream, but cheap to check)."""
     if not (0 <= z0 < z1 <= grid.shape_xyz[2]):
@@ -182,6 +192,23 @@ def sniff_format(path: Path) -> str:
     raise DreamPrintError("not a volume format DreamPrint reads (OpenVDB, NanoVDB, VTK image, "
                           "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ, MagicaVoxel)",
                           path)
+
+
+def inspect_file(path_or_name: str | os.PathLike) -> dict:
+    """The ``inspect`` description of a file, without choosing grids or options (a file whose
+    density grid is empty or missing can still be inspected)."""
+    import importlib
+
+    if str(path_or_name) == "demo":
+        return open_source("demo").info()
+    path = Path(path_or_name)
+    if not path.exists():
+        raise DreamPrintError("no such file", path)
+    key = sniff_format(path)
+    module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
+    if hasattr(module, "inspect_path"):
+        return module.inspect_path(path)
+    return module.open_path(path, fmt=key).info()
 
 
 def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
