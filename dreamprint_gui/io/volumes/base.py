@@ -106,8 +106,8 @@ def voxel_centres(grid: PrintGrid, axis: int, lo: int = 0, hi: int | None = None
 
 
 def linear_to_srgb(c: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 sRGB encoding of linear values, clipped to [0, 1], in place if float32."""
-    c = np.clip(c, 0.0, 1.0, out=c if c.dtype == np.float32 else None)
+    """IEC 61966-2-1 sRGB encoding of linear values, clipped to [0, 1] (float32)."""
+    c = np.clip(np.asarray(c, np.float32), 0.0, 1.0)
     low = c <= 0.0031308
     out = np.where(low, 12.92 * c, 1.055 * np.power(c, 1 / 2.4, dtype=np.float32) - 0.055)
     return out.astype(np.float32, copy=False)
