@@ -14,6 +14,7 @@ density is ``solid_density`` per source unit in every filled voxel.
 
 from __future__ import annotations
 
+import math
 import struct
 from pathlib import Path
 
@@ -208,7 +209,7 @@ class VoxSource:
         lo = np.min([off for _, _, off in models], axis=0)
         hi = np.max([np.add(off, s) for s, _, off in models], axis=0)
         dims = hi - lo
-        if int(np.prod(dims)) > MAX_VOXELS:
+        if math.prod(int(v) for v in dims) > MAX_VOXELS:
             raise DreamPrintError(f"models spread over {dims.tolist()} voxels: too large", path)
         self.index = np.zeros(tuple(int(v) for v in dims[::-1]), np.uint8)
         self._grids = []

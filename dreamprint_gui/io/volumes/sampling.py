@@ -12,6 +12,8 @@ sample different slabs concurrently; they allocate only their output.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -116,7 +118,7 @@ class SparseBlocks:
         node = leaf >> NODE_LOG2
         self.node_min = node.min(axis=0)
         dims = node.max(axis=0) - self.node_min + 1
-        if int(np.prod(dims)) > MAX_TOP_ENTRIES:
+        if math.prod(int(d) for d in dims) > MAX_TOP_ENTRIES:
             raise DreamPrintError(f"grid {name!r}: active voxels spread over {dims * 128} voxels; "
                                   "too sparse to sample")
         rel = node - self.node_min
