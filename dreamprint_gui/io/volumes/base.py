@@ -1,0 +1,203 @@
+"""The one interface every volume reader offers, the printer grid, and format dispatch.
+
+Defines :class:`PrintGrid`, :func:`grid_for_source`, the :class:`VolumeSource` protocol,
+:func:`voxel_centres`, :func:`linear_to_srgb`, :func:`sniff_format` and :func:`open_source`.
+
+Conventions shared by every reader:
+
+* Arrays are ordered (z, y, x) so a slab of layers is contiguous; z is the build direction.
+  Source z maps to printer z (no axis swap: a y-up scene must be rotated by its author).
+* Voxel (i, j, k) of a :class:`PrintGrid` has its centre, in source units, at
+  ``origin + ((i + .5) * vx, (j + .5) * vy, (k + .5) * vz) / mm_per_unit``.
+* Density rule (every reader, every format)::
+
+      sigma [1/mm] = source_density [1/source unit] * density_scale / mm_per_unit
+
+  i.e. the source's extinction per source unit, rescaled to millimetres by the operator's
+  physical size, times the operator's density scale.  Outside a source's bounds density is 0.
+* Colour returned by ``sample_slab`` is always sRGB-encoded in [0, 1] (IEC 61966-2-1 transfer
+  function); ``colour_encoding`` says what the file held ("srgb" or "linear").
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ...errors import DreamPrintError
+
+__all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
+           "sniff_format", "open_source", "FORMATS"]
+
+
+@dataclass(frozen=True)
+class PrintGrid:
+    """The printer's voxel grid placed in a source's coordinate system."""
+
+    shape_xyz: tuple[int, int, int]         # voxels along x, y, z (z = build/layer direction)
+    voxel_mm: tuple[float, float, float]    # printer voxel size along x, y, z in mm
+    origin: tuple[float, float, float]      # source-space coordinate of the grid's min corner
+    mm_per_unit: float                      # physical mm per source unit (uniform scale)
+
+    @property
+    def n_voxels(self) -> int:
+        nx, ny, nz = self.shape_xyz
+        return nx * ny * nz
+
+    @property
+    def size_mm(self) -> tuple[float, float, float]:
+        return tuple(n * v for n, v in zip(self.shape_xyz, self.voxel_mm, strict=True))
+
+
+def grid_for_source(source, voxel_mm, *, height_mm: float | None = None,
+                    size_mm: tuple[float, float, float] | None = None) -> PrintGrid:
+    """Scale ``source`` to a physical size and lay the printer grid over it.
+
+    ``height_mm``: the source's z extent becomes ``height_mm`` (aspect kept).
+    ``size_mm=(X, Y, Z)``: the largest uniform scale that fits the source in that box.
+    Exactly one must be given.  The grid covers the source's bounds and is centred on them.
+    """
+    if (height_mm is None) == (size_mm is None):
+        raise DreamPrintError("give exactly one of a height (mm) or a box size (mm)")
+    vox = tuple(float(v) for v in voxel_mm)
+    if len(vox) != 3 or not all(math.isfinite(v) and v > 0 for v in vox):
+        raise DreamPrintError(f"printer voxel size must be three positive numbers, got {voxel_mm}")
+    lo = np.asarray(source.bounds[0], float)
+    hi = np.asarray(source.bounds[1], float)
+    ext = hi - lo
+    if not (np.all(np.isfinite(ext)) and np.all(ext >= 0) and ext.max() > 0):
+        raise DreamPrintError(f"the source has empty or invalid bounds {source.bounds}",
+                              getattr(source, "name", None))
+    if height_mm is not None:
+        if not (math.isfinite(height_mm) and height_mm > 0):
+            raise DreamPrintError(f"height must be a positive number of mm, got {height_mm}")
+        if ext[2] <= 0:
+            raise DreamPrintError("the source is flat in z: give a box size instead of a height",
+                                  getattr(source, "name", None))
+        mpu = float(height_mm) / float(ext[2])
+    else:
+        box = np.asarray(size_mm, float)
+        if box.shape != (3,) or not np.all(np.isfinite(box)) or np.any(box <= 0):
+            raise DreamPrintError(f"box size must be three positive numbers of mm, got {size_mm}")
+        ok = ext > 0
+        mpu = float(np.min(box[ok] / ext[ok]))
+    shape = []
+    origin = []
+    for a in range(3):
+        n = max(1, math.ceil(ext[a] * mpu / vox[a] - 1e-9))
+        shape.append(int(n))
+        surplus = (n * vox[a] / mpu - ext[a]) / 2.0
+        origin.append(float(lo[a] - surplus))
+    return PrintGrid(tuple(shape), vox, tuple(origin), mpu)
+
+
+def voxel_centres(grid: PrintGrid, axis: int, lo: int = 0, hi: int | None = None) -> np.ndarray:
+    """Source-space centres (float64) of printer voxels ``lo..hi-1`` along ``axis`` (0=x)."""
+    if hi is None:
+        hi = grid.shape_xyz[axis]
+    idx = np.arange(lo, hi, dtype=np.float64)
+    return grid.origin[axis] + (idx + 0.5) * (grid.voxel_mm[axis] / grid.mm_per_unit)
+
+
+def linear_to_srgb(c: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1 sRGB encoding of linear values, clipped to [0, 1], in place if float32."""
+    c = np.clip(c, 0.0, 1.0, out=c if c.dtype == np.float32 else None)
+    low = c <= 0.0031308
+    out = np.where(low, 12.92 * c, 1.055 * np.power(c, 1 / 2.4, dtype=np.float32) - 0.055)
+    return out.astype(np.float32, copy=False)
+
+
+def check_slab(grid: PrintGrid, z0: int, z1: int) -> None:
+    """Refuse a slab outside the grid (a programming error upstream, but cheap to check)."""
+    if not (0 <= z0 < z1 <= grid.shape_xyz[2]):
+        raise ValueError(f"slab {z0}:{z1} outside the grid's {grid.shape_xyz[2]} layers")
+
+
+@runtime_checkable
+class VolumeSource(Protocol):
+    """What every reader returns: bounds, colour model, density model, slab sampler."""
+
+    name: str
+    format: str
+    bounds: tuple[tuple[float, float, float], tuple[float, float, float]]
+    colour_encoding: str
+
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """rgb float32 (z1-z0, ny, nx, 3) sRGB-encoded; density float32 (z1-z0, ny, nx) 1/mm."""
+        ...
+
+    def info(self) -> dict:
+        """The ``dreamprint inspect --json`` description of the file."""
+        ...
+
+
+# format key -> (module, extensions)
+FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "openvdb": ("openvdb", (".vdb",)),
+    "nanovdb": ("nanovdb", (".nvdb",)),
+    "vtk": ("vtkimage", (".vti", ".vtk", ".mhd", ".mha", ".nrrd", ".nhdr")),
+    "radiance-npz": ("radiance", (".npz",)),
+    "radiance-exr": ("radiance", (".exr",)),
+    "splats": ("splats", (".ply", ".spz")),
+    "magicavoxel": ("magicavoxel", (".vox",)),
+}
+
+
+def sniff_format(path: Path) -> str:
+    """Format key of ``path`` from its extension, falling back to its first bytes."""
+    if path.is_dir():
+        return "radiance-exr"
+    suffix = path.suffix.lower()
+    for key, (_mod, exts) in FORMATS.items():
+        if suffix in exts:
+            return key
+    try:
+        with open(path, "rb") as f:
+            head = f.read(64)
+    except OSError as exc:
+        raise DreamPrintError(f"cannot read: {exc.strerror or exc}", path) from None
+    if head[:4] == b"\x20\x42\x44\x56":
+        return "openvdb"
+    if head[:7] == b"NanoVDB":
+        return "nanovdb"
+    if head[:4] in (b"ply\n", b"ply\r"):
+        return "splats"
+    if head[:2] == b"\x1f\x8b" or head[:4] == b"NGSP":
+        return "splats"
+    if head[:4] == b"VOX ":
+        return "magicavoxel"
+    if head[:4] == b"PK\x03\x04":
+        return "radiance-npz"
+    if head[:4] == b"\x76\x2f\x31\x01":
+        return "radiance-exr"
+    if head[:4] == b"NRRD" or head.startswith(b"# vtk DataFile") or b"<VTKFile" in head \
+            or head.startswith(b"ObjectType"):
+        return "vtk"
+    raise DreamPrintError("not a volume format DreamPrint reads (OpenVDB, NanoVDB, VTK image, "
+                          "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ, MagicaVoxel)",
+                          path)
+
+
+def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
+    """Open a volume file (or ``"demo"``, the built-in procedural cloud) as a source.
+
+    ``options`` are passed to the format's reader (e.g. ``density_grid="density"``,
+    ``window=(lo, hi)``, ``level_set="solid"``); unknown options are refused by the reader.
+    """
+    import importlib
+
+    if str(path_or_name) == "demo":
+        from .demo import DemoCloud
+        return DemoCloud(**options)
+    path = Path(path_or_name)
+    if not path.exists():
+        raise DreamPrintError("no such file", path)
+    key = sniff_format(path)
+    module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
+    return module.open_path(path, fmt=key, **options)

@@ -1,0 +1,129 @@
+"""Sources held as a regular, axis-aligned grid of samples (VTK images, radiance grids, voxels).
+
+Defines :class:`DenseVolume` (samples + placement, trilinear slab sampling),
+:class:`DenseSource` (density + colour channels -> the :class:`~.base.VolumeSource` contract),
+:func:`colormap_lut` and :func:`check_claimed_size` (refuse headers that claim more voxels than
+the bytes on disk can hold, before any reader allocates).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...errors import DreamPrintError
+from .base import PrintGrid, check_slab, linear_to_srgb, voxel_centres
+from .sampling import sample_dense
+
+__all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_lut",
+           "bounds_list"]
+
+# zlib/gzip cannot expand data by more than ~1032:1; allow headroom for the other codecs.
+MAX_EXPANSION = 1100
+
+
+def check_claimed_size(n_values: int, bytes_per_value: int, available_bytes: int, path) -> None:
+    """Refuse a header whose claimed size the file's bytes could not possibly hold."""
+    if n_values < 0:
+        raise DreamPrintError("negative dimensions in the header", path)
+    need = int(n_values) * int(bytes_per_value)
+    if need > MAX_EXPANSION * int(available_bytes) + (1 << 20):
+        raise DreamPrintError(f"the header claims {n_values:,} values but the file holds only "
+                              f"{available_bytes:,} bytes: damaged or truncated", path)
+
+
+class DenseVolume:
+    """Samples ``data`` (nz, ny, nx, C) float32 at ``origin + index * spacing`` (x, y, z).
+
+    ``cell_centred``: each sample is a voxel whose box reaches half a spacing beyond its
+    centre (bounds = outer faces); otherwise samples are points (bounds = outer samples).
+    """
+
+    def __init__(self, data: np.ndarray, origin, spacing, cell_centred: bool):
+        if data.ndim != 4:
+            raise ValueError("data must be (nz, ny, nx, C)")
+        self.data = np.ascontiguousarray(data, np.float32)
+        self.origin = np.asarray(origin, float)
+        self.spacing = np.asarray(spacing, float)
+        if np.any(~np.isfinite(self.spacing)) or np.any(self.spacing <= 0):
+            raise DreamPrintError(f"grid spacing must be positive, got {tuple(self.spacing)}")
+        self.pad = 0.5 if cell_centred else 0.0
+        nxyz = np.array(self.data.shape[2::-1], float)
+        lo = self.origin - self.pad * self.spacing
+        hi = self.origin + (nxyz - 1 + self.pad) * self.spacing
+        self.bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
+
+    def sample(self, grid: PrintGrid, z0: int, z1: int) -> np.ndarray:
+        """Trilinear samples at the printer voxel centres of layers z0..z1-1: (Z, Y, X, C)."""
+        u = [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None)))
+              - self.origin[a]) / self.spacing[a] for a in range(3)]
+        return sample_dense(self.data, u[2], u[1], u[0], self.pad)
+
+
+def colormap_lut(name: str | None, colour=None, n: int = 256) -> np.ndarray:
+    """(n, 3) float32 sRGB-encoded lookup table: a matplotlib colormap or one uniform colour."""
+    if name:
+        try:
+            import matplotlib
+            cmap = matplotlib.colormaps[name]
+        except (KeyError, ValueError):
+            raise DreamPrintError(f"unknown colormap {name!r}") from None
+        return np.asarray(cmap(np.linspace(0, 1, n))[:, :3], np.float32)
+    c = (1.0, 1.0, 1.0) if colour is None else colour
+    c = np.asarray(c, np.float32).reshape(-1)
+    if c.shape != (3,) or np.any(~np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
+        raise DreamPrintError(f"a colour is three numbers in [0, 1], got {colour}")
+    return np.tile(c, (n, 1))
+
+
+def apply_lut(lut: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Colours of values ``t`` in [0, 1] from ``lut`` (nearest entry)."""
+    i = np.clip(np.rint(t * (len(lut) - 1)), 0, len(lut) - 1).astype(np.intp)
+    return lut[i]
+
+
+def bounds_list(bounds) -> list[list[float]]:
+    return [[float(v) for v in bounds[0]], [float(v) for v in bounds[1]]]
+
+
+class DenseSource:
+    """A dense grid holding density (1/source unit) and optionally colour channels.
+
+    ``volume.data`` channel 0 is density; channels 1-3 (if present) colour in
+    ``colour_encoding``; with one channel, ``uniform_colour`` (sRGB-encoded) is used.
+    Colour is interpolated density-weighted (stored premultiplied), so a transparent voxel's
+    colour does not bleed into its neighbours.
+    """
+
+    def __init__(self, name: str, fmt: str, volume: DenseVolume, colour_encoding: str = "srgb",
+                 uniform_colour=(1.0, 1.0, 1.0), grids_info: list[dict] | None = None):
+        self.name = name
+        self.format = fmt
+        self.volume = volume
+        self.colour_encoding = colour_encoding
+        self.uniform_colour = np.asarray(uniform_colour, np.float32)
+        self.bounds = volume.bounds
+        self._grids_info = grids_info or []
+        if volume.data.shape[3] == 4:
+            d = volume.data
+            d[..., 1:4] *= d[..., :1]       # premultiply once, in the source's own storage
+
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+        check_slab(grid, z0, z1)
+        s = self.volume.sample(grid, z0, z1)
+        dens = s[..., 0]
+        if s.shape[3] == 4:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                rgb = np.where(dens[..., None] > 0, s[..., 1:4] / dens[..., None], 0.0)
+            rgb = rgb.astype(np.float32)
+            if self.colour_encoding == "linear":
+                rgb = linear_to_srgb(rgb)
+            else:
+                np.clip(rgb, 0.0, 1.0, out=rgb)
+        else:
+            rgb = np.broadcast_to(self.uniform_colour, dens.shape + (3,)).copy()
+        sigma = (dens * np.float32(density_scale / grid.mm_per_unit)).astype(np.float32)
+        np.maximum(sigma, 0.0, out=sigma)
+        return rgb, sigma
+
+    def info(self) -> dict:
+        return {"format": self.format, "grids": self._grids_info}

@@ -1,0 +1,235 @@
+"""3D Gaussian splats as a density field: INRIA PLY, SuperSplat compressed PLY, Niantic SPZ.
+
+Defines :class:`GaussianCloud` (the source), :func:`peak_density` and :func:`open_path`.
+
+Readers: INRIA PLY through ``plyfile`` (any property order/precision; SH degree 0-3 from the
+number of ``f_rest_*``); the chunked, quantised SuperSplat/PlayCanvas ``.compressed.ply`` and
+SPZ through ``gsply`` (which returns pre-activation values like the INRIA file).  Activations
+(Kerbl et al. 2023, sec. 4 and the reference code): colour ``0.5 + C0 * f_dc`` (C0 =
+0.28209479, the degree-0 SH basis), opacity ``sigmoid(o)``, scales ``exp(s)``, rotation the
+normalised quaternion (w, x, y, z).  Higher SH bands (view-dependent) are ignored: a print has
+one colour per point.
+
+Density derivation.  Gaussian i contributes ``rho_i(x) = s_i exp(-1/2 (x-mu)^T Sigma^-1 (x-mu))``
+with ``Sigma = R diag(sigma^2) R^T``.  Along a unit direction d through the centre its optical
+depth is ``tau(d) = s_i sqrt(2 pi / (d^T Sigma^-1 d))``; along principal axis k that is
+``s_i sqrt(2 pi) sigma_k``.  The splat's alpha is opacity ``a`` at its centre from every view,
+which no 3D density reproduces exactly for an anisotropic Gaussian; we match the geometric
+mean over the principal axes, ``-ln(1 - a) = s_i sqrt(2 pi) (sigma_1 sigma_2 sigma_3)^(1/3)``,
+so ``s_i = -ln(1 - a) / (sqrt(2 pi) (sigma_1 sigma_2 sigma_3)^(1/3))``: exact for isotropic
+Gaussians, rotation invariant, and the transmittance through the centre along axis k is
+``(1 - a)^(sigma_k / geomean)``.  The kernel is cut at Mahalanobis distance 3 (99.97 % of a
+1D line integral).  Colour is density-weighted: ``c(x) = sum rho_i c_i / sum rho_i``;
+density units are 1/source unit, then the rule of :mod:`.base` applies.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import DreamPrintError
+from .base import PrintGrid, check_slab, voxel_centres
+from .dense import bounds_list
+from .sampling import rasterise_gaussians
+
+__all__ = ["GaussianCloud", "peak_density", "open_path", "SH_C0"]
+
+SH_C0 = 0.28209479177387814
+MAX_OPACITY = 1.0 - 1e-6
+
+
+def peak_density(opacity: np.ndarray, sigmas: np.ndarray) -> np.ndarray:
+    """Centre density s (1/unit) of Gaussians with ``opacity`` (N,) and axis sigmas (N, 3)."""
+    a = np.clip(np.asarray(opacity, float), 0.0, MAX_OPACITY)
+    geo = np.cbrt(np.prod(np.asarray(sigmas, float), axis=1))
+    return -np.log1p(-a) / (np.sqrt(2 * np.pi) * geo)
+
+
+def _quat_to_rot(q: np.ndarray) -> np.ndarray:
+    q = np.asarray(q, float)
+    n = np.linalg.norm(q, axis=1, keepdims=True)
+    q = np.where(n > 0, q / np.where(n > 0, n, 1), np.array([1.0, 0, 0, 0]))
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], axis=1)
+
+
+class GaussianCloud:
+    """Activated Gaussians (means, axis sigmas, unit quaternions wxyz, opacity, sRGB colour)."""
+
+    def __init__(self, name: str, fmt: str, means, sigmas, quats, opacity, rgb,
+                 sh_degree: int = 0, bounds=None):
+        self.name = name
+        self.format = fmt
+        self.colour_encoding = "srgb"
+        self.sh_degree = int(sh_degree)
+        means = np.asarray(means, float).reshape(-1, 3)
+        sigmas = np.asarray(sigmas, float).reshape(-1, 3)
+        opacity = np.asarray(opacity, float).reshape(-1)
+        rgb = np.clip(np.asarray(rgb, float).reshape(-1, 3), 0.0, 1.0)
+        ok = (np.all(np.isfinite(means), 1) & np.all(np.isfinite(sigmas), 1)
+              & np.all(sigmas > 0, 1) & np.isfinite(opacity) & (opacity > 0)
+              & np.all(np.isfinite(rgb), 1))
+        self.n_total = len(means)
+        means, sigmas, opacity, rgb = means[ok], sigmas[ok], opacity[ok], rgb[ok]
+        rot = _quat_to_rot(np.asarray(quats, float).reshape(-1, 4)[ok])
+        cov = np.einsum("nij,nj,nkj->nik", rot, sigmas ** 2, rot)
+        inv = np.einsum("nij,nj,nkj->nik", rot, sigmas ** -2.0, rot)
+        self.mean = np.ascontiguousarray(means)
+        self.inv_cov = np.ascontiguousarray(np.stack(
+            [inv[:, 0, 0], inv[:, 1, 1], inv[:, 2, 2], inv[:, 0, 1], inv[:, 0, 2],
+             inv[:, 1, 2]], axis=1))
+        self.half = np.ascontiguousarray(3.0 * np.sqrt(np.einsum("nii->ni", cov)))
+        self.peak = np.ascontiguousarray(peak_density(opacity, sigmas))
+        self.rgb = np.ascontiguousarray(rgb)
+        zmin = self.mean[:, 2] - self.half[:, 2]
+        self._order = np.argsort(zmin, kind="stable")
+        self._zmin_sorted = zmin[self._order]
+        self._zmax = self.mean[:, 2] + self.half[:, 2]
+        if bounds is None:
+            if len(self.mean):
+                lo = (self.mean - self.half).min(0)
+                hi = (self.mean + self.half).max(0)
+            else:
+                lo = hi = np.zeros(3)
+            bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
+        self.bounds = bounds
+
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+        check_slab(grid, z0, z1)
+        xs = voxel_centres(grid, 0)
+        ys = voxel_centres(grid, 1)
+        zs = voxel_centres(grid, 2, z0, z1)
+        n = np.searchsorted(self._zmin_sorted, zs[-1], side="right")
+        cand = self._order[:n]
+        cand = np.sort(cand[self._zmax[cand] >= zs[0]])      # fixed order: deterministic sums
+        dens, col = rasterise_gaussians(cand, self.mean, self.inv_cov, self.peak, self.rgb,
+                                        self.half, xs, ys, zs)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rgb = np.where(dens[..., None] > 0, col / dens[..., None], 0.0).astype(np.float32)
+        np.clip(rgb, 0.0, 1.0, out=rgb)
+        sigma = dens * np.float32(density_scale / grid.mm_per_unit)
+        return rgb, sigma.astype(np.float32, copy=False)
+
+    def info(self) -> dict:
+        return {"format": self.format, "gaussians": int(self.n_total),
+                "sh_degree": self.sh_degree, "bounds": bounds_list(self.bounds)}
+
+
+# ------------------------------------------------------------------------------------ readers
+
+_PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2, "int16": 2,
+              "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4, "float": 4,
+              "float32": 4, "double": 8, "float64": 8}
+
+
+def _ply_header(path: Path) -> tuple[str, list[tuple[str, int, list[str]]]]:
+    """(format, [(element, count, [property names])]) after checking sizes against the file."""
+    with open(path, "rb") as f:
+        raw = f.read(1 << 16)
+    end = raw.find(b"end_header")
+    if not raw.startswith(b"ply") or end < 0:
+        raise DreamPrintError("not a PLY file (no 'ply' ... 'end_header' header)", path)
+    nl = raw.find(b"\n", end)
+    header_len = nl + 1 if nl >= 0 else len(raw)
+    fmt = ""
+    elements: list[tuple[str, int, list[str]]] = []
+    rows: list[int] = []
+    for line in raw[:end].decode("ascii", "replace").splitlines():
+        w = line.split()
+        if not w:
+            continue
+        if w[0] == "format" and len(w) >= 2:
+            fmt = w[1]
+        elif w[0] == "element" and len(w) == 3:
+            if not re.fullmatch(r"\d+", w[2]):
+                raise DreamPrintError(f"bad element count in header: {line.strip()}", path)
+            elements.append((w[1], int(w[2]), []))
+            rows.append(0)
+        elif w[0] == "property" and elements:
+            if w[1] == "list":
+                rows[-1] = -1           # variable-size rows: cannot pre-size
+            else:
+                rows[-1] += _PLY_SIZES.get(w[1], 0) if rows[-1] >= 0 else 0
+            elements[-1][2].append(w[-1])
+    if fmt.startswith("binary"):
+        need = sum(c * r for (_, c, _), r in zip(elements, rows, strict=True) if r > 0)
+        have = path.stat().st_size - header_len
+        if need > have:
+            raise DreamPrintError(f"truncated: the header announces {need:,} bytes of data, the "
+                                  f"file has {have:,}", path)
+    else:
+        n = sum(c for _, c, _ in elements)
+        if n > path.stat().st_size:
+            raise DreamPrintError(f"the header claims {n:,} rows, more than the file's bytes",
+                                  path)
+    return fmt, elements
+
+
+def _sigmoid(x):
+    return 1.0 / (1.0 + np.exp(-np.asarray(x, float)))
+
+
+def _from_gsply(path: Path, fmt: str, data) -> GaussianCloud:
+    shn = getattr(data, "shN", None)
+    k = 0 if shn is None else int(np.asarray(shn).reshape(len(data.means), -1).shape[1] // 3)
+    degree = {0: 0, 3: 1, 8: 2, 15: 3}.get(k, 0)
+    return GaussianCloud(str(path), fmt, data.means, np.exp(np.asarray(data.scales, float)),
+                         data.quats, _sigmoid(data.opacities),
+                         0.5 + SH_C0 * np.asarray(data.sh0, float), degree)
+
+
+def _read_inria(path: Path) -> GaussianCloud:
+    from plyfile import PlyData
+
+    try:
+        ply = PlyData.read(str(path))
+        v = ply["vertex"].data
+    except Exception as exc:  # noqa: BLE001 - plyfile raises assorted types on bad input
+        raise DreamPrintError(f"cannot read PLY: {exc}", path) from None
+    names = set(v.dtype.names or ())
+    need = ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1",
+            "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
+    missing = [n for n in need if n not in names]
+    if missing:
+        raise DreamPrintError("not a Gaussian-splat PLY (missing vertex properties "
+                              f"{', '.join(missing)})", path)
+
+    def col(*ks):
+        return np.stack([np.asarray(v[k], float) for k in ks], axis=1)
+
+    n_rest = sum(1 for n in names if n.startswith("f_rest_"))
+    degree = {0: 0, 9: 1, 24: 2, 45: 3}.get(n_rest, 0)
+    return GaussianCloud(str(path), "splats (INRIA PLY)", col("x", "y", "z"),
+                         np.exp(col("scale_0", "scale_1", "scale_2")),
+                         col("rot_0", "rot_1", "rot_2", "rot_3"),
+                         _sigmoid(np.asarray(v["opacity"], float)),
+                         0.5 + SH_C0 * col("f_dc_0", "f_dc_1", "f_dc_2"), degree)
+
+
+def open_path(path: Path, fmt: str = "splats") -> GaussianCloud:
+    """Open a splat PLY (INRIA or SuperSplat compressed) or an SPZ file."""
+    import gsply
+
+    with open(path, "rb") as f:
+        magic = f.read(3)
+    if path.suffix.lower() == ".spz" or magic != b"ply":
+        try:
+            data = gsply.read_spz(path)
+        except Exception as exc:  # noqa: BLE001
+            raise DreamPrintError(f"cannot read SPZ: {exc}", path) from None
+        return _from_gsply(path, "splats (SPZ)", data)
+    _fmt, elements = _ply_header(path)
+    if any(name == "chunk" for name, _, _ in elements):
+        try:
+            data = gsply.plyread(path)
+        except Exception as exc:  # noqa: BLE001
+            raise DreamPrintError(f"cannot read compressed splat PLY: {exc}", path) from None
+        return _from_gsply(path, "splats (SuperSplat compressed PLY)", data)
+    return _read_inria(path)

@@ -1,0 +1,86 @@
+"""PrintGrid placement, the density rule and dispatch."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.io.volumes.base import linear_to_srgb, voxel_centres
+
+
+class _Box:
+    bounds = ((-1.0, 0.0, 2.0), (3.0, 2.0, 4.0))   # extents 4, 2, 2
+
+
+def test_height_scales_z_extent_and_keeps_aspect():
+    g = grid_for_source(_Box(), (0.1, 0.2, 0.05), height_mm=10)
+    assert g.mm_per_unit == pytest.approx(5.0)
+    assert g.shape_xyz == (200, 50, 200)
+    # grid covers the bounds, centred
+    for a in range(3):
+        c = voxel_centres(g, a)
+        half = g.voxel_mm[a] / g.mm_per_unit / 2
+        assert c[0] - half <= _Box.bounds[0][a] + 1e-12
+        assert c[-1] + half >= _Box.bounds[1][a] - 1e-12
+        assert (c[0] + c[-1]) / 2 == pytest.approx(sum(_Box.bounds[i][a] for i in (0, 1)) / 2)
+
+
+def test_size_takes_largest_fitting_uniform_scale():
+    g = grid_for_source(_Box(), (0.5, 0.5, 0.5), size_mm=(40, 40, 10))
+    assert g.mm_per_unit == pytest.approx(5.0)          # z limits: 2 units -> 10 mm
+    g = grid_for_source(_Box(), (0.5, 0.5, 0.5), size_mm=(8, 40, 40))
+    assert g.mm_per_unit == pytest.approx(2.0)          # x limits: 4 units -> 8 mm
+    assert g.shape_xyz == (16, 8, 8)
+
+
+def test_exactly_one_size_and_positive_values():
+    with pytest.raises(DreamPrintError):
+        grid_for_source(_Box(), (0.1, 0.1, 0.1))
+    with pytest.raises(DreamPrintError):
+        grid_for_source(_Box(), (0.1, 0.1, 0.1), height_mm=1, size_mm=(1, 1, 1))
+    with pytest.raises(DreamPrintError):
+        grid_for_source(_Box(), (0.1, 0, 0.1), height_mm=1)
+    with pytest.raises(DreamPrintError):
+        grid_for_source(_Box(), (0.1, 0.1, 0.1), height_mm=-2)
+
+
+def test_srgb_encoding_closed_form():
+    x = np.array([0.0, 0.002, 0.0031308, 0.18, 0.5, 1.0, 1.5], np.float32)
+    want = [0.0, 12.92 * 0.002, 12.92 * 0.0031308, 1.055 * 0.18 ** (1 / 2.4) - 0.055,
+            1.055 * 0.5 ** (1 / 2.4) - 0.055, 1.0, 1.0]
+    np.testing.assert_allclose(linear_to_srgb(x.copy()), want, rtol=1e-5, atol=1e-6)
+
+
+def test_unknown_file_is_refused(tmp_path):
+    p = tmp_path / "x.bin"
+    p.write_bytes(b"hello world")
+    with pytest.raises(DreamPrintError, match="not a volume format"):
+        open_source(p)
+    with pytest.raises(DreamPrintError, match="no such file"):
+        open_source(tmp_path / "missing.vdb")
+
+
+def test_demo_is_deterministic_bounded_and_zero_outside():
+    s = open_source("demo")
+    assert s.bounds == ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    g = grid_for_source(s, (0.1, 0.1, 0.05), height_mm=5)
+    rgb1, d1 = s.sample_slab(g, 40, 60)
+    rgb2, d2 = open_source("demo").sample_slab(g, 40, 60)
+    assert np.array_equal(d1, d2) and np.array_equal(rgb1, rgb2)
+    assert d1.max() > 0 and rgb1.dtype == np.float32 and d1.dtype == np.float32
+    assert rgb1.shape == (20, g.shape_xyz[1], g.shape_xyz[0], 3)
+    assert 0 <= rgb1.min() and rgb1.max() <= 1
+    # outside the soft boundary (corner layer) density is exactly 0
+    _, d0 = s.sample_slab(g, 0, 2)
+    assert not d0.any()
+    # slabs are independent of how the grid is cut
+    _, whole = s.sample_slab(g, 40, 60)
+    _, a = s.sample_slab(g, 40, 47)
+    _, b = s.sample_slab(g, 47, 60)
+    np.testing.assert_allclose(np.concatenate([a, b]), whole, rtol=1e-6)
+    # density rule: scale and mm per unit enter linearly
+    _, d3 = s.sample_slab(g, 40, 60, density_scale=2.5)
+    np.testing.assert_allclose(d3, 2.5 * d1, rtol=1e-5)
+    assert math.isclose(g.mm_per_unit, 5.0)
