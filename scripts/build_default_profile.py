@@ -15,8 +15,8 @@ from dreamprint_gui.engine.profile import INKS, InkProfile, now_iso, save_profil
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "resources" / "inks" / "polyjet_ks"
 # The source tabulates K/S of opaque patches with no unit. Read as "per 10 um", i.e. x100 per mm:
-# then every ink is opaque (T < 1e-3) within the paper's t_max = 5 mm at every wavelength, as its
-# Table 1 requires, and a 1 mm VeroWhite-like layer lets through about a fifth of the light.
+# then every ink is opaque (T < 0.3 %) within the paper's t_max = 5 mm at every wavelength, as its
+# Table 1 requires, and a 1 mm VeroWhite-like layer lets through about a tenth of the light.
 SCALE_PER_MM = 100.0
 SOURCE_ROWS = ("K", "C", "M", "Y", "W")
 

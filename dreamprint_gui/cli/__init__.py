@@ -59,6 +59,9 @@ def main(argv: list[str] | None = None) -> int:
 # Command modules register themselves on `cli` when imported.
 from . import physics  # noqa: E402,F401,I001
 from . import volumes  # noqa: E402,F401,I001
+from . import jobs  # noqa: E402,F401,I001
+from . import spectra  # noqa: E402,F401,I001
+from . import gamut  # noqa: E402,F401,I001
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,5 +1,211 @@
-"""``dreamprint predict``, ``calibrate``, ``evaluate density-fit``, ``demo``."""
+"""``dreamprint predict``, ``calibrate``, ``evaluate density-fit``."""
 
 from __future__ import annotations
 
+import json
+import math
+from pathlib import Path
 
+import click
+
+from ..errors import DreamPrintError
+from . import cli, evaluate
+
+
+def emit_json(obj: object) -> None:
+    click.echo(json.dumps(obj, allow_nan=False))
+
+
+def parse_thickness(text: str | None) -> float | None:
+    if text is None:
+        return None
+    if text.strip().lower() in ("inf", "infinite", "infinity"):
+        return math.inf
+    try:
+        t = float(text)
+    except ValueError:
+        raise DreamPrintError(f"--thickness-mm must be a number of mm or 'inf', got {text!r}") \
+            from None
+    if not t > 0:
+        raise DreamPrintError("--thickness-mm must be > 0")
+    return t
+
+
+def parse_pair(text: str | None, option: str) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        a, b = (float(x) for x in text.split(","))
+    except ValueError:
+        raise DreamPrintError(f"{option} takes two numbers 'k1,k2', got {text!r}") from None
+    return a, b
+
+
+profile_option = click.option("--profile", "profile_path", default=None, metavar="P",
+                              help="Ink profile JSON (default: the built-in PolyJet profile).")
+
+
+@cli.command()
+@click.option("--mix", "mix_text", metavar="C=0.2,M=0.3,W=0.5", help="One mixture.")
+@click.option("--mix-file", type=click.Path(dir_okay=False, path_type=Path),
+              help="CSV of recipes: header of ink names, one row per mixture.")
+@profile_option
+@click.option("--thickness-mm", default=None, metavar="T|inf",
+              help="Layer thickness (default: the profile's colour reference, R_inf).")
+@click.option("--saunderson", default=None, metavar="k1,k2",
+              help="Predict what an instrument measures (surface correction).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def predict(mix_text: str | None, mix_file: Path | None, profile_path: str | None,
+            thickness_mm: str | None, saunderson: str | None, as_json: bool) -> None:
+    """Spectra, colour and density of ink mixtures (Kubelka-Munk, eqs. 3-9)."""
+    from ..engine.mixture import predict as predict_mix
+    from ..engine.profile import load_profile, parse_mix
+    from ..io.recipes import read_recipes
+
+    if (mix_text is None) == (mix_file is None):
+        raise click.UsageError("give exactly one of --mix or --mix-file")
+    profile = load_profile(profile_path)
+    t = parse_thickness(thickness_mm)
+    sd = parse_pair(saunderson, "--saunderson")
+    if mix_text is not None:
+        result = predict_mix(profile, parse_mix(mix_text), t, sd)
+        records: object = result.record()
+        rows = [(mix_text, result.record())]
+    else:
+        conc = read_recipes(mix_file)
+        result = predict_mix(profile, conc, t, sd)
+        records = [result.record(i) for i in range(conc.shape[0])]
+        rows = [(f"row {i + 1}", r) for i, r in enumerate(records)]
+    if as_json:
+        emit_json(records)
+        return
+    for label, r in rows:
+        srgb = ", ".join(f"{x:.4f}" for x in r["sRGB"])
+        lab = ", ".join(f"{x:.2f}" for x in r["Lab"])
+        click.echo(f"{label}: sRGB ({srgb})  Lab ({lab})  sigma {r['sigma_per_mm']:.4g}/mm")
+
+
+@cli.command()
+@click.argument("measurements", required=False,
+                type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Profile JSON to write.")
+@click.option("--chart", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Recipes CSV of a printed mixture chart.")
+@click.option("--reflectance", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Measured reflectance of the chart's patches (CSV, header of wavelengths).")
+@click.option("--base-profile", default=None, metavar="P",
+              help="Profile to start from / keep unmeasured inks from (default: built-in).")
+@click.option("--name", default=None, help="Name of the new profile.")
+@click.option("--saunderson", default=None, metavar="k1,k2",
+              help="Chart readings include surface reflections (Saunderson k1,k2).")
+@click.option("--folds", default=5, show_default=True, help="Cross-validation folds (chart).")
+@click.option("--json", "as_json", is_flag=True, help="Print the fit report as JSON.")
+def calibrate(measurements: Path | None, output: Path, chart: Path | None,
+              reflectance: Path | None, base_profile: str | None, name: str | None,
+              saunderson: str | None, folds: int, as_json: bool) -> None:
+    """Fit ink K and S from measurements and write a profile.
+
+    MEASUREMENTS is a calibration set (.toml, naming instrument files per ink) or a CSV in
+    DreamPrint's layout (docs/measurements-csv.md). With --chart and --reflectance, refit all
+    inks jointly to a printed mixture chart and report cross-validated dE2000.
+    """
+    from ..engine.profile import load_profile
+
+    base = load_profile(base_profile)
+    if chart is not None or reflectance is not None:
+        if chart is None or reflectance is None or measurements is not None:
+            raise click.UsageError("a chart needs both --chart and --reflectance (and no "
+                                   "MEASUREMENTS)")
+        report = _calibrate_chart(base, chart, reflectance, name, parse_pair(
+            saunderson, "--saunderson"), folds, output)
+    else:
+        if measurements is None:
+            raise click.UsageError("give MEASUREMENTS (.toml or .csv) or --chart/--reflectance")
+        report = _calibrate_layers(base, measurements, name, output)
+    if as_json:
+        emit_json(report)
+    else:
+        _print_report(report)
+
+
+def _calibrate_layers(base, path: Path, name: str | None, output: Path) -> dict:
+    from ..engine.calibration import calibrate_profile
+    from ..engine.profile import save_profile
+
+    if path.suffix.lower() == ".toml":
+        from ..io.spectra.calibration_set import load_calibration_set
+
+        layers = load_calibration_set(path, base.wavelengths_nm)
+    else:
+        from ..io.measurements_csv import read_measurements_csv
+
+        layers = read_measurements_csv(path, base.wavelengths_nm)
+    profile, fits = calibrate_profile(layers, base, name or output.stem)
+    save_profile(profile, output)
+    return {"profile": str(output), "kind": "layers",
+            "inks": [f.summary() for f in fits],
+            "inks_from_base_profile": sorted(profile.provenance["inks_from_base_profile"])}
+
+
+def _calibrate_chart(base, chart: Path, reflectance: Path, name: str | None,
+                     saunderson, folds: int, output: Path) -> dict:
+    from ..engine.chart_calibration import fit_chart
+    from ..engine.profile import save_profile
+    from ..io.recipes import read_recipes, read_spectra_rows
+
+    recipes = read_recipes(chart)
+    wl, spectra = read_spectra_rows(reflectance)
+    from ..engine.spectral_grid import resample
+
+    spectra = resample(wl, spectra, base.wavelengths_nm, source=str(reflectance))
+    if spectra.shape[0] != recipes.shape[0]:
+        raise DreamPrintError(f"{spectra.shape[0]} spectra but {recipes.shape[0]} recipes in "
+                              f"{chart}; one spectrum row per recipe, in the same order",
+                              reflectance)
+    fit = fit_chart(base, recipes, spectra, folds=folds, saunderson=saunderson,
+                    name=name or output.stem, source=str(chart))
+    save_profile(fit.profile, output)
+    return {"profile": str(output), "kind": "chart", **fit.report()}
+
+
+def _print_report(report: dict) -> None:
+    click.echo(f"wrote {report['profile']}")
+    if report["kind"] == "layers":
+        for ink in report["inks"]:
+            r = ink["max_rms_R"]
+            t = ink["max_rms_T"]
+            click.echo(f"  {ink['ink']:>2}: {ink['method']}, {len(ink['layers'])} layer(s), "
+                       f"worst-wavelength RMS residual R {'-' if r is None else f'{r:.2e}'}, "
+                       f"T {'-' if t is None else f'{t:.2e}'}")
+        if report["inks_from_base_profile"]:
+            click.echo("  kept from the base profile: "
+                       + ", ".join(report["inks_from_base_profile"]))
+    else:
+        for key in ("base_dE2000", "fit_dE2000", "cross_validated_dE2000"):
+            s = report[key]
+            click.echo(f"  {key.replace('_', ' ')}: mean {s['mean']:.3f}, p95 {s['p95']:.3f}, "
+                       f"max {s['max']:.3f}")
+
+
+@evaluate.command("density-fit")
+@profile_option
+@click.option("--t-max-mm", default=5.0, show_default=True, help="Thickness range of the fit.")
+@click.option("--samples", default=100, show_default=True, help="Thickness samples.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def density_fit(profile_path: str | None, t_max_mm: float, samples: int, as_json: bool) -> None:
+    """The paper's Table 1: error of approximating T(t) by exp(-sigma t), per ink."""
+    from ..engine.density import exp_fit_errors
+    from ..engine.profile import load_profile
+
+    profile = load_profile(profile_path)
+    mean, worst = exp_fit_errors(profile.K, profile.S, t_max_mm, samples)
+    inks = {ink: {"mean_percent": float(mean[i] * 100), "max_percent": float(worst[i] * 100)}
+            for i, ink in enumerate(profile.inks)}
+    if as_json:
+        emit_json({"profile": profile.name, "t_max_mm": t_max_mm, "samples": samples,
+                   "inks": inks})
+        return
+    click.echo(f"{'':6}" + "".join(f"{ink:>9}" for ink in inks))
+    click.echo("Mean  " + "".join(f"{v['mean_percent']:8.3f}%" for v in inks.values()))
+    click.echo("Max   " + "".join(f"{v['max_percent']:8.3f}%" for v in inks.values()))

@@ -77,12 +77,14 @@ def reflectance_transmittance(
     t_fin = np.where(infinite, 0.0, t)
     x = beta * t_fin
     small = x < _SMALL_X
-    with np.errstate(invalid="ignore", divide="ignore"):
-        tanhc = np.where(small, 1.0 - x * x / 3.0, np.tanh(x) / np.where(small, 1.0, x))
-    e = np.exp(-x)
-    sech = 2.0 * e / (1.0 + e * e)
-    q = (S + K) * t_fin * tanhc + 1.0
-    R = S * t_fin * tanhc / q
+    xs = np.minimum(x, _SMALL_X)
+    with np.errstate(invalid="ignore", divide="ignore", under="ignore"):
+        # t * tanh(x)/x, bounded by 1/beta: no overflow for any t.
+        tt = np.where(small, t_fin * (1.0 - xs * xs / 3.0), np.tanh(x) / np.where(small, 1.0, beta))
+        e = np.exp(-x)
+        sech = 2.0 * e / (1.0 + e * e)
+    q = (S + K) * tt + 1.0
+    R = S * tt / q
     T = sech / q
     if np.any(infinite):
         R = np.where(infinite, reflectance_infinite(K, S), R)

@@ -1,0 +1,115 @@
+"""End-to-end conversion speed and peak memory of ``dreamprint convert`` on the demo source.
+
+Prints, per job size (~1e7, 1e8, 1e9 voxels on the j850-paper grid): voxels, wall seconds,
+voxels per second end to end (source sampling, table lookup + density alignment, halftoning,
+PNG encoding and writing), the peak resident memory of the converting process (its own
+``ru_maxrss``, measured in a fresh child process per job so sizes do not mix), and the 1 -> 2
+worker speed-up on the 1e8 job. Targets on a 2-core machine: >= 1e8 voxels/s, flat peak memory
+< 1.5 GB.
+
+    python benchmarks/bench_convert.py                 # 1e7, 1e8 and the 1 -> 2 worker speed-up
+    python benchmarks/bench_convert.py --sizes 1e7,1e8,1e9
+    python benchmarks/bench_convert.py --one 1e8 --workers 2 --out /tmp/job   # one child run
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+VOXEL = (0.084, 0.028, 0.014)  # j850-paper
+
+
+def height_for(n_voxels: float) -> float:
+    # The demo source's bounds are about a unit cube: N ~ h^3 / (vx vy vz).
+    return (n_voxels * VOXEL[0] * VOXEL[1] * VOXEL[2]) ** (1 / 3)
+
+
+def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
+        source: str = "demo") -> dict:
+    from dreamprint_gui.engine.pipeline import ConvertSettings, run_conversion
+
+    s = ConvertSettings(source=source, output=out, height_mm=height_for(n), workers=workers,
+                        halftone=halftone, scheduler=scheduler, overwrite=True)
+    # Warm the caches (tables, mask, numba) outside the timed run.
+    from dreamprint_gui.engine.pipeline import prepare_job
+
+    ctx = prepare_job(s)
+    t = time.perf_counter()
+    gen = run_conversion(s, context=ctx)
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            m = stop.value
+            break
+    wall = time.perf_counter() - t
+    nx, ny, nz = m["grid_dimensions"]
+    return {"voxels": nx * ny * nz, "grid": [nx, ny, nz], "wall_s": wall,
+            "voxels_per_s": nx * ny * nz / wall,
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+            "stages_s": m["timings_s"]["worker_stage_sum"],
+            "job_mb": sum(f.stat().st_size for f in Path(out, "slices").iterdir()) / 1e6}
+
+
+def child(n: float, workers: int, halftone: str, scheduler: str | None, source: str) -> dict:
+    tmp = tempfile.mkdtemp(prefix="dp-bench-", dir=os.environ.get("BENCH_DIR"))
+    try:
+        cmd = [sys.executable, __file__, "--one", str(n), "--workers", str(workers),
+               "--out", os.path.join(tmp, "JOB"), "--halftone", halftone, "--source", source]
+        if scheduler:
+            cmd += ["--scheduler", scheduler]
+        res = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        if res.returncode:
+            raise SystemExit(res.stderr)
+        return json.loads(res.stdout.strip().splitlines()[-1])
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sizes", default="1e7,1e8")
+    ap.add_argument("--one", type=float)
+    ap.add_argument("--workers", type=int, default=os.cpu_count())
+    ap.add_argument("--out")
+    ap.add_argument("--halftone", default="blue-noise")
+    ap.add_argument("--scheduler", default=None)
+    ap.add_argument("--no-speedup", action="store_true")
+    ap.add_argument("--source", default="demo", help="demo, or a volume file (a cube-ish one: "
+                    "the job size assumes equal extents)")
+    a = ap.parse_args()
+    if a.one:
+        print(json.dumps(one(a.one, a.workers, a.out, a.halftone, a.scheduler, a.source)))
+        return
+    print(f"machine: {os.cpu_count()} cores; source {a.source} on j850-paper; "
+          f"halftone {a.halftone}")
+    print(f"{'voxels':>12} {'grid (x,y,z)':>20} {'workers':>7} {'wall s':>8} {'Mvox/s':>8} "
+          f"{'peak RSS MB':>11} {'job MB':>8}")
+    for n in (float(x) for x in a.sizes.split(",")):
+        r = child(n, a.workers, a.halftone, a.scheduler, a.source)
+        print(f"{r['voxels']:>12,} {str(tuple(r['grid'])):>20} {a.workers:>7} "
+              f"{r['wall_s']:>8.1f} {r['voxels_per_s'] / 1e6:>8.1f} {r['peak_rss_mb']:>11.0f} "
+              f"{r['job_mb']:>8.0f}", flush=True)
+        st = r["stages_s"]
+        print(f"{'':>12} worker-seconds: sample {st['sample']:.1f}, lookup+halftone "
+              f"{st['lookup_halftone']:.1f}, png {st['png']:.1f}, write {st['write']:.1f}",
+              flush=True)
+    if not a.no_speedup:
+        r1 = child(1e8, 1, a.halftone, a.scheduler, a.source)
+        r2 = child(1e8, 2, a.halftone, a.scheduler, a.source)
+        print(f"1 -> 2 workers on {r1['voxels']:,} voxels: {r1['voxels_per_s'] / 1e6:.1f} -> "
+              f"{r2['voxels_per_s'] / 1e6:.1f} Mvox/s, speed-up "
+              f"{r2['voxels_per_s'] / r1['voxels_per_s']:.2f}x")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,179 @@
+"""``dreamprint lookup`` and ``dreamprint gamut``: the RGB -> ink table and its gamut (issue 5)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import click
+
+from ..errors import DreamPrintError
+from . import cli
+
+_OBJECTIVES = click.Choice(["rgb", "lab"])
+
+
+def _parse_rgb(text: str) -> list[float]:
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        v = [float(p) for p in parts]
+    except ValueError:
+        raise DreamPrintError(f"--rgb {text!r} is not three numbers R,G,B") from None
+    if len(v) != 3 or not all(math.isfinite(x) and 0.0 <= x <= 1.0 for x in v):
+        raise DreamPrintError(f"--rgb {text!r} must be three numbers in [0, 1]")
+    return v
+
+
+def _read_rgb_file(path: str) -> list[list[float]]:
+    p = Path(path)
+    try:
+        with p.open(newline="", encoding="utf-8-sig") as fh:
+            rows = list(csv.reader(fh))
+    except FileNotFoundError:
+        raise DreamPrintError("no such file", p) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DreamPrintError(f"cannot read: {exc}", p) from None
+    if not rows:
+        raise DreamPrintError("empty file; expected a header row R,G,B", p)
+    header = [h.strip().upper() for h in rows[0]]
+    try:
+        cols = [header.index(c) for c in ("R", "G", "B")]
+    except ValueError:
+        raise DreamPrintError(f"header {rows[0]} must name columns R, G and B", p, 1) from None
+    out = []
+    for line, row in enumerate(rows[1:], start=2):
+        if not any(cell.strip() for cell in row):
+            continue
+        try:
+            v = [float(row[c]) for c in cols]
+        except (IndexError, ValueError):
+            raise DreamPrintError("R, G, B must be numbers", p, line) from None
+        if not all(math.isfinite(x) and 0.0 <= x <= 1.0 for x in v):
+            raise DreamPrintError("R, G, B must be in [0, 1]", p, line)
+        out.append(v)
+    if not out:
+        raise DreamPrintError("no colours after the header", p)
+    return out
+
+
+def _progress_bar(enabled: bool):
+    if not enabled:
+        return None
+    state = {"last": -1}
+
+    def report(fraction: float) -> None:
+        pct = int(100 * fraction)
+        if pct // 10 != state["last"]:
+            state["last"] = pct // 10
+            click.echo(f"building colour tables: {pct:3d} %", err=True)
+
+    return report
+
+
+@cli.command()
+@click.option("--rgb", "rgb_text", help="One colour R,G,B (encoded sRGB in [0, 1]).")
+@click.option("--rgb-file", type=click.Path(dir_okay=False),
+              help="CSV with a header row R,G,B; one colour per row.")
+@click.option("--density", type=float, default=None,
+              help="Target density sigma (1/mm) for the alignment (default: none, the table's "
+                   "mixture is kept).")
+@click.option("--profile", "profile_path", default=None, help="Ink profile JSON (default: "
+              "built-in).")
+@click.option("--objective", type=_OBJECTIVES, default=None,
+              help="Table objective (default: lab, the lower mean dE2000).")
+@click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True)
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def lookup(rgb_text, rgb_file, density, profile_path, objective, size, as_json) -> None:
+    """Ink concentrations for colours: table lookup, density alignment, reproduced colour."""
+    import numpy as np
+
+    from ..engine.colorimetry import delta_E2000, observer_for, srgb_to_lab
+    from ..engine.gamut import align_density, get_tables
+    from ..engine.gamut import lookup as table_lookup
+    from ..engine.mixture import predict
+    from ..engine.profile import COLOUR_INKS, INKS, load_profile
+
+    if (rgb_text is None) == (rgb_file is None):
+        raise DreamPrintError("give exactly one of --rgb or --rgb-file")
+    if density is not None and not (math.isfinite(density) and density >= 0):
+        raise DreamPrintError("--density must be a finite number >= 0 (1/mm)")
+    colours = [_parse_rgb(rgb_text)] if rgb_text else _read_rgb_file(rgb_file)
+    profile = load_profile(profile_path)
+    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json))
+    rgb = np.asarray(colours, dtype=np.float64)
+    conc5 = table_lookup(tables, rgb)
+    pred = predict(profile, conc5)  # exactly what `dreamprint predict --mix` computes
+    target_lab = srgb_to_lab(rgb, observer_for(profile.wavelengths_nm))
+    de = delta_E2000(pred.Lab, target_lab)
+    sig_target = pred.sigma_per_mm if density is None else np.full(len(rgb), density)
+    al = align_density(tables, rgb, conc5, sig_target, profile)
+    records = []
+    for i, c in enumerate(colours):
+        records.append({
+            "rgb": c,
+            "concentrations": {ink: float(conc5[i, j]) for j, ink in enumerate(COLOUR_INKS)},
+            "aligned": {ink: float(al.conc[i, j]) for j, ink in enumerate(INKS)},
+            "sRGB": pred.sRGB[i].tolist(),
+            "Lab": pred.Lab[i].tolist(),
+            "dE2000": float(de[i]),
+            "sigma_per_mm": float(al.sigma[i]),
+            "density_clamped": {-1: "low", 0: None, 1: "high"}[int(al.clamped[i])],
+        })
+    if as_json:
+        click.echo(json.dumps(records, indent=1))
+        return
+    for r in records:
+        conc = " ".join(f"{k}={v:.3f}" for k, v in r["aligned"].items())
+        click.echo(f"rgb {r['rgb']} -> {conc}  sRGB "
+                   f"{', '.join(f'{x:.3f}' for x in r['sRGB'])}  dE2000 {r['dE2000']:.2f}  "
+                   f"sigma {r['sigma_per_mm']:.3f}/mm"
+                   + (f" (clamped {r['density_clamped']})" if r["density_clamped"] else ""))
+
+
+@cli.command()
+@click.option("--profile", "profile_path", default=None, help="Ink profile JSON.")
+@click.option("--objective", type=_OBJECTIVES, default=None,
+              help="Table objective (default: lab, the lower mean dE2000).")
+@click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True)
+@click.option("--samples", type=click.IntRange(10, 100000), default=2000, show_default=True,
+              help="Random colours for the LUT-vs-direct comparison.")
+@click.option("--chart", type=click.Path(dir_okay=False), help="Write the Fig. 7 hexagon chart "
+              "(PNG).")
+@click.option("--plot", type=click.Path(dir_okay=False), help="Write the CIELAB gamut plot (PNG).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def gamut(profile_path, objective, size, samples, chart, plot, as_json) -> None:
+    """Build (or load) the colour tables and report the printable gamut."""
+    from ..engine.gamut import get_tables
+    from ..engine.gamut.charts import gamut_plot, hexagon_chart
+    from ..engine.gamut.evaluation import evaluate
+    from ..engine.profile import load_profile
+
+    profile = load_profile(profile_path)
+    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json))
+    report = evaluate(tables, profile, samples)
+    for target, draw in ((chart, lambda p: hexagon_chart(tables, profile, p)),
+                         (plot, lambda p: gamut_plot(profile, p))):
+        if target:
+            try:
+                draw(target)
+            except OSError as exc:
+                raise DreamPrintError(f"cannot write: {exc.strerror or exc}", target) from None
+    if as_json:
+        click.echo(json.dumps(report, indent=1))
+        return
+    lv = report["lut_vs_direct_dE2000"]
+    og = report["out_of_gamut_dE2000"]
+    click.echo(f"table {report['lut_size']}^3, objective {report['objective']}, "
+               f"{'cached' if report['cached'] else 'built'} "
+               f"(build {report['build_seconds']:.1f} s)")
+    click.echo(f"sRGB in gamut (dE2000 <= {report['in_gamut_threshold_dE2000']}): "
+               f"{100 * report['srgb_in_gamut_fraction']:.1f} %; CIELAB volume printable "
+               f"{report['lab_gamut_volume']:.0f} vs sRGB {report['srgb_lab_volume']:.0f}")
+    if lv["count"]:
+        click.echo(f"LUT vs direct dE2000: mean {lv['mean']:.3f}, p95 {lv['p95']:.3f}, "
+                   f"max {lv['max']:.3f}")
+    if og["count"]:
+        click.echo(f"out of gamut dE2000: mean {og['mean']:.2f}, p95 {og['p95']:.2f}, "
+                   f"max {og['max']:.2f}")

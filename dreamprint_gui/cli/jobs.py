@@ -1,0 +1,161 @@
+"""``dreamprint convert`` (volume -> print job) and ``dreamprint evaluate job`` (check a job)."""
+
+from __future__ import annotations
+
+import json
+import math
+import signal
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from ..errors import DreamPrintError
+from . import cli, evaluate
+
+
+def _size(text: str | None) -> tuple[float, float, float] | None:
+    if text is None:
+        return None
+    try:
+        v = tuple(float(x) for x in text.replace("x", ",").split(","))
+    except ValueError:
+        raise DreamPrintError(f"--size-mm must be X,Y,Z in mm, got '{text}'") from None
+    if len(v) != 3 or not all(math.isfinite(x) and x > 0 for x in v):
+        raise DreamPrintError(f"--size-mm must be three positive numbers X,Y,Z, got '{text}'")
+    return v
+
+
+def _fmt_time(s: float | None) -> str:
+    if s is None or not math.isfinite(s):
+        return "--:--"
+    s = int(round(s))
+    if s >= 3600:
+        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+    return f"{s // 60}:{s % 60:02d}"
+
+
+@cli.command()
+@click.argument("source")
+@click.option("-o", "--output", "output", required=True, type=click.Path(),
+              help="Job folder to create (JOB/slices/NNNNN.png + JOB/manifest.json).")
+@click.option("--profile", default=None, help="Ink profile JSON (default: built-in).")
+@click.option("--printer", default=None,
+              help="Built-in printer name (j850-paper, voxelprint-14um, voxelprint-27um) or a "
+                   "printer .toml file. Default j850-paper.")
+@click.option("--height-mm", type=float, default=None, help="Height (z) of the print in mm.")
+@click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm (aspect kept).")
+@click.option("--density-scale", type=float, default=1.0, show_default=True,
+              help="Multiplies the source density (1/mm = source density x scale / mm per unit).")
+@click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",
+              show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--workers", type=int, default=None, help="Worker count (default: all cores).")
+@click.option("--scheduler", default=None,
+              help="threads (default), processes, or a dask.distributed address such as "
+                   "tcp://host:8786 (workers must see the job's folder).")
+@click.option("--background", type=click.Choice(["clear", "empty"]), default="clear",
+              show_default=True, help="What voxels below the density threshold become.")
+@click.option("--density-threshold", type=float, default=None,
+              help="Background threshold in 1/mm (default: half the density of pure Clear).")
+@click.option("--slab-layers", type=int, default=None, help="Layers per task (default: auto).")
+@click.option("--option", "source_options", multiple=True,
+              help="Source reader option KEY=VALUE (e.g. grid=density); repeatable.")
+@click.option("--table-size", type=int, default=100, hidden=True,
+              help="Colour table nodes per axis (tests use small tables).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")
+@click.option("--json", "as_json", is_flag=True, help="Print the manifest as JSON at the end.")
+def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
+            workers, scheduler, background, density_threshold, slab_layers, source_options,
+            table_size, overwrite, as_json) -> None:
+    """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack."""
+    from ..engine.pipeline import ConvertSettings, JobCancelled, run_conversion
+
+    opts = {}
+    for kv in source_options:
+        if "=" not in kv:
+            raise DreamPrintError(f"--option must be KEY=VALUE, got '{kv}'")
+        k, v = kv.split("=", 1)
+        opts[k.strip()] = _option_value(v.strip())
+    settings = ConvertSettings(
+        source=source, output=output, profile=profile, printer=printer, height_mm=height_mm,
+        size_mm=_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
+        workers=workers, scheduler=scheduler, background=background,
+        density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
+        table_size=table_size, source_options=opts)
+
+    def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
+        raise KeyboardInterrupt()
+
+    old = signal.signal(signal.SIGTERM, on_term)
+    tty = sys.stderr.isatty()
+    gen = run_conversion(settings)
+    last = 0.0
+    try:
+        while True:
+            try:
+                p = next(gen)
+            except StopIteration as stop:
+                manifest = stop.value
+                break
+            now = time.monotonic()
+            if p.stage == "converting" and p.layers_total and (tty or now - last > 10):
+                last = now
+                frac = p.layers_done / p.layers_total
+                width = 30
+                bar = "#" * int(frac * width) + "-" * (width - int(frac * width))
+                rate = p.voxels_done / max(p.elapsed_s, 1e-9)
+                line = (f"[{bar}] {p.layers_done}/{p.layers_total} layers  "
+                        f"{rate / 1e6:.1f} Mvox/s  elapsed {_fmt_time(p.elapsed_s)}  "
+                        f"eta {_fmt_time(p.eta_s)}")
+                click.echo(("\r" + line) if tty else line, err=True, nl=not tty)
+            elif p.message and p.stage != "done":
+                click.echo(("\n" if tty and p.stage == "finishing" else "") + p.message,
+                           err=True)
+    except JobCancelled:
+        raise DreamPrintError("cancelled; the partial job was removed", output) from None
+    finally:
+        gen.close()
+        signal.signal(signal.SIGTERM, old)
+    t = manifest["timings_s"]
+    nx, ny, nz = manifest["grid_dimensions"]
+    if as_json:
+        click.echo(json.dumps(manifest, indent=2))
+    else:
+        size = manifest["physical_size_mm"]
+        click.echo(f"wrote {output}: {nz} slices of {nx} x {ny} voxels "
+                   f"({size[0]:.2f} x {size[1]:.2f} x {size[2]:.2f} mm), "
+                   f"{nx * ny * nz:,} voxels in {t['total']:.1f} s "
+                   f"({t['voxels_per_second'] / 1e6:.1f} Mvox/s)")
+
+
+def _option_value(v: str):
+    for conv in (int, float):
+        try:
+            return conv(v)
+        except ValueError:
+            pass
+    return {"true": True, "false": False}.get(v.lower(), v)
+
+
+@evaluate.command("job")
+@click.argument("job", type=click.Path())
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+def evaluate_job(job, as_json) -> None:
+    """Read a finished JOB back: material fractions vs intended concentrations, consistency."""
+    from ..io.job_check import check_job
+
+    report = check_job(Path(job))
+    if as_json:
+        click.echo(json.dumps(report, indent=2))
+        return
+    click.echo(f"{job}: {report['slices_found']} slices, grid {report['grid_dimensions']}, "
+               f"consistent: {report['consistent']}")
+    for m, r in report["materials"].items():
+        click.echo(f"  {m:5s} fraction {r['fraction']:.5f}  intended {r['intended']:.5f}  "
+                   f"z {r['z_score']:+.2f}")
+    for p in report["problems"]:
+        click.echo(f"  problem: {p}")
+    if not report["consistent"]:
+        raise DreamPrintError("the job is not consistent with its manifest", job)

@@ -1,0 +1,52 @@
+"""``dreamprint spectra FILE``: what a spectral measurement file holds, as DreamPrint reads it."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from . import cli
+
+_QUANTITIES = ["reflectance", "transmittance", "absorbance", "spd"]
+
+
+@cli.command()
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON object.")
+@click.option("--quantity", type=click.Choice(_QUANTITIES),
+              help="Read as this quantity (absorbance <-> transmittance converted).")
+@click.option("--file-quantity", type=click.Choice(_QUANTITIES + ["log_epsilon"]),
+              help="What the file holds, when the file does not say.")
+@click.option("--scale", type=click.Choice(["auto", "fraction", "percent"]), default="auto",
+              show_default=True, help="Scale of reflectance/transmittance values.")
+def spectra(file: str, as_json: bool, quantity: str | None, file_quantity: str | None,
+            scale: str) -> None:
+    """Show the format, quantity, unit conversion and samples of a spectral FILE.
+
+    Reads CGATS.17 (i1Profiler, ArgyllCMS, X-Rite), Agilent Cary CSV, JCAMP-DX, IES TM-27-14
+    and plain CSV. Physically impossible values are listed as problems.
+    """
+    from ..io.spectra import read_spectra
+
+    sf = read_spectra(file, quantity=quantity, file_quantity=file_quantity, value_scale=scale)
+    summary = sf.summary()
+    if as_json:
+        click.echo(json.dumps(summary, indent=2))
+        return
+    click.echo(f"file: {sf.path}")
+    click.echo(f"format: {sf.format}")
+    click.echo(f"quantity: {sf.quantity}")
+    click.echo(f"conversion: {sf.conversion}")
+    click.echo(f"samples: {len(sf.samples)}")
+    width = min(max(len(s["name"]) for s in summary["samples"]), 32)
+    for s in summary["samples"]:
+        lo, hi = s["wavelengths_nm"]
+        step = f"step {s['step_nm']:g} nm" + ("" if s["uniform"] else " (median, uneven)")
+        rng = ("" if s["min"] is None else f"  values {s['min']:.4g} to {s['max']:.4g}")
+        click.echo(f"  {s['name'][:32]:<{width}}  {lo:g}-{hi:g} nm  {step}  "
+                   f"{s['points']} points{rng}")
+    if sf.problems:
+        click.echo(f"problems: {len(sf.problems)}")
+        for p in sf.problems:
+            click.echo(f"  {p}")

@@ -1,0 +1,326 @@
+"""Density alignment (paper section 4.1, eqs. 11-13): Clear to lower sigma, K/W grey to raise it.
+
+Defines
+-------
+- :class:`Alignment`: six-ink concentrations (INKS order) on the simplex, achieved sigma, and the
+  report of voxels that could not reach their target.
+- :func:`align_density`: exact alignment (vectorised root finding on the KM density of the real
+  inks, Clear's small K and S included): sigma of the result equals the target to ~1e-10
+  relative wherever the target is reachable.
+- :func:`lookup_and_align_into`: the fused, compiled (numba, nogil, one core) lookup + alignment
+  for the streaming print job; no KM at run time: it interpolates the tables' per-node sigma
+  curves (sigma at Clear dilutions rho = 1 .. 1/32, log-log piecewise linear in rho; sigma with
+  10 % grey, linear in the grey fraction). ``benchmarks/bench_gamut.py`` prints its speed and its
+  sigma error against :func:`align_density`.
+- :func:`predicted_appearance`: what a voxel will look like after lookup + alignment (GUI).
+
+Lowering (eq. 12): ``C = rho C* + (1 - rho) Cl``. With an ideal Clear (K = S = 0) the mixture's
+T(t) is C*'s T(rho t); the real Clear is included by solving sigma(C) = target for rho exactly.
+Targets below pure Clear's sigma give rho = 0 and are reported as clamped low.
+Raising (eq. 13): ``C = rho+ C* + (1 - rho+) X`` with X = rho_K K + (1 - rho_K) W of the target's
+brightness (eq. 11, brightness table), the grey fraction ``1 - rho+ <= 0.1`` (the paper's "upper
+limit of rho+ 0.1" bounds the grey). Targets beyond 10 % grey, or where the grey is not denser
+than C* (bright colours: X is mostly white, whose sigma is low), are reported as clamped high.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..colorimetry import observer_for
+from ..mixture import mixture_colour
+from ..profile import INKS, InkProfile
+from .forward import N_COLOUR_INKS
+from .grey import grey_concentrations, rho_k_for
+from .tables import (
+    CLEAR_KNOTS,
+    F_GREY,
+    F_SIGMA,
+    GREY_MAX,
+    N_FIELDS,
+    ColourTables,
+    lookup,
+    mixture_sigma,
+    trilinear_fields,
+)
+
+__all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
+           "predicted_appearance"]
+
+_I_K = INKS.index("K")
+_I_W = INKS.index("W")
+_I_CL = INKS.index("Cl")
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """Result of density alignment; leading shape that of the voxels."""
+
+    conc: NDArray[np.float64]  # (..., 6) INKS order
+    sigma: NDArray[np.float64]  # (...) achieved sigma, 1/mm
+    clamped: NDArray[np.int8]  # -1 below reach (too thin), +1 above reach (too dense), 0 exact
+    n_clamped_low: int
+    n_clamped_high: int
+    max_shortfall_low: float  # 1/mm: achieved - target, worst too-thin voxel
+    max_shortfall_high: float  # 1/mm: target - achieved, worst too-dense voxel
+
+    @property
+    def max_shortfall(self) -> float:
+        return max(self.max_shortfall_low, self.max_shortfall_high)
+
+
+@dataclass(frozen=True)
+class AlignCounts:
+    n_clamped_low: int
+    n_clamped_high: int
+    max_shortfall_low: float
+    max_shortfall_high: float
+
+
+def _solve_on_line(profile: InkProfile, a: NDArray, b: NDArray, sa: NDArray, sb: NDArray,
+                   target: NDArray, rtol: float = 1e-11) -> tuple[NDArray, NDArray]:
+    """w in [0, 1] with sigma((1 - w) a + w b) = target, sigma(a) = sa <= target <= sb = sigma(b).
+
+    Illinois (modified regula falsi) on all rows at once: superlinear and always bracketed.
+    """
+    lo = np.zeros(target.shape)
+    hi = np.ones(target.shape)
+    flo = sa - target
+    fhi = sb - target
+    w = np.clip(np.where(fhi > flo, -flo / np.where(fhi > flo, fhi - flo, 1.0), 0.5), 0.0, 1.0)
+    sig = np.empty(target.shape)
+    todo = np.ones(target.shape, dtype=bool)
+    side = np.zeros(target.shape, dtype=np.int8)
+    for _ in range(100):
+        idx = np.flatnonzero(todo)
+        if idx.size == 0:
+            break
+        wi = w[idx]
+        s = mixture_sigma(profile, (1.0 - wi)[:, None] * a[idx] + wi[:, None] * b[idx])
+        sig[idx] = s
+        f = s - target[idx]
+        done = np.abs(f) <= rtol * np.maximum(target[idx], 1e-300)
+        todo[idx[done]] = False
+        up = f < 0
+        lo_i, hi_i, flo_i, fhi_i, sd = lo[idx], hi[idx], flo[idx], fhi[idx], side[idx]
+        lo_i = np.where(up, wi, lo_i)
+        flo_i = np.where(up, f, flo_i)
+        hi_i = np.where(up, hi_i, wi)
+        fhi_i = np.where(up, fhi_i, f)
+        # Illinois: halve the stale end's value when the same end moves twice
+        fhi_i = np.where(up & (sd == 1), 0.5 * fhi_i, fhi_i)
+        flo_i = np.where(~up & (sd == -1), 0.5 * flo_i, flo_i)
+        sd = np.where(up, 1, -1).astype(np.int8)
+        denom = fhi_i - flo_i
+        nxt = np.where(denom > 0, lo_i - flo_i * (hi_i - lo_i) / np.where(denom > 0, denom, 1.0),
+                       0.5 * (lo_i + hi_i))
+        bad = ~((nxt > lo_i) & (nxt < hi_i))
+        nxt = np.where(bad, 0.5 * (lo_i + hi_i), nxt)
+        tiny = (hi_i - lo_i) <= 1e-15
+        todo[idx[tiny]] = False
+        lo[idx], hi[idx], flo[idx], fhi[idx], side[idx] = lo_i, hi_i, flo_i, fhi_i, sd
+        w[idx] = np.where(done | tiny, wi, nxt)
+    return w, sig
+
+
+def align_density(tables: ColourTables, rgb: ArrayLike, conc5: ArrayLike,
+                  sigma_target: ArrayLike, profile: InkProfile | None = None) -> Alignment:
+    """Align mixtures ``conc5`` (..., 5) of colours ``rgb`` (..., 3) to ``sigma_target`` (...).
+
+    ``profile`` must be the tables' profile (checked by fingerprint); default: the built-in one.
+    """
+    from ..profile import default_profile
+
+    profile = profile or default_profile()
+    if profile.fingerprint() != tables.profile_fingerprint:
+        raise ValueError("the tables were built for another profile")
+    rgb = np.asarray(rgb, dtype=np.float64)
+    c5 = np.asarray(conc5, dtype=np.float64)
+    shape = c5.shape[:-1]
+    target = np.broadcast_to(np.asarray(sigma_target, dtype=np.float64), shape).ravel().copy()
+    if not np.all(np.isfinite(target)) or np.any(target < 0):
+        raise ValueError("target densities must be finite and >= 0")
+    c5 = c5.reshape(-1, N_COLOUR_INKS)
+    n = c5.shape[0]
+    c_star = np.concatenate([c5, np.zeros((n, 1))], axis=1)
+    clear = np.zeros((n, len(INKS)))
+    clear[:, _I_CL] = 1.0
+    s_star = mixture_sigma(profile, c_star)
+    s_clear = np.full(n, tables.sigma_clear)
+    out = c_star.copy()
+    sigma = s_star.copy()
+    clamped = np.zeros(n, dtype=np.int8)
+
+    low = target < s_star
+    floor = low & (target <= s_clear)  # even pure Clear is denser than the target
+    out[floor] = clear[floor]
+    sigma[floor] = s_clear[floor]
+    clamped[floor & (target < s_clear)] = -1
+    m = low & ~floor
+    if m.any():
+        rho, s = _solve_on_line(profile, clear[m], c_star[m], s_clear[m], s_star[m], target[m])
+        out[m] = rho[:, None] * c_star[m] + (1.0 - rho)[:, None] * clear[m]
+        sigma[m] = s
+
+    high = target > s_star
+    if high.any():
+        idx = np.flatnonzero(high)
+        grey = grey_concentrations(rho_k_for(tables.brightness_rho_k,
+                                             rgb.reshape(-1, 3)[idx].mean(axis=-1)))
+        full = (1.0 - GREY_MAX) * c_star[idx] + GREY_MAX * grey
+        s_full = mixture_sigma(profile, full)
+        reach = s_full >= target[idx]
+        useless = s_full <= s_star[idx]  # the grey would not raise the density
+        stop = ~reach
+        pick = idx[stop & ~useless]
+        out[pick] = full[stop & ~useless]
+        sigma[pick] = s_full[stop & ~useless]
+        clamped[idx[stop]] = 1
+        sel = reach & ~useless
+        if sel.any():
+            i = idx[sel]
+            w, s = _solve_on_line(profile, c_star[i], full[sel], s_star[i], s_full[sel],
+                                  target[i])
+            out[i] = (1.0 - w)[:, None] * c_star[i] + w[:, None] * full[sel]
+            sigma[i] = s
+    short_low = np.where(clamped == -1, sigma - target, 0.0)
+    short_high = np.where(clamped == 1, target - sigma, 0.0)
+    return Alignment(out.reshape(shape + (len(INKS),)), sigma.reshape(shape),
+                     clamped.reshape(shape), int(np.sum(clamped == -1)),
+                     int(np.sum(clamped == 1)), float(short_low.max(initial=0.0)),
+                     float(short_high.max(initial=0.0)))
+
+
+_LOG_KNOTS = np.log(np.asarray(CLEAR_KNOTS))
+
+
+@nb.njit(cache=True, nogil=True)
+def _align_kernel(packed, rgb, target, rho_k_table, sigma_clear, log_knots, out, stats):
+    n = packed.shape[0]
+    nk = log_knots.shape[0]
+    f = np.empty(N_FIELDS)
+    nb_table = rho_k_table.shape[0]
+    n_low = 0
+    n_high = 0
+    worst_low = 0.0
+    worst_high = 0.0
+    for v in range(rgb.shape[0]):
+        r = rgb[v, 0]
+        g = rgb[v, 1]
+        b = rgb[v, 2]
+        r = min(max(r, 0.0), 1.0) if r == r else 0.0
+        g = min(max(g, 0.0), 1.0) if g == g else 0.0
+        b = min(max(b, 0.0), 1.0) if b == b else 0.0
+        trilinear_fields(packed, n, r, g, b, N_FIELDS, f)
+        tot = 0.0
+        for i in range(N_COLOUR_INKS):
+            f[i] = max(f[i], 0.0)
+            tot += f[i]
+        for i in range(N_COLOUR_INKS):
+            f[i] /= tot
+        t = target[v]
+        if not (t >= 0.0):  # NaN or negative density: treat as empty
+            t = 0.0
+        s1 = f[F_SIGMA]
+        if t <= s1:
+            # eq. 12: C = rho C* + (1 - rho) Cl
+            if t <= sigma_clear:
+                rho = 0.0
+                if t < sigma_clear:
+                    n_low += 1
+                    worst_low = max(worst_low, sigma_clear - t)
+            else:
+                rho = -1.0
+                lt = math.log(t)
+                for k in range(nk - 1):
+                    sa = f[F_SIGMA + k]
+                    sb = f[F_SIGMA + k + 1]
+                    if t >= sb:
+                        if sa > sb:
+                            u = (lt - math.log(sb)) / (math.log(sa) - math.log(sb))
+                            rho = math.exp(log_knots[k + 1]
+                                           + u * (log_knots[k] - log_knots[k + 1]))
+                        else:
+                            rho = math.exp(log_knots[k])
+                        break
+                if rho < 0.0:  # below the last knot: linear to pure Clear
+                    sl = f[F_SIGMA + nk - 1]
+                    rl = math.exp(log_knots[nk - 1])
+                    rho = rl * (t - sigma_clear) / max(sl - sigma_clear, 1e-30)
+                rho = min(max(rho, 0.0), 1.0)
+            for i in range(N_COLOUR_INKS):
+                out[v, i] = rho * f[i]
+            out[v, 5] = 1.0 - rho
+        else:
+            # eq. 13: C = (1 - g) C* + g X, g <= 0.1, X of matching brightness (eq. 11)
+            sg = f[F_GREY]
+            if sg <= s1:
+                gfrac = 0.0
+                n_high += 1
+                worst_high = max(worst_high, t - s1)
+            else:
+                gfrac = GREY_MAX * (t - s1) / (sg - s1)
+                if gfrac > GREY_MAX:
+                    gfrac = GREY_MAX
+                    n_high += 1
+                    worst_high = max(worst_high, t - sg)
+            x = (r + g + b) / 3.0 * (nb_table - 1)
+            j = min(int(x), nb_table - 2)
+            u = x - j
+            rk = rho_k_table[j] * (1.0 - u) + rho_k_table[j + 1] * u
+            for i in range(N_COLOUR_INKS):
+                out[v, i] = (1.0 - gfrac) * f[i]
+            out[v, _I_K] += gfrac * rk
+            out[v, _I_W] += gfrac * (1.0 - rk)
+            out[v, 5] = 0.0
+    stats[0] = n_low
+    stats[1] = n_high
+    stats[2] = worst_low
+    stats[3] = worst_high
+
+
+def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDArray,
+                          out_conc6: NDArray) -> AlignCounts:
+    """Fused lookup + density alignment for the streaming job (compiled, releases the GIL).
+
+    ``rgb`` (N, 3) and ``sigma_target`` (N,) float32 (any float accepted), encoded sRGB in
+    [0, 1] and 1/mm; writes C, M, Y, K, W, Cl into ``out_conc6`` (N, 6). Runs on the calling
+    thread (call it from several threads on separate slabs to use several cores).
+    """
+    rgb = np.ascontiguousarray(rgb)
+    target = np.ascontiguousarray(sigma_target).reshape(-1)
+    if rgb.ndim != 2 or rgb.shape[1] != 3 or target.shape[0] != rgb.shape[0]:
+        raise ValueError("rgb must be (N, 3) and sigma_target (N,)")
+    if out_conc6.shape != (rgb.shape[0], len(INKS)):
+        raise ValueError("out_conc6 must be (N, 6)")
+    stats = np.zeros(4)
+    _align_kernel(tables.packed, rgb, target, tables.brightness_rho_k.astype(np.float64),
+                  float(tables.sigma_clear), _LOG_KNOTS, out_conc6, stats)
+    return AlignCounts(int(stats[0]), int(stats[1]), float(stats[2]), float(stats[3]))
+
+
+def predicted_appearance(tables: ColourTables, profile: InkProfile, rgb: ArrayLike,
+                         sigma_target: ArrayLike) -> tuple[NDArray, NDArray]:
+    """(sRGB (..., 3), sigma (...)) of what the print job will deposit per voxel.
+
+    Runs the same fused kernel as the job, then evaluates the resulting six-ink mixtures with
+    the full model (colour at the reference thickness, eq. 7; sigma, eq. 9).
+    """
+    rgb = np.asarray(rgb, dtype=np.float32)
+    shape = rgb.shape[:-1]
+    flat = rgb.reshape(-1, 3)
+    target = np.broadcast_to(np.asarray(sigma_target, dtype=np.float32), shape).reshape(-1)
+    conc = np.empty((flat.shape[0], len(INKS)), dtype=np.float32)
+    lookup_and_align_into(tables, flat, target, conc)
+    obs = observer_for(profile.wavelengths_nm)
+    srgb = obs.XYZ_to_sRGB(mixture_colour(profile, conc.astype(np.float64), observer=obs))
+    sigma = mixture_sigma(profile, conc.astype(np.float64))
+    return srgb.reshape(shape + (3,)), sigma.reshape(shape)
+
+
+__all__ += ["lookup"]

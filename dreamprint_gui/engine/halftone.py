@@ -1,0 +1,374 @@
+"""3D halftoning: per-voxel ink concentrations -> one material label per voxel.
+
+Defines
+-------
+- :func:`blue_noise_mask`: a tileable 3D void-and-cluster threshold mask (Ulichney 1993, "The
+  void-and-cluster method for dither array generation", SPIE 1913), built for the printer's
+  anisotropic voxel with a Gaussian energy filter in *physical* distance, generated once and
+  cached on disk (platformdirs user cache folder, keyed by shape, voxel and algorithm version).
+- :func:`uniform_hash`: the counter-based generator of the paper's stochastic halftoning: a
+  SplitMix64 finaliser (Steele, Lea & Flood 2014) of (seed, x, y, z), i.e. a pure function of
+  the voxel's position, so the result does not depend on slab size, worker count or scheduler.
+- :class:`Halftoner`: the settings of one job (method, seed, mask, background); its
+  :meth:`Halftoner.layer_into` labels one layer with a numba kernel that releases the GIL.
+- :func:`fraction_variance_ratio`: the quality metric (variance of local fractions in boxes
+  relative to the binomial i.i.d. variance, and the mean bias).
+
+Label of a voxel with concentrations c (6 inks, INKS order, summing to s) and threshold
+t in [0, 1): the first ink i with t * s < c_0 + ... + c_i. With t uniform on [0, 1) every ink is
+drawn with probability c_i / s exactly (the paper's section 4.3 "3D stochastic halftoning" for
+``random``). ``blue-noise`` uses as t the mask's rank threshold (rank + 0.5) / N at the voxel's
+position (mask tiled over the job with a seed-dependent toroidal offset): over a tile each
+threshold occurs once, so every ink's fraction equals its concentration to within 1/N (unbiased),
+while neighbouring voxels get thresholds far apart (low local variance). Voxels whose density is
+below the background threshold get the background label (Clear or empty) without drawing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from .profile import INKS
+
+__all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
+           "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS", "MASK_VERSION"]
+
+HALFTONE_METHODS = ("blue-noise", "random")
+MASK_VERSION = 1
+_NO_MASK = np.zeros((1, 1, 1), np.float32)
+# Order of the inks along the threshold axis. The first band [0, c) of a void-and-cluster mask
+# is its best blue-noise set; the last band is the complement of one (also blue); middle bands
+# are differences of two. Black, the most visible speck, goes first; Clear, usually the largest
+# share, last.
+INK_ORDER: tuple[int, ...] = (3, 0, 1, 2, 4, 5)  # K, C, M, Y, W, Cl
+_MASK_VOXELS = 32768  # 32^3: generation is O(N^2) ~ 2 s once, then cached
+_SIGMA_VOXELS = 1.5   # Ulichney's filter width, in geometric-mean voxel sizes
+
+
+# ----------------------------------------------------------------------------- randomness
+@njit(cache=True, nogil=True, inline="always")
+def _mix64(z):
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _uniform(seed, x, y, z):
+    # Coordinates are packed in 21 bits each (2,097,152 voxels per axis: far above any tray).
+    key = (np.uint64(x) & np.uint64(0x1FFFFF)) | ((np.uint64(y) & np.uint64(0x1FFFFF))
+                                                  << np.uint64(21)) \
+        | ((np.uint64(z) & np.uint64(0x1FFFFF)) << np.uint64(42))
+    h = _mix64(key + _mix64(seed + np.uint64(0x9E3779B97F4A7C15)))
+    return np.float64(h >> np.uint64(11)) * (1.0 / 9007199254740992.0)  # 53 bits -> [0, 1)
+
+
+@njit(cache=True, nogil=True)
+def _uniform_grid(seed, x0, y0, z0, nx, ny, nz, out):
+    for k in range(nz):
+        for j in range(ny):
+            for i in range(nx):
+                out[k, j, i] = _uniform(seed, x0 + i, y0 + j, z0 + k)
+
+
+def uniform_hash(seed: int, shape_zyx: tuple[int, int, int],
+                 origin_xyz: tuple[int, int, int] = (0, 0, 0)) -> np.ndarray:
+    """The position-keyed uniform [0, 1) numbers of a block of voxels, (z, y, x) ordered."""
+    nz, ny, nx = shape_zyx
+    out = np.empty((nz, ny, nx), dtype=np.float64)
+    _uniform_grid(np.uint64(seed & 0xFFFFFFFFFFFFFFFF), origin_xyz[0], origin_xyz[1],
+                  origin_xyz[2], nx, ny, nz, out)
+    return out
+
+
+# ----------------------------------------------------------------------------- blue noise
+def mask_shape_for_voxel(voxel_mm: tuple[float, float, float],
+                         n_voxels: int = _MASK_VOXELS) -> tuple[int, int, int]:
+    """(nz, ny, nx) of a mask about physically cubic for this voxel, ~``n_voxels`` in total."""
+    vx, vy, vz = voxel_mm
+    inv = np.array([1 / vx, 1 / vy, 1 / vz])
+    side = (n_voxels / np.prod(inv)) ** (1 / 3)
+    n = np.maximum(8, np.round(side * inv)).astype(int)
+    return int(n[2]), int(n[1]), int(n[0])
+
+
+@njit(cache=True, nogil=True)
+def _add_energy(energy, kernel, shape, idx, sign):
+    nz, ny, nx = shape
+    z0 = idx // (ny * nx)
+    y0 = (idx // nx) % ny
+    x0 = idx % nx
+    p = 0
+    for z in range(nz):
+        dz = (z - z0) % nz
+        for y in range(ny):
+            dy = (y - y0) % ny
+            for x in range(nx):
+                energy[p] += sign * kernel[dz, dy, (x - x0) % nx]
+                p += 1
+
+
+@njit(cache=True, nogil=True)
+def _tightest_cluster(ones, energy):
+    best, bi = -1e300, -1
+    for i in range(ones.size):
+        if ones[i] and energy[i] > best:
+            best, bi = energy[i], i
+    return bi
+
+
+@njit(cache=True, nogil=True)
+def _largest_void(ones, energy):
+    best, bi = 1e300, -1
+    for i in range(ones.size):
+        if not ones[i] and energy[i] < best:
+            best, bi = energy[i], i
+    return bi
+
+
+@njit(cache=True, nogil=True)
+def _void_and_cluster(shape, kernel, initial):
+    nz, ny, nx = shape
+    n = nz * ny * nx
+    ones = initial.copy()
+    energy = np.zeros(n)
+    for i in range(n):
+        if ones[i]:
+            _add_energy(energy, kernel, shape, i, 1.0)
+    # Phase 0: relax the initial random pattern into a homogeneous one.
+    for _ in range(10 * n):
+        c = _tightest_cluster(ones, energy)
+        ones[c] = False
+        _add_energy(energy, kernel, shape, c, -1.0)
+        v = _largest_void(ones, energy)
+        ones[v] = True
+        _add_energy(energy, kernel, shape, v, 1.0)
+        if v == c:
+            break
+    prototype = ones.copy()
+    n_ones = 0
+    for i in range(n):
+        if prototype[i]:
+            n_ones += 1
+    rank = np.empty(n, dtype=np.int64)
+    # Phase 1: rank the prototype's points by removing tightest clusters.
+    r = n_ones - 1
+    while r >= 0:
+        c = _tightest_cluster(ones, energy)
+        ones[c] = False
+        _add_energy(energy, kernel, shape, c, -1.0)
+        rank[c] = r
+        r -= 1
+    # Restore the prototype, then phases 2-3: fill the largest voids. Because the filter's sum
+    # is constant, the largest void of the ones is the tightest cluster of the zeros, so one rule
+    # covers both halves of Ulichney's procedure.
+    energy[:] = 0.0
+    for i in range(n):
+        ones[i] = prototype[i]
+        if ones[i]:
+            _add_energy(energy, kernel, shape, i, 1.0)
+    for r in range(n_ones, n):
+        v = _largest_void(ones, energy)
+        ones[v] = True
+        _add_energy(energy, kernel, shape, v, 1.0)
+        rank[v] = r
+    return rank
+
+
+def _cache_dir() -> Path:
+    from platformdirs import user_cache_dir
+
+    env = os.environ.get("DREAMPRINT_CACHE")
+    return Path(env) if env else Path(user_cache_dir("dreamprint")) / "halftone"
+
+
+def _generate_mask(shape_zyx: tuple[int, int, int],
+                   voxel_mm: tuple[float, float, float]) -> np.ndarray:
+    nz, ny, nx = shape_zyx
+    vx, vy, vz = voxel_mm
+    sigma = _SIGMA_VOXELS * (vx * vy * vz) ** (1 / 3)
+
+    def d(nn, v):  # toroidal distance in mm
+        k = np.arange(nn)
+        return np.minimum(k, nn - k) * v
+
+    dz, dy, dx = np.meshgrid(d(nz, vz), d(ny, vy), d(nx, vx), indexing="ij")
+    kernel = np.exp(-(dx**2 + dy**2 + dz**2) / (2 * sigma**2))
+    rng = np.random.default_rng(20240611)
+    n = nz * ny * nx
+    initial = np.zeros(n, dtype=np.bool_)
+    initial[rng.choice(n, size=max(1, n // 10), replace=False)] = True
+    rank = _void_and_cluster((nz, ny, nx), kernel, initial)
+    return ((rank.reshape(nz, ny, nx) + 0.5) / n).astype(np.float32)
+
+
+def blue_noise_mask(voxel_mm: tuple[float, float, float],
+                    shape_zyx: tuple[int, int, int] | None = None) -> np.ndarray:
+    """Threshold mask (nz, ny, nx) float32 with values (rank + 0.5) / N, cached on disk."""
+    shape = shape_zyx or mask_shape_for_voxel(voxel_mm)
+    key = hashlib.sha256(repr((MASK_VERSION, tuple(shape), tuple(round(v, 9) for v in voxel_mm),
+                               _SIGMA_VOXELS)).encode()).hexdigest()[:16]
+    path = _cache_dir() / f"void-and-cluster-{key}.npy"
+    try:
+        m = np.load(path)
+        if m.shape == tuple(shape) and m.dtype == np.float32:
+            return m
+    except (OSError, ValueError):
+        pass
+    m = _generate_mask(tuple(shape), voxel_mm)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        with open(tmp, "wb") as f:
+            np.save(f, m)
+        os.replace(tmp, path)  # atomic: concurrent workers never read a half-written mask
+    except OSError:
+        pass  # a read-only cache only costs the regeneration next time
+    return m
+
+
+# ----------------------------------------------------------------------------- kernel
+@njit(cache=True, nogil=True)
+def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy, oz, seed,
+                    x0, y0, order, out, counts, conc_sums):
+    ny, nx = out.shape
+    mz, my, mx = mask.shape
+    mzz = (z + oz) % mz
+    for j in range(ny):
+        myy = (y0 + j + oy) % my
+        for i in range(nx):
+            p = j * nx + i
+            if density[p] < threshold:
+                out[j, i] = bg_label
+                counts[bg_label] += 1
+                conc_sums[bg_label] += 1.0
+                continue
+            s = 0.0
+            for m in range(6):
+                s += conc[p, m]
+                conc_sums[m] += conc[p, m]
+            if method == 0:
+                t = mask[mzz, myy, (x0 + i + ox) % mx]
+            else:
+                t = _uniform(seed, x0 + i, y0 + j, z)
+            t *= s
+            lab = -1
+            c = 0.0
+            for q in range(6):
+                m = order[q]
+                c += conc[p, m]
+                if t < c:
+                    lab = m
+                    break
+            if lab < 0:  # t*s rounded onto the total: take the last ink with a non-zero share
+                for q in range(5, -1, -1):
+                    if conc[p, order[q]] > 0.0:
+                        lab = order[q]
+                        break
+            if lab < 0:  # all-zero concentrations cannot come from the tables; be safe
+                lab = bg_label
+            out[j, i] = lab
+            counts[lab] += 1
+
+
+@dataclass(frozen=True)
+class Halftoner:
+    """Halftoning settings of a job; picklable (the mask travels to process/cluster workers)."""
+
+    method: str
+    seed: int
+    voxel_mm: tuple[float, float, float]
+    threshold: float = 0.0   # density (1/mm) below which a voxel is background
+    bg_label: int = 5        # 5 = Clear, 6 = empty
+    mask: np.ndarray | None = None
+    order: tuple[int, ...] = INK_ORDER
+    offset_xyz: tuple[int, int, int] = (0, 0, 0)
+
+    @classmethod
+    def create(cls, method: str, seed: int, voxel_mm: tuple[float, float, float],
+               threshold: float = 0.0, bg_label: int = 5) -> Halftoner:
+        if method not in HALFTONE_METHODS:
+            raise ValueError(f"unknown halftoning {method!r} (use {', '.join(HALFTONE_METHODS)})")
+        mask = blue_noise_mask(voxel_mm) if method == "blue-noise" else None
+        off = (0, 0, 0)
+        if mask is not None:  # seed-dependent toroidal offset of the mask
+            mz, my, mx = mask.shape
+            u = uniform_hash(int(seed), (1, 1, 3), (0, 0, 2**20))[0, 0]
+            off = (int(u[0] * mx), int(u[1] * my), int(u[2] * mz))
+        return cls(method, int(seed), tuple(voxel_mm), float(threshold), int(bg_label), mask,
+                   INK_ORDER, off)
+
+    def describe(self) -> dict:
+        d = {"method": self.method, "seed": self.seed}
+        if self.mask is not None:
+            d.update(mask="void-and-cluster", mask_shape_zyx=list(self.mask.shape),
+                     mask_version=MASK_VERSION,
+                     mask_sha256=hashlib.sha256(self.mask.tobytes()).hexdigest()[:16],
+                     mask_sigma_voxels=_SIGMA_VOXELS)
+        else:
+            d.update(generator="splitmix64(seed, x, y, z)")
+        d["ink_order"] = [INKS[i] for i in self.order]
+        return d
+
+    def layer_into(self, conc: np.ndarray, density: np.ndarray, z: int, out: np.ndarray,
+                   counts: np.ndarray, conc_sums: np.ndarray, x0: int = 0, y0: int = 0) -> None:
+        """Label layer ``z``: ``conc`` (ny*nx, 6) float32, ``density`` (ny*nx,) -> ``out``.
+
+        ``counts`` (7,) int64 and ``conc_sums`` (7,) float64 are accumulated (labels and
+        intended concentrations, background voxels counting 1 for the background label).
+        """
+        mask = self.mask if self.mask is not None else _NO_MASK
+        ox, oy, oz = self.offset_xyz
+        _halftone_layer(conc, density, np.float32(self.threshold), self.bg_label, z,
+                        0 if self.method == "blue-noise" else 1, mask, ox, oy, oz,
+                        np.uint64(self.seed & 0xFFFFFFFFFFFFFFFF), x0, y0,
+                        np.asarray(self.order, dtype=np.int64), out, counts, conc_sums)
+
+    def block(self, conc: np.ndarray, origin_xyz: tuple[int, int, int] = (0, 0, 0)) -> np.ndarray:
+        """Labels of a (nz, ny, nx, 6) concentration block (no background) - for tests/metrics."""
+        nz, ny, nx, _ = conc.shape
+        out = np.empty((nz, ny, nx), dtype=np.uint8)
+        counts = np.zeros(7, np.int64)
+        sums = np.zeros(7, np.float64)
+        dens = np.ones(ny * nx, np.float32)
+        for k in range(nz):
+            c = np.ascontiguousarray(conc[k].reshape(ny * nx, 6), dtype=np.float32)
+            self.layer_into(c, dens, origin_xyz[2] + k, out[k], counts, sums,
+                            origin_xyz[0], origin_xyz[1])
+        return out
+
+
+def fraction_variance_ratio(labels: np.ndarray, conc6: np.ndarray,
+                            box_zyx: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Quality of a halftone of a constant-concentration block.
+
+    Splits ``labels`` (nz, ny, nx) into non-overlapping boxes of ``box_zyx`` voxels; per ink,
+    returns (variance of the boxes' fractions / binomial variance c(1-c)/n of i.i.d. sampling,
+    mean fraction - c). i.i.d. sampling gives a ratio of 1; lower is smoother.
+    """
+    bz, by, bx = box_zyx
+    nz, ny, nx = (s - s % b for s, b in zip(labels.shape, box_zyx, strict=True))
+    lab = labels[:nz, :ny, :nx]
+    n = bz * by * bx
+    ratios = np.full(6, np.nan)
+    bias = np.zeros(6)
+    for m in range(6):
+        c = float(conc6[m])
+        f = (lab == m).reshape(nz // bz, bz, ny // by, by, nx // bx, bx).sum(axis=(1, 3, 5)) / n
+        bias[m] = f.mean() - c
+        if 0 < c < 1:
+            ratios[m] = f.var() / (c * (1 - c) / n)
+    return ratios, bias
+
+
+def box_for_voxel(voxel_mm: tuple[float, float, float], width_mm: float = 0.25
+                  ) -> tuple[int, int, int]:
+    """(z, y, x) voxels of a box about ``width_mm`` wide on this voxel grid."""
+    return tuple(max(1, math.floor(width_mm / v + 0.5)) for v in voxel_mm[::-1])

@@ -1,0 +1,611 @@
+"""The print-job conversion (paper Fig. 2 and section 4), streamed slab by slab.
+
+Defines
+-------
+- :class:`ConvertSettings`: everything ``dreamprint convert`` takes.
+- :class:`ConvertProgress`: what the conversion yields (layers done/total, voxels, elapsed, ETA).
+- :func:`run_conversion`: a generator driven by the CLI and the GUI alike; yields progress and
+  returns the manifest dict once the job folder is complete and renamed into place.
+- :func:`prepare_job`: resolve settings into a :class:`JobContext` (source, grid, tables,
+  halftoner, printer) and refuse a job larger than the tray before any work.
+- :func:`halftone_layer`: the labels (ny, nx) of one layer, for the GUI's slice scrubber
+  (byte-identical to the layer in an exported job).
+
+Per slab of layers ``[z0, z1)``: sample the source on the printer grid (density in 1/mm, the
+volume source's rule) -> trilinear table lookup of C, M, Y, K, W and density alignment (Clear,
+K/W grey; ``gamut.lookup_and_align_into``) -> background threshold (``--background clear|empty``)
+-> halftone (:mod:`.halftone`) -> labels -> PNG (:mod:`..io.png_slices`). Only a slab is ever in
+memory per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
+multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed`` cluster
+(``scheduler="tcp://host:8786"``) whose workers write the slices into the job's temporary folder
+directly, so that folder must be on a path every worker sees (docs/print-jobs.md). Every label is
+a function of the voxel's position, the seed and its concentrations, never of the slab or worker,
+so the slices are byte-identical whatever the slab size, worker count or scheduler.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import queue
+import threading
+import time
+from collections.abc import Generator
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from ..errors import DreamPrintError
+from .halftone import HALFTONE_METHODS, Halftoner
+from .printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
+from .profile import INKS
+
+__all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "run_conversion", "prepare_job",
+           "halftone_layer", "JobCancelled", "DEFAULT_SLAB_VOXELS"]
+
+DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
+_LABELS = (*INKS, "empty")
+
+
+class JobCancelled(Exception):
+    """The conversion was cancelled (GUI cancel, Ctrl-C)."""
+
+
+@dataclass(frozen=True)
+class ConvertSettings:
+    source: str
+    output: str | os.PathLike | None = None
+    profile: str | os.PathLike | None = None
+    printer: str | os.PathLike | None = None
+    height_mm: float | None = None
+    size_mm: tuple[float, float, float] | None = None
+    density_scale: float = 1.0
+    halftone: str = "blue-noise"
+    seed: int = 0
+    workers: int | None = None            # None: all cores
+    scheduler: str | None = None          # None/"threads", "processes", "tcp://host:port"
+    background: str = "clear"             # "clear" | "empty"
+    density_threshold: float | None = None  # 1/mm; None: half the density of pure Clear
+    overwrite: bool = False
+    slab_layers: int | None = None        # None: ~DEFAULT_SLAB_VOXELS per slab
+    objective: str | None = None          # gamut table objective (None: its default)
+    table_size: int = 100
+    source_options: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ConvertProgress:
+    stage: str                 # "preparing", "converting", "finishing", "done"
+    layers_done: int
+    layers_total: int
+    voxels_done: int
+    voxels_total: int
+    elapsed_s: float
+    eta_s: float | None
+    message: str = ""
+
+
+# ----------------------------------------------------------------------------- context
+_WORKER_CACHE: dict[Any, Any] = {}
+_WORKER_LOCK = threading.Lock()
+
+
+def _open_source(spec: str, options: dict[str, Any]):
+    from ..io.volumes import open_source
+
+    return open_source(spec, **options)
+
+
+def _tables_for(profile_spec, layer_mm: float, objective, size: int):
+    from .gamut import get_tables
+    from .profile import load_profile
+
+    profile = load_profile(profile_spec).with_settings(layer_thickness_mm=layer_mm)
+    return profile, get_tables(profile, objective=objective, size=size)
+
+
+@dataclass
+class JobContext:
+    """Everything a slab task needs. Pickles without the source and the tables: a process or
+    cluster worker reopens them (the tables from the on-disk cache) once per process."""
+
+    settings: ConvertSettings
+    printer: PrinterProfile
+    grid: Any
+    halftoner: Halftoner
+    palette: np.ndarray
+    profile_name: str = ""
+    profile_fingerprint: str = ""
+    source: Any = None
+    tables: Any = None
+
+    @property
+    def shape_xyz(self) -> tuple[int, int, int]:
+        return tuple(int(v) for v in self.grid.shape_xyz)
+
+    def __getstate__(self) -> dict:
+        d = dict(self.__dict__)
+        d["source"] = None
+        d["tables"] = None
+        return d
+
+    def resources(self):
+        if self.source is not None and self.tables is not None:
+            return self.source, self.tables
+        s = self.settings
+        key = (s.source, repr(sorted(s.source_options.items())), str(s.profile),
+               self.printer.layer_thickness_mm, s.objective, s.table_size)
+        with _WORKER_LOCK:
+            if key not in _WORKER_CACHE:
+                src = _open_source(s.source, s.source_options)
+                _, tables = _tables_for(s.profile, self.printer.layer_thickness_mm,
+                                        s.objective, s.table_size)
+                _WORKER_CACHE.clear()  # one job per worker process at a time
+                _WORKER_CACHE[key] = (src, tables)
+            return _WORKER_CACHE[key]
+
+
+def _clear_sigma(profile) -> float:
+    from .density import scalar_sigma
+
+    return float(scalar_sigma(profile.K[INKS.index("Cl")], profile.S[INKS.index("Cl")],
+                              profile.layer_thickness_mm, profile.density_t_max_mm,
+                              profile.density_samples))
+
+
+def prepare_job(settings: ConvertSettings) -> JobContext:
+    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables."""
+    from ..io.volumes import grid_for_source
+
+    s = settings
+    if s.halftone not in HALFTONE_METHODS:
+        raise DreamPrintError(f"unknown halftoning '{s.halftone}' "
+                              f"(use {' or '.join(HALFTONE_METHODS)})")
+    if s.background not in ("clear", "empty"):
+        raise DreamPrintError(f"--background must be clear or empty, not '{s.background}'")
+    if (s.height_mm is None) == (s.size_mm is None):
+        raise DreamPrintError("give exactly one of --height-mm and --size-mm")
+    if not (np.isfinite(s.density_scale) and s.density_scale >= 0):
+        raise DreamPrintError(f"--density-scale must be >= 0, got {s.density_scale}")
+    if s.workers is not None and s.workers < 1:
+        raise DreamPrintError(f"--workers must be at least 1, got {s.workers}")
+    printer = load_printer(s.printer)
+    source = _open_source(s.source, s.source_options)
+    grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
+                           size_mm=tuple(s.size_mm) if s.size_mm is not None else None)
+    shape = tuple(int(v) for v in grid.shape_xyz)
+    if min(shape) < 1:
+        raise DreamPrintError(f"the job would have no voxels (grid {shape[0]} x {shape[1]} x "
+                              f"{shape[2]}); choose a larger size")
+    check_tray(shape, printer)  # before any expensive work
+    profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
+                                  s.table_size)
+    sigma_clear = getattr(tables, "sigma_clear", None)
+    if sigma_clear is None:
+        sigma_clear = _clear_sigma(profile)
+    thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
+    bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
+    ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
+    return JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
+                      palette=printer.palette(), profile_name=profile.name,
+                      profile_fingerprint=profile.fingerprint(), source=source, tables=tables)
+
+
+# ----------------------------------------------------------------------------- slab work
+def _counts_dict(c: Any) -> dict[str, float]:
+    """Normalise the clamp report of ``lookup_and_align_into`` to a flat dict of numbers."""
+    if c is None:
+        return {}
+    if isinstance(c, dict):
+        return {str(k): float(v) for k, v in c.items() if np.isscalar(v)}
+    if hasattr(c, "_asdict"):
+        return {str(k): float(v) for k, v in c._asdict().items() if np.isscalar(v)}
+    if hasattr(c, "__dataclass_fields__"):
+        return {k: float(getattr(c, k)) for k in c.__dataclass_fields__
+                if np.isscalar(getattr(c, k))}
+    arr = np.atleast_1d(np.asarray(c, dtype=np.float64))
+    names = ["n_clamped_low", "n_clamped_high", "max_shortfall"]
+    return {(names[i] if i < len(names) else f"count_{i}"): float(v) for i, v in enumerate(arr)}
+
+
+def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
+    for k, v in add.items():
+        if k.startswith("max"):
+            acc[k] = max(acc.get(k, 0.0), v)
+        else:
+            acc[k] = acc.get(k, 0.0) + v
+
+
+@njit(cache=True, nogil=True)
+def _gather_foreground(rgb, dens, threshold, idx, rgb_fg, dens_fg):
+    n = 0
+    for i in range(dens.shape[0]):
+        if dens[i] >= threshold:
+            idx[n] = i
+            rgb_fg[n, 0] = rgb[i, 0]
+            rgb_fg[n, 1] = rgb[i, 1]
+            rgb_fg[n, 2] = rgb[i, 2]
+            dens_fg[n] = dens[i]
+            n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _scatter_conc(idx, n, conc_fg, conc):
+    for k in range(n):
+        i = idx[k]
+        for m in range(6):
+            conc[i, m] = conc_fg[k, m]
+
+
+def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
+                     conc: np.ndarray, labels: np.ndarray, counts: np.ndarray,
+                     sums: np.ndarray, clamped: dict[str, float]) -> None:
+    from .gamut import lookup_and_align_into
+
+    _, tables = ctx.resources()
+    rgb = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32)
+    d = np.ascontiguousarray(dens.reshape(-1), dtype=np.float32)
+    # Background voxels skip the lookup: faster, and they are not "clamped" (they become
+    # background by choice, not for want of a reachable density).
+    n = d.size
+    idx = np.empty(n, dtype=np.int64)
+    rgb_fg = np.empty((n, 3), dtype=np.float32)
+    d_fg = np.empty(n, dtype=np.float32)
+    n_fg = _gather_foreground(rgb, d, np.float32(ctx.halftoner.threshold), idx, rgb_fg, d_fg)
+    if n_fg == n:
+        _merge_clamped(clamped, _counts_dict(lookup_and_align_into(tables, rgb, d, conc)))
+    elif n_fg:
+        sub = np.empty((n_fg, 6), dtype=np.float32)
+        _merge_clamped(clamped, _counts_dict(
+            lookup_and_align_into(tables, rgb_fg[:n_fg], d_fg[:n_fg], sub)))
+        _scatter_conc(idx, n_fg, sub, conc)
+    ctx.halftoner.layer_into(conc, d, z, labels, counts, sums)
+
+
+def _oriented(ctx: JobContext, labels: np.ndarray) -> np.ndarray:
+    img = labels if ctx.printer.image_columns == "x" else labels.T
+    return img[::-1] if ctx.printer.flip_rows else img
+
+
+def _cancelled(slices_dir: str, event: threading.Event | None) -> bool:
+    if event is not None and event.is_set():
+        return True
+    return os.path.exists(os.path.join(os.path.dirname(slices_dir), ".cancelled"))
+
+
+def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
+             cancel: threading.Event | None = None) -> dict[str, Any]:
+    """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings."""
+    from ..io.job_export import slice_name
+    from ..io.png_slices import encode_labels_png
+
+    source, _ = ctx.resources()
+    nx, ny, nz = ctx.shape_xyz
+    t0 = time.perf_counter()
+    rgb, dens = source.sample_slab(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale)
+    t1 = time.perf_counter()
+    conc = np.zeros((ny * nx, 6), dtype=np.float32)
+    labels = np.empty((ny, nx), dtype=np.uint8)
+    counts = np.zeros(7, dtype=np.int64)
+    sums = np.zeros(7, dtype=np.float64)
+    clamped: dict[str, float] = {}
+    t_lab = t_png = t_io = 0.0
+    for k in range(z1 - z0):
+        if _cancelled(slices_dir, cancel):
+            raise JobCancelled()
+        ta = time.perf_counter()
+        _labels_of_layer(ctx, rgb[k], dens[k], z0 + k, conc, labels, counts, sums, clamped)
+        tb = time.perf_counter()
+        png = encode_labels_png(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+        tc = time.perf_counter()
+        # Never create folders here: after a cancel the job's temporary folder is removed and
+        # a straggling task must fail rather than recreate it.
+        with open(os.path.join(slices_dir, slice_name(z0 + k, nz)), "xb") as f:
+            f.write(png)
+        td = time.perf_counter()
+        t_lab += tb - ta
+        t_png += tc - tb
+        t_io += td - tc
+    return {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
+            "clamped": clamped, "seconds": {"sample": t1 - t0, "lookup_halftone": t_lab,
+                                            "png": t_png, "write": t_io}}
+
+
+def halftone_layer(settings: ConvertSettings, layer: int,
+                   context: JobContext | None = None) -> np.ndarray:
+    """Labels (ny, nx) of one layer (0..5 = INKS, 6 = empty) exactly as the export writes it.
+
+    Pass ``context`` (from :func:`prepare_job`) when scrubbing many layers of one job.
+    """
+    ctx = context if context is not None else prepare_job(settings)
+    source, _ = ctx.resources()
+    nx, ny, nz = ctx.shape_xyz
+    if not 0 <= layer < nz:
+        raise DreamPrintError(f"layer {layer} is outside the job's 0..{nz - 1}")
+    rgb, dens = source.sample_slab(ctx.grid, layer, layer + 1,
+                                   density_scale=ctx.settings.density_scale)
+    conc = np.zeros((ny * nx, 6), dtype=np.float32)
+    labels = np.empty((ny, nx), dtype=np.uint8)
+    _labels_of_layer(ctx, rgb[0], dens[0], layer, conc, labels, np.zeros(7, np.int64),
+                     np.zeros(7), {})
+    return labels
+
+
+# ----------------------------------------------------------------------------- scheduling
+def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
+    nx, ny, nz = ctx.shape_xyz
+    if ctx.settings.slab_layers:
+        step = int(ctx.settings.slab_layers)
+    else:
+        step = max(1, DEFAULT_SLAB_VOXELS // max(1, nx * ny))
+        step = min(step, max(1, -(-nz // (4 * workers))))  # >= 4 slabs per worker to balance
+    return [(z, min(nz, z + step)) for z in range(0, nz, step)]
+
+
+def _scheduler_kind(s: ConvertSettings) -> str:
+    sch = (s.scheduler or "threads").strip()
+    if sch in ("threads", "sync", "processes"):
+        return sch
+    if "://" in sch or ":" in sch:
+        return "distributed"
+    raise DreamPrintError(f"unknown scheduler '{sch}' (threads, processes, or an address like "
+                          "tcp://host:8786)")
+
+
+def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
+    """Run slabs with Dask's local scheduler; put each result (or the exception) on out_q."""
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+
+    import dask
+
+    stop = threading.Event()
+
+    def pretask(key, dsk, state):
+        if stop.is_set() or (cancel is not None and cancel.is_set()):
+            raise JobCancelled()
+
+    def posttask(key, result, dsk, state, worker_id):
+        if isinstance(key, tuple) and key[0] == "slab":
+            out_q.put(("result", result))
+
+    dsk: dict[Any, Any] = {"ctx": ctx}
+    keys = []
+    for i, (z0, z1) in enumerate(slabs):
+        if kind == "processes":
+            dsk[("slab", i)] = (run_slab, "ctx", z0, z1, slices_dir)
+        else:
+            dsk[("slab", i)] = (run_slab, "ctx", z0, z1, slices_dir, cancel)
+        keys.append(("slab", i))
+    if kind == "processes":
+        import multiprocessing as mp
+
+        pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"))
+        get = dask.multiprocessing.get
+    else:
+        pool = ThreadPoolExecutor(workers)
+        get = dask.threaded.get
+    # dask.local's callback tuple: (start, start_state, pretask, posttask, finish).
+    cb = (None, None, pretask, posttask, None)
+
+    def drive():
+        try:
+            get(dsk, keys, num_workers=workers, pool=pool, callbacks=[cb])
+            out_q.put(("done", None))
+        except BaseException as exc:  # noqa: BLE001 - handed to the consuming generator
+            out_q.put(("error", exc))
+        finally:
+            stop.set()
+            pool.shutdown(wait=True, cancel_futures=True)  # no task outlives the driver
+            out_q.put(("closed", None))
+
+    th = threading.Thread(target=drive, name="dreamprint-dask", daemon=True)
+    th.start()
+    return th, stop
+
+
+def _distributed_results(ctx, slabs, slices_dir, address, out_q, cancel):
+    from distributed import Client, as_completed
+
+    try:
+        client = Client(address, timeout="10s")
+    except (OSError, TimeoutError) as exc:
+        raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    stop = threading.Event()
+
+    def drive():
+        futs = []
+        try:
+            ctx_f = client.scatter(ctx, broadcast=True, hash=False)
+            futs = [client.submit(run_slab, ctx_f, z0, z1, slices_dir, pure=False)
+                    for z0, z1 in slabs]
+            for f in as_completed(futs):
+                if stop.is_set() or (cancel is not None and cancel.is_set()):
+                    raise JobCancelled()
+                out_q.put(("result", f.result()))
+            out_q.put(("done", None))
+        except BaseException as exc:  # noqa: BLE001
+            out_q.put(("error", exc))
+        finally:
+            stop.set()
+            try:
+                if futs:
+                    client.cancel(futs)
+                client.close()
+            finally:
+                out_q.put(("closed", None))
+
+    th = threading.Thread(target=drive, name="dreamprint-distributed", daemon=True)
+    th.start()
+    return th, stop
+
+
+# ----------------------------------------------------------------------------- driver
+def _sha256(path: str) -> str | None:
+    p = Path(path)
+    if not p.is_file():
+        return None
+    h = hashlib.sha256()
+    with open(p, "rb") as f:
+        for block in iter(lambda: f.read(1 << 22), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> dict[str, Any]:
+    from .. import __version__
+
+    s = ctx.settings
+    nx, ny, nz = ctx.shape_xyz
+    n = nx * ny * nz
+    counts = totals["counts"]
+    src_path = s.source if Path(s.source).is_file() else None
+    return {
+        "format": "dreamprint-job",
+        "format_version": 1,
+        "software": {"name": "dreamprint", "version": __version__},
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "source": {"path": str(Path(src_path).absolute()) if src_path else s.source,
+                   "sha256": totals["source_sha256"], "options": s.source_options,
+                   "density_scale": s.density_scale},
+        "profile": {"name": ctx.profile_name, "fingerprint": ctx.profile_fingerprint,
+                    "path": None if s.profile is None else str(s.profile),
+                    "objective": getattr(ctx.tables, "objective", s.objective),
+                    "table_size": s.table_size},
+        "printer": ctx.printer.to_json_dict(),
+        "physical_size_mm": [nx * ctx.printer.voxel_mm[0], ny * ctx.printer.voxel_mm[1],
+                             nz * ctx.printer.voxel_mm[2]],
+        "voxel_mm": list(ctx.printer.voxel_mm),
+        "grid_dimensions": [nx, ny, nz],
+        "requested_size": {"height_mm": s.height_mm,
+                           "size_mm": None if s.size_mm is None else list(s.size_mm)},
+        "seed": s.seed,
+        "halftoning": ctx.halftoner.describe(),
+        "background": {"mode": s.background, "density_threshold_per_mm":
+                       ctx.halftoner.threshold},
+        "slices": {"folder": "slices", "count": nz, "width": nx if ctx.printer.image_columns
+                   == "x" else ny, "height": ny if ctx.printer.image_columns == "x" else nx,
+                   "first": "slices/" + _slice(0, nz), "last": "slices/" + _slice(nz - 1, nz),
+                   "png_mode": ctx.printer.png_mode},
+        "labels": {lab: {"material": (ctx.printer.material_names[i] if i < 6 else "none"),
+                         "rgb": ctx.palette[i].tolist()} for i, lab in enumerate(_LABELS)},
+        "voxel_counts": {lab: int(counts[i]) for i, lab in enumerate(_LABELS)},
+        "mean_concentration": {lab: totals["conc_sums"][i] / n for i, lab in enumerate(_LABELS)},
+        "total_voxels": n,
+        "clamped_density": totals["clamped"],
+        "timings_s": {"total": time.perf_counter() - started, **timings},
+        "execution": {"scheduler": s.scheduler or "threads", "workers": totals["workers"],
+                      "slabs": totals["slabs"]},
+    }
+
+
+def _slice(z: int, nz: int) -> str:
+    from ..io.job_export import slice_name
+
+    return slice_name(z, nz)
+
+
+def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,
+                   context: JobContext | None = None
+                   ) -> Generator[ConvertProgress, None, dict[str, Any]]:
+    """Convert ``settings.source`` into the job folder ``settings.output``.
+
+    Yields :class:`ConvertProgress`; returns the manifest dict (also written to
+    ``manifest.json``). Setting ``cancel`` (or closing the generator, or Ctrl-C) stops the work
+    and removes the partial job; nothing is ever left under the final name unless complete.
+    """
+    from ..io.job_export import JobWriter, check_target
+
+    started = time.perf_counter()
+    if settings.output is None:
+        raise DreamPrintError("no output folder given (-o JOB)")
+    check_target(settings.output, settings.overwrite)  # before any work
+    yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
+    ctx = context if context is not None else prepare_job(settings)
+    t_prep = time.perf_counter() - started
+    kind = _scheduler_kind(settings)
+    workers = settings.workers or os.cpu_count() or 1
+    slabs = _slabs(ctx, workers)
+    nx, ny, nz = ctx.shape_xyz
+    totals: dict[str, Any] = {"counts": np.zeros(7, np.int64), "conc_sums": np.zeros(7),
+                              "clamped": {}, "workers": workers, "slabs": len(slabs)}
+    stage_t = {"sample": 0.0, "lookup_halftone": 0.0, "png": 0.0, "write": 0.0}
+    with JobWriter(settings.output, settings.overwrite) as writer:
+        sha_box: dict[str, str | None] = {}
+        sha_th = threading.Thread(target=lambda: sha_box.update(v=_sha256(settings.source)),
+                                  daemon=True)
+        sha_th.start()  # hashing a big source overlaps the conversion
+        yield ConvertProgress("converting", 0, nz, 0, nx * ny * nz,
+                              time.perf_counter() - started, None)
+        out_q: queue.Queue = queue.Queue()
+        slices_dir = str(writer.slices_dir)
+        if kind == "distributed":
+            th, stop = _distributed_results(ctx, slabs, slices_dir, settings.scheduler, out_q,
+                                            cancel)
+        elif kind == "sync":
+            th, stop = _local_results(ctx, slabs, slices_dir, 1, "threads", cancel, out_q)
+        else:
+            th, stop = _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q)
+        error: BaseException | None = None
+        layers = 0
+        t_conv = time.perf_counter()
+        try:
+            while True:
+                try:
+                    what, payload = out_q.get(timeout=0.2)
+                except queue.Empty:
+                    if cancel is not None and cancel.is_set():
+                        writer.request_cancel()
+                        stop.set()
+                    continue
+                if what == "result":
+                    totals["counts"] += np.asarray(payload["counts"], np.int64)
+                    totals["conc_sums"] += np.asarray(payload["conc_sums"])
+                    _merge_clamped(totals["clamped"], payload["clamped"])
+                    for k, v in payload["seconds"].items():
+                        stage_t[k] += v
+                    layers += payload["z1"] - payload["z0"]
+                    el = time.perf_counter() - started
+                    rate = layers / max(1e-9, time.perf_counter() - t_conv)
+                    yield ConvertProgress("converting", layers, nz, layers * nx * ny,
+                                          nx * ny * nz, el, (nz - layers) / rate)
+                elif what == "error":
+                    error = payload
+                elif what == "closed":
+                    break
+        except BaseException:
+            # GeneratorExit (closed by the GUI), KeyboardInterrupt: stop the tasks, wait for
+            # them, then JobWriter removes the partial folder.
+            writer.request_cancel()
+            stop.set()
+            th.join()
+            raise
+        th.join()
+        if error is not None:
+            if isinstance(error, JobCancelled) or (cancel is not None and cancel.is_set()):
+                raise JobCancelled("the conversion was cancelled") from None
+            raise error
+        if cancel is not None and cancel.is_set():
+            raise JobCancelled("the conversion was cancelled")
+        yield ConvertProgress("finishing", nz, nz, nx * ny * nz, nx * ny * nz,
+                              time.perf_counter() - started, 0.0, "writing the manifest")
+        sha_th.join()
+        totals["source_sha256"] = sha_box.get("v")
+        timings = {"prepare": t_prep, "convert": time.perf_counter() - t_conv,
+                   "worker_stage_sum": stage_t}
+        manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
+                                   "conc_sums": totals["conc_sums"].tolist()},
+                             timings, started)
+        manifest["timings_s"]["voxels_per_second"] = (nx * ny * nz) / max(
+            1e-9, manifest["timings_s"]["total"])
+        writer.commit(manifest)
+    yield ConvertProgress("done", nz, nz, nx * ny * nz, nx * ny * nz,
+                          time.perf_counter() - started, 0.0, str(writer.target))
+    return manifest
+
+
+def replace_settings(settings: ConvertSettings, **changes: Any) -> ConvertSettings:
+    return replace(settings, **changes)

@@ -1,0 +1,96 @@
+"""DreamPrint's own CSV layout for ink layer measurements (docs/measurements-csv.md).
+
+Header ``ink,quantity,thickness_mm,<wavelength nm>...``; one row per measured spectrum:
+``quantity`` is ``R`` (reflectance) or ``T`` (transmittance), values are fractions (0-1) or
+percent (read as percent when any value of the file exceeds 1.5). An R row and a T row of the
+same ink and thickness form one layer. Rows are resampled onto the profile's grid.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..engine.calibration_types import LayerMeasurement
+from ..engine.profile import INKS
+from ..engine.spectral_grid import resample
+from ..errors import DreamPrintError
+
+__all__ = ["read_measurements_csv", "write_measurements_csv"]
+
+
+def read_measurements_csv(path: Path, wavelengths_nm: NDArray) -> list[LayerMeasurement]:
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise DreamPrintError("no such file", path) from None
+    except UnicodeDecodeError:
+        raise DreamPrintError("not a text CSV file", path) from None
+    rows = [(n, [c.strip() for c in r]) for n, r in enumerate(csv.reader(io.StringIO(text)), 1)
+            if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+    if len(rows) < 2:
+        raise DreamPrintError("needs a header row and at least one measurement", path)
+    hline, header = rows[0]
+    if [h.lower() for h in header[:3]] != ["ink", "quantity", "thickness_mm"]:
+        raise DreamPrintError("header must start with ink,quantity,thickness_mm", path, hline)
+    try:
+        wl = np.array([float(h.lower().removesuffix("nm")) for h in header[3:]])
+    except ValueError:
+        raise DreamPrintError("header after thickness_mm must be wavelengths in nm", path,
+                              hline) from None
+    if wl.size < 3 or np.any(np.diff(wl) <= 0):
+        raise DreamPrintError("need at least 3 increasing wavelengths in the header", path, hline)
+    entries = []
+    inks = {i.lower(): i for i in INKS}
+    for line, row in rows[1:]:
+        if len(row) != len(header):
+            raise DreamPrintError(f"{len(row)} cells, the header has {len(header)}", path, line)
+        ink = inks.get(row[0].lower())
+        if ink is None:
+            raise DreamPrintError(f"unknown ink '{row[0]}' ({', '.join(INKS)})", path, line)
+        q = row[1].upper()
+        if q not in ("R", "T"):
+            raise DreamPrintError(f"quantity must be R or T, got '{row[1]}'", path, line)
+        try:
+            t = float(row[2])
+            values = np.array([float(c) for c in row[3:]])
+        except ValueError:
+            raise DreamPrintError("a cell is not a number", path, line) from None
+        if not t > 0:
+            raise DreamPrintError(f"thickness must be > 0 mm, got {row[2]}", path, line)
+        if not np.all(np.isfinite(values)):
+            raise DreamPrintError("non-finite value", path, line)
+        entries.append((line, ink, q, t, values))
+    percent = max(float(e[4].max()) for e in entries) > 1.5
+    layers: dict[tuple[str, float], dict] = {}
+    for line, ink, q, t, values in entries:
+        v = values / 100.0 if percent else values
+        bad = np.flatnonzero((v < 0) | (v > 1.0 + 1e-9))
+        if bad.size:
+            k = int(bad[0])
+            raise DreamPrintError(f"{ink} {q} = {v[k]:g} at {wl[k]:g} nm is outside 0-1", path,
+                                  line)
+        v = resample(wl, v, wavelengths_nm, source=f"{path}:{line}")
+        slot = layers.setdefault((ink, t), {"R": None, "T": None, "lines": []})
+        if slot[q] is not None:
+            raise DreamPrintError(f"a second {q} row for {ink} at {t:g} mm", path, line)
+        slot[q] = v
+        slot["lines"].append(line)
+    return [LayerMeasurement(ink, t, d["R"], d["T"],
+                             f"{path} line(s) {','.join(map(str, d['lines']))}")
+            for (ink, t), d in layers.items()]
+
+
+def write_measurements_csv(path: Path, wavelengths_nm: NDArray,
+                           layers: list[LayerMeasurement]) -> None:
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["ink", "quantity", "thickness_mm", *[f"{x:g}" for x in wavelengths_nm]])
+        for m in layers:
+            for q, v in (("R", m.R), ("T", m.T)):
+                if v is not None:
+                    w.writerow([m.ink, q, repr(m.thickness_mm), *[repr(float(x)) for x in v]])

@@ -1,0 +1,67 @@
+"""`dreamprint lookup` and `dreamprint gamut` (issue 5's command-line contract)."""
+
+import json
+
+import pytest
+
+from dreamprint_gui.cli import main
+
+
+@pytest.fixture(autouse=True)
+def _private_cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "xdg-cache"))
+
+
+def _run(capsys, *args):
+    code = main(list(args))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_lookup_json_matches_predict(capsys):
+    code, out, _ = _run(capsys, "lookup", "--rgb", "0.2,0.5,0.7", "--density", "4",
+                        "--size", "9", "--json")
+    assert code == 0
+    (rec,) = json.loads(out)
+    assert set(rec) >= {"rgb", "concentrations", "aligned", "sRGB", "Lab", "dE2000",
+                        "sigma_per_mm"}
+    assert set(rec["concentrations"]) == {"C", "M", "Y", "K", "W"}
+    assert set(rec["aligned"]) == {"C", "M", "Y", "K", "W", "Cl"}
+    assert rec["sigma_per_mm"] == pytest.approx(4.0, rel=1e-6)
+    mix = ",".join(f"{k}={v!r}" for k, v in rec["concentrations"].items())
+    code, out, _ = _run(capsys, "predict", "--mix", mix, "--json")
+    assert code == 0
+    assert json.loads(out)["sRGB"] == rec["sRGB"]
+
+
+def test_lookup_rgb_file_and_errors(capsys, tmp_path):
+    f = tmp_path / "c.csv"
+    f.write_text("R,G,B\n0.1,0.2,0.3\n1,1,1\n")
+    code, out, _ = _run(capsys, "lookup", "--rgb-file", str(f), "--size", "9", "--json")
+    assert code == 0 and len(json.loads(out)) == 2
+    f.write_text("red,green\n0.1,0.2\n")
+    code, _, err = _run(capsys, "lookup", "--rgb-file", str(f), "--size", "9")
+    assert code == 2 and f"{f}:1:" in err and "R, G and B" in err
+    f.write_text("R,G,B\n0.1,x,0.3\n")
+    code, _, err = _run(capsys, "lookup", "--rgb-file", str(f), "--size", "9")
+    assert code == 2 and f"{f}:2:" in err
+    code, _, err = _run(capsys, "lookup", "--rgb", "0.1,2,0.3", "--size", "9")
+    assert code == 2 and "[0, 1]" in err
+
+
+def test_gamut_json_chart_and_plot(capsys, tmp_path):
+    chart, plot = tmp_path / "chart.png", tmp_path / "plot.png"
+    code, out, _ = _run(capsys, "gamut", "--size", "9", "--samples", "200", "--json",
+                        "--chart", str(chart), "--plot", str(plot))
+    assert code == 0
+    rep = json.loads(out)
+    for key in ("lut_size", "build_seconds", "cached", "colour_thickness_mm",
+                "srgb_in_gamut_fraction", "lab_gamut_volume", "lut_vs_direct_dE2000",
+                "out_of_gamut_dE2000"):
+        assert key in rep
+    assert rep["lut_size"] == 9 and 0 < rep["srgb_in_gamut_fraction"] < 1
+    assert 0 < rep["lab_gamut_volume"] < rep["srgb_lab_volume"]
+    assert chart.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, out, _ = _run(capsys, "gamut", "--size", "9", "--samples", "50", "--json")
+    assert json.loads(out)["cached"] is True

@@ -1,0 +1,100 @@
+"""Halftoning: unbiased fractions, blue noise beats i.i.d., position-keyed determinism.
+
+Statistical tolerances: for ``random`` each voxel is an independent draw, so a fraction over n
+voxels has standard error sqrt(c(1-c)/n); we allow 5 standard errors (false alarm ~6e-7). The
+blue-noise mask is deterministic and exact over whole tiles (|bias| <= 1/N per tile); we allow
+the same 5-sigma i.i.d. bound, which it must beat by far.
+"""
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.engine.halftone import (
+    Halftoner,
+    blue_noise_mask,
+    box_for_voxel,
+    fraction_variance_ratio,
+    uniform_hash,
+)
+
+VOX = (0.084, 0.028, 0.014)
+CONC = np.array([0.12, 0.2, 0.05, 0.03, 0.1, 0.5], np.float32)
+
+
+@pytest.fixture(scope="module")
+def blocks():
+    block = np.broadcast_to(CONC, (72, 72, 24, 6))
+    return {m: Halftoner.create(m, 11, VOX).block(block) for m in ("random", "blue-noise")}
+
+
+def test_mask_is_a_permutation_of_rank_thresholds():
+    m = blue_noise_mask(VOX)
+    n = m.size
+    np.testing.assert_allclose(np.sort(m.ravel()), (np.arange(n) + 0.5) / n, rtol=1e-6)
+
+
+@pytest.mark.parametrize("method", ["random", "blue-noise"])
+def test_fractions_converge_to_concentrations(blocks, method):
+    lab = blocks[method]
+    n = lab.size
+    frac = np.bincount(lab.ravel(), minlength=7)[:6] / n
+    se = np.sqrt(CONC * (1 - CONC) / n)
+    assert np.all(np.abs(frac - CONC) < 5 * se), (frac, CONC)
+
+
+def test_varying_concentrations_are_unbiased():
+    # A smooth random field of concentrations: the expected count of ink m is sum(c_m).
+    rng = np.random.default_rng(5)
+    c = rng.dirichlet(np.ones(6), size=(40, 60, 30)).astype(np.float32)
+    for method in ("random", "blue-noise"):
+        lab = Halftoner.create(method, 3, VOX).block(c)
+        for m in range(6):
+            expect = float(c[..., m].sum())
+            var = float((c[..., m] * (1 - c[..., m])).sum())
+            assert abs((lab == m).sum() - expect) < 5 * np.sqrt(var) + 1
+
+
+def test_blue_noise_beats_iid(blocks):
+    box = box_for_voxel(VOX)  # ~0.25 mm
+    r_iid, _ = fraction_variance_ratio(blocks["random"], CONC, box)
+    r_bn, b_bn = fraction_variance_ratio(blocks["blue-noise"], CONC, box)
+    assert np.all(np.abs(r_iid - 1) < 0.25)   # i.i.d. is binomial by construction
+    assert np.all(r_bn < 0.6), r_bn
+    assert np.nanmean(r_bn) < 0.3
+
+
+@pytest.mark.parametrize("method", ["random", "blue-noise"])
+def test_labels_depend_only_on_position(method):
+    h = Halftoner.create(method, 99, VOX)
+    rng = np.random.default_rng(0)
+    c = rng.dirichlet(np.ones(6), size=(20, 30, 40)).astype(np.float32)
+    whole = h.block(c)
+    # The same voxels converted as two sub-blocks with their absolute origin.
+    a = h.block(c[:7, :, 10:], origin_xyz=(10, 0, 0))
+    b = h.block(c[7:, 5:, :], origin_xyz=(0, 5, 7))
+    np.testing.assert_array_equal(a, whole[:7, :, 10:])
+    np.testing.assert_array_equal(b, whole[7:, 5:, :])
+    other = Halftoner.create(method, 100, VOX).block(c)
+    assert (other != whole).mean() > 0.1  # the seed matters
+
+
+def test_uniform_hash_is_uniform_and_independent():
+    u = uniform_hash(1, (32, 64, 64)).ravel()
+    assert abs(u.mean() - 0.5) < 5 * np.sqrt(1 / 12 / u.size)
+    hist = np.bincount((u * 16).astype(int), minlength=16)
+    expected = u.size / 16
+    chi2 = ((hist - expected) ** 2 / expected).sum()
+    assert chi2 < 50  # 15 dof: p ~ 1e-5
+    assert abs(np.corrcoef(u[:-1], u[1:])[0, 1]) < 5 / np.sqrt(u.size)
+
+
+def test_background_threshold_and_label():
+    h = Halftoner.create("random", 1, VOX, threshold=0.5, bg_label=6)
+    conc = np.tile(np.array([1, 0, 0, 0, 0, 0], np.float32), (4, 1))
+    dens = np.array([0.1, 0.6, 0.49, 0.5], np.float32)
+    out = np.empty((2, 2), np.uint8)
+    counts = np.zeros(7, np.int64)
+    sums = np.zeros(7)
+    h.layer_into(conc, dens, 0, out, counts, sums)
+    assert out.ravel().tolist() == [6, 0, 6, 0]
+    assert counts.tolist() == [2, 0, 0, 0, 0, 0, 2]

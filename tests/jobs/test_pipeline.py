@@ -1,0 +1,195 @@
+"""The conversion pipeline end to end on the built-in demo source (small grids, small tables)."""
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.cli import main
+from dreamprint_gui.engine.pipeline import (
+    ConvertSettings,
+    JobCancelled,
+    halftone_layer,
+    prepare_job,
+    run_conversion,
+)
+from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.io.job_check import check_job
+from dreamprint_gui.io.png_slices import read_png_labels
+
+TABLE = 17  # small colour tables keep the suite fast; the pipeline is the same at 100
+
+
+def _settings(out, **kw):
+    base = dict(source="demo", output=out, height_mm=0.6, table_size=TABLE, seed=3)
+    base.update(kw)
+    return ConvertSettings(**base)
+
+
+def _run(settings, cancel=None):
+    gen = run_conversion(settings, cancel)
+    progress = []
+    while True:
+        try:
+            progress.append(next(gen))
+        except StopIteration as stop:
+            return stop.value, progress
+
+
+def _digests(job):
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted((job / "slices").iterdir())}
+
+
+@pytest.fixture(scope="module")
+def reference_job(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ref") / "JOB"
+    manifest, progress = _run(_settings(out, workers=1, slab_layers=3))
+    return out, manifest, progress
+
+
+def test_job_layout_and_manifest(reference_job):
+    job, manifest, progress = reference_job
+    nx, ny, nz = manifest["grid_dimensions"]
+    assert nz == round(0.6 / 0.014)
+    assert sorted(os.listdir(job)) == ["manifest.json", "slices"]
+    names = sorted(os.listdir(job / "slices"))
+    assert names == [f"{z:05d}.png" for z in range(nz)]
+    on_disk = json.loads((job / "manifest.json").read_text())
+    assert on_disk == json.loads(json.dumps(manifest))
+    for key in ("software", "source", "profile", "printer", "physical_size_mm", "voxel_mm",
+                "grid_dimensions", "seed", "halftoning", "voxel_counts", "clamped_density",
+                "timings_s"):
+        assert key in manifest
+    assert sum(manifest["voxel_counts"].values()) == nx * ny * nz
+    assert manifest["physical_size_mm"][2] == pytest.approx(nz * 0.014)
+    assert progress[-1].stage == "done" and progress[-1].layers_done == nz
+    done = [p.layers_done for p in progress if p.stage == "converting"]
+    assert done == sorted(done) and done[-1] == nz
+
+
+def test_evaluate_job_is_consistent(reference_job, capsys):
+    job, manifest, _ = reference_job
+    report = check_job(job)
+    assert report["consistent"], report["problems"]
+    n = report["total_voxels"]
+    for m, r in report["materials"].items():
+        # Halftoning is unbiased: fraction within 5 binomial standard errors of the intent.
+        p = r["intended"]
+        assert abs(r["fraction"] - p) <= 5 * np.sqrt(p * (1 - p) / n) + 1e-12, m
+    assert main(["evaluate", "job", str(job), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["consistent"] and set(out["materials"]) == {"C", "M", "Y", "K", "W", "Cl",
+                                                           "empty"}
+
+
+def test_evaluate_job_detects_a_tampered_slice(reference_job, tmp_path):
+    import shutil
+
+    job, manifest, _ = reference_job
+    copy = tmp_path / "J"
+    shutil.copytree(job, copy)
+    (copy / "slices" / "00001.png").unlink()
+    report = check_job(copy)
+    assert not report["consistent"] and any("missing" in p for p in report["problems"])
+
+
+def test_byte_identical_across_workers_and_slab_sizes(reference_job, tmp_path):
+    job, _, _ = reference_job
+    ref = _digests(job)
+    out = tmp_path / "J2"
+    _run(_settings(out, workers=2, slab_layers=7))
+    assert _digests(out) == ref
+    out = tmp_path / "J3"
+    _run(_settings(out, workers=2, scheduler="processes", slab_layers=11))
+    assert _digests(out) == ref
+
+
+def test_local_cluster_gives_the_same_slices(reference_job, tmp_path):
+    from distributed import LocalCluster
+
+    job, _, _ = reference_job
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster:
+        out = tmp_path / "JD"
+        manifest, _ = _run(_settings(out, scheduler=cluster.scheduler_address, slab_layers=5))
+    assert _digests(out) == _digests(job)
+    assert manifest["execution"]["scheduler"].startswith("tcp://")
+
+
+def test_halftone_layer_matches_the_exported_slice(reference_job):
+    job, manifest, _ = reference_job
+    settings = _settings(None)
+    ctx = prepare_job(settings)
+    palette = np.array([v["rgb"] for v in manifest["labels"].values()], np.uint8)
+    for z in (0, 17):
+        np.testing.assert_array_equal(halftone_layer(settings, z, ctx),
+                                      read_png_labels(job / "slices" / f"{z:05d}.png", palette))
+
+
+def test_cancel_leaves_nothing(tmp_path):
+    out = tmp_path / "JOB"
+    cancel = threading.Event()
+    gen = run_conversion(_settings(out, workers=2, slab_layers=1), cancel)
+    with pytest.raises(JobCancelled):
+        for p in gen:
+            if p.stage == "converting" and p.layers_done >= 2:
+                cancel.set()
+    assert os.listdir(tmp_path) == []
+
+
+def test_closing_the_generator_leaves_nothing(tmp_path):
+    out = tmp_path / "JOB"
+    gen = run_conversion(_settings(out, workers=2, slab_layers=1))
+    for p in gen:
+        if p.stage == "converting" and p.layers_done >= 1:
+            break
+    gen.close()
+    assert os.listdir(tmp_path) == []
+
+
+def test_ctrl_c_of_the_cli_leaves_nothing(tmp_path):
+    out = tmp_path / "JOB"
+    env = dict(os.environ, PYTHONPATH=os.getcwd())
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "dreamprint_gui.cli", "convert", "demo", "-o", str(out),
+         "--height-mm", "3", "--slab-layers", "1", "--workers", "1", "--table-size", "17"],
+        stderr=subprocess.PIPE, env=env)
+    deadline = time.time() + 120
+    while time.time() < deadline:  # wait until slices are being written
+        partial = [p for p in tmp_path.iterdir() if p.name.startswith(".JOB.partial")]
+        if partial and any(partial[0].joinpath("slices").glob("*.png")):
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert os.listdir(tmp_path) == []
+
+
+def test_refusals_happen_before_any_work(tmp_path):
+    with pytest.raises(DreamPrintError, match="tray"):
+        _run(_settings(tmp_path / "J", height_mm=None, size_mm=(600.0, 600.0, 600.0)))
+    (tmp_path / "EXISTS").mkdir()
+    with pytest.raises(DreamPrintError, match="--overwrite"):
+        _run(_settings(tmp_path / "EXISTS"))
+    assert sorted(os.listdir(tmp_path)) == ["EXISTS"]
+
+
+def test_cli_convert_demo(tmp_path, capsys):
+    out = tmp_path / "JOB"
+    rc = main(["convert", "demo", "-o", str(out), "--height-mm", "0.3", "--table-size", "17",
+               "--background", "empty", "--halftone", "random", "--seed", "5"])
+    assert rc == 0
+    assert "wrote" in capsys.readouterr().out
+    m = json.loads((out / "manifest.json").read_text())
+    assert m["background"]["mode"] == "empty" and m["halftoning"]["method"] == "random"
+    assert main(["convert", "demo", "-o", str(out), "--height-mm", "0.3"]) == 2
+    assert "--overwrite" in capsys.readouterr().err

@@ -1,0 +1,41 @@
+"""PNG slices: written bytes decode (Pillow) to exactly the label image, both modes."""
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from dreamprint_gui.engine.printer import load_printer
+from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.io.png_slices import encode_labels_png, read_png_labels
+
+
+@pytest.mark.parametrize("mode", ["rgb", "palette"])
+@pytest.mark.parametrize("shape", [(1, 1), (7, 13), (64, 3)])
+def test_round_trip_through_pillow(tmp_path, mode, shape):
+    pal = load_printer().palette()
+    lab = np.random.default_rng(1).integers(0, 7, shape).astype(np.uint8)
+    f = tmp_path / "s.png"
+    f.write_bytes(encode_labels_png(lab, pal, mode))
+    with Image.open(f) as im:
+        im.verify()  # checks the chunk CRCs
+    with Image.open(f) as im:
+        assert im.size == (shape[1], shape[0])
+        assert im.mode == ("RGB" if mode == "rgb" else "P")
+        rgb = np.asarray(im.convert("RGB"))
+    np.testing.assert_array_equal(rgb, pal[lab])
+    np.testing.assert_array_equal(read_png_labels(f, pal), lab)
+
+
+def test_strided_views_encode_like_copies():
+    pal = load_printer().palette()
+    lab = np.random.default_rng(2).integers(0, 7, (9, 5)).astype(np.uint8)
+    assert encode_labels_png(lab.T, pal) == encode_labels_png(lab.T.copy(), pal)
+    assert encode_labels_png(lab[::-1], pal) == encode_labels_png(lab[::-1].copy(), pal)
+
+
+def test_foreign_colour_is_reported(tmp_path):
+    pal = load_printer().palette()
+    f = tmp_path / "x.png"
+    Image.new("RGB", (3, 2), (1, 2, 3)).save(f)
+    with pytest.raises(DreamPrintError, match=r"\(1, 2, 3\)"):
+        read_png_labels(f, pal)
