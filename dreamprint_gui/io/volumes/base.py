@@ -221,10 +221,34 @@ def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
 
     if str(path_or_name) == "demo":
         from .demo import DemoCloud
-        return DemoCloud(**options)
+        return DemoCloud(**_checked_options(DemoCloud, options, "demo"))
     path = Path(path_or_name)
     if not path.exists():
         raise DreamPrintError("no such file", path)
     key = sniff_format(path)
     module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
-    return module.open_path(path, fmt=key, **options)
+    return module.open_path(path, fmt=key, **_checked_options(module.open_path, options, path))
+
+
+OPTION_ALIASES = {"grid": "density_grid", "color": "colour", "colormap": "colormap",
+                  "cmap": "colormap"}
+
+
+def _checked_options(func, options: dict, where) -> dict:
+    """Refuse options the reader does not take, naming the ones it does (``grid`` is accepted
+    for ``density_grid``, ``color`` for ``colour``)."""
+    import inspect
+
+    params = [p for p in inspect.signature(func).parameters.values()
+              if p.kind == p.KEYWORD_ONLY or (p.name not in ("self", "path", "fmt")
+                                              and p.kind == p.POSITIONAL_OR_KEYWORD)]
+    names = {p.name for p in params}
+    out = {}
+    for k, v in options.items():
+        k2 = k if k in names else OPTION_ALIASES.get(k, k)
+        if k2 not in names:
+            known = ", ".join(sorted(names)) or "none"
+            raise DreamPrintError(f"unknown reader option {k!r} (this format takes: {known})",
+                                  where)
+        out[k2] = v
+    return out

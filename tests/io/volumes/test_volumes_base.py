@@ -99,3 +99,11 @@ def test_concurrent_slabs_match_sequential(shared_data):
             par = list(ex.map(lambda ab, s=s, g=g: s.sample_slab(g, *ab)[1], spans))
         for x, y in zip(seq, par, strict=True):
             assert np.array_equal(x, y)
+
+
+def test_unknown_reader_option_is_named(shared_data):
+    with pytest.raises(DreamPrintError, match="unknown reader option 'bogus'.*window"):
+        open_source(shared_data / "volumes" / "ironProt.vtk", bogus=1)
+    s = open_source(shared_data / "volumes" / "blender_mantaflow_fluid_data_0190.vdb",
+                    grid="shadow")
+    assert s.density.name == "shadow"
