@@ -46,9 +46,9 @@ def inspect(file: str, as_json: bool) -> None:
     FILE is an OpenVDB, NanoVDB, VTK/MetaImage/NRRD image, radiance .npz or EXR stack (file or
     folder), splat PLY/SPZ or MagicaVoxel file, or "demo".
     """
-    from ..io.volumes import open_source
+    from ..io.volumes.base import inspect_file
 
-    info = open_source(file).info()
+    info = inspect_file(file)
     if as_json:
         click.echo(json.dumps(info, indent=2))
     else:

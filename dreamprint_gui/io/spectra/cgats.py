@@ -325,7 +325,7 @@ def write_cgats(path: str | os.PathLike, samples: Sequence[Sample], quantity: st
         if s.wavelengths_nm.shape != wl.shape or not np.array_equal(s.wavelengths_nm, wl):
             raise DreamPrintError(f"sample '{s.name}' is on another wavelength grid: CGATS "
                                   "holds one grid per table", path)
-    names = [f"SPECTRAL_NM{w:g}" for w in wl]
+    names = ["SPECTRAL_NM" + repr(float(w)).removesuffix(".0") for w in wl]
     if len(set(names)) != len(names):
         raise DreamPrintError("wavelengths too close to name as CGATS fields", path)
     lines = [

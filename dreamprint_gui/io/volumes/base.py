@@ -32,7 +32,8 @@ import numpy as np
 from ...errors import DreamPrintError
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
-           "sniff_format", "open_source", "FORMATS"]
+           "uniform_rgb",
+           "sniff_format", "open_source", "inspect_file", "FORMATS"]
 
 
 @dataclass(frozen=True)
@@ -105,11 +106,20 @@ def voxel_centres(grid: PrintGrid, axis: int, lo: int = 0, hi: int | None = None
 
 
 def linear_to_srgb(c: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 sRGB encoding of linear values, clipped to [0, 1], in place if float32."""
-    c = np.clip(c, 0.0, 1.0, out=c if c.dtype == np.float32 else None)
+    """IEC 61966-2-1 sRGB encoding of linear values, clipped to [0, 1] (float32)."""
+    c = np.clip(np.asarray(c, np.float32), 0.0, 1.0)
     low = c <= 0.0031308
     out = np.where(low, 12.92 * c, 1.055 * np.power(c, 1 / 2.4, dtype=np.float32) - 0.055)
     return out.astype(np.float32, copy=False)
+
+
+def uniform_rgb(shape: tuple[int, ...], colour) -> np.ndarray:
+    """float32 ``shape + (3,)`` filled with one colour (per-channel fill: numpy's broadcast
+    copy of a length-3 vector is several times slower)."""
+    out = np.empty(tuple(shape) + (3,), np.float32)
+    for k in range(3):
+        out[..., k] = colour[k]
+    return out
 
 
 def check_slab(grid: PrintGrid, z0: int, z1: int) -> None:
@@ -184,6 +194,23 @@ def sniff_format(path: Path) -> str:
                           path)
 
 
+def inspect_file(path_or_name: str | os.PathLike) -> dict:
+    """The ``inspect`` description of a file, without choosing grids or options (a file whose
+    density grid is empty or missing can still be inspected)."""
+    import importlib
+
+    if str(path_or_name) == "demo":
+        return open_source("demo").info()
+    path = Path(path_or_name)
+    if not path.exists():
+        raise DreamPrintError("no such file", path)
+    key = sniff_format(path)
+    module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
+    if hasattr(module, "inspect_path"):
+        return module.inspect_path(path)
+    return module.open_path(path, fmt=key).info()
+
+
 def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
     """Open a volume file (or ``"demo"``, the built-in procedural cloud) as a source.
 
@@ -194,10 +221,34 @@ def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
 
     if str(path_or_name) == "demo":
         from .demo import DemoCloud
-        return DemoCloud(**options)
+        return DemoCloud(**_checked_options(DemoCloud, options, "demo"))
     path = Path(path_or_name)
     if not path.exists():
         raise DreamPrintError("no such file", path)
     key = sniff_format(path)
     module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
-    return module.open_path(path, fmt=key, **options)
+    return module.open_path(path, fmt=key, **_checked_options(module.open_path, options, path))
+
+
+OPTION_ALIASES = {"grid": "density_grid", "color": "colour", "colormap": "colormap",
+                  "cmap": "colormap"}
+
+
+def _checked_options(func, options: dict, where) -> dict:
+    """Refuse options the reader does not take, naming the ones it does (``grid`` is accepted
+    for ``density_grid``, ``color`` for ``colour``)."""
+    import inspect
+
+    params = [p for p in inspect.signature(func).parameters.values()
+              if p.kind == p.KEYWORD_ONLY or (p.name not in ("self", "path", "fmt")
+                                              and p.kind == p.POSITIONAL_OR_KEYWORD)]
+    names = {p.name for p in params}
+    out = {}
+    for k, v in options.items():
+        k2 = k if k in names else OPTION_ALIASES.get(k, k)
+        if k2 not in names:
+            known = ", ".join(sorted(names)) or "none"
+            raise DreamPrintError(f"unknown reader option {k!r} (this format takes: {known})",
+                                  where)
+        out[k2] = v
+    return out

@@ -9,12 +9,13 @@ the bytes on disk can hold, before any reader allocates).
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, check_slab, linear_to_srgb, voxel_centres
+from .base import PrintGrid, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
 from .sampling import sample_dense
 
-__all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_lut",
+__all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_window",
            "bounds_list"]
 
 # zlib/gzip cannot expand data by more than ~1032:1; allow headroom for the other codecs.
@@ -75,10 +76,31 @@ def colormap_lut(name: str | None, colour=None, n: int = 256) -> np.ndarray:
     return np.tile(c, (n, 1))
 
 
-def apply_lut(lut: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Colours of values ``t`` in [0, 1] from ``lut`` (nearest entry)."""
-    i = np.clip(np.rint(t * (len(lut) - 1)), 0, len(lut) - 1).astype(np.intp)
-    return lut[i]
+@njit(cache=True, nogil=True)
+def _window_kernel(v, lo, inv_width, lut, dens, rgb, sigma):
+    n = lut.shape[0] - 1
+    flat_v = v.reshape(-1)
+    fs = sigma.reshape(-1)
+    fr = rgb.reshape(-1, 3)
+    for q in range(flat_v.shape[0]):
+        t = (flat_v[q] - lo) * inv_width
+        t = min(max(t, 0.0), 1.0)
+        fs[q] = t * dens
+        i = int(t * n + 0.5)
+        fr[q, 0] = lut[i, 0]
+        fr[q, 1] = lut[i, 1]
+        fr[q, 2] = lut[i, 2]
+
+
+def apply_window(v: np.ndarray, low: float, high: float, lut: np.ndarray, density: float):
+    """``t = clip((v - low) / (high - low), 0, 1)`` -> (colour ``lut[t]`` (..., 3), ``t * density``)
+    in one compiled pass."""
+    v = np.ascontiguousarray(v, np.float32)
+    rgb = np.empty(v.shape + (3,), np.float32)
+    sigma = np.empty(v.shape, np.float32)
+    _window_kernel(v, np.float32(low), np.float32(1.0 / (high - low)),
+                   np.ascontiguousarray(lut, np.float32), np.float32(density), rgb, sigma)
+    return rgb, sigma
 
 
 def bounds_list(bounds) -> list[list[float]]:
@@ -120,7 +142,7 @@ class DenseSource:
             else:
                 np.clip(rgb, 0.0, 1.0, out=rgb)
         else:
-            rgb = np.broadcast_to(self.uniform_colour, dens.shape + (3,)).copy()
+            rgb = uniform_rgb(dens.shape, self.uniform_colour)
         sigma = (dens * np.float32(density_scale / grid.mm_per_unit)).astype(np.float32)
         np.maximum(sigma, 0.0, out=sigma)
         return rgb, sigma

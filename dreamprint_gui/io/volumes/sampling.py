@@ -12,6 +12,8 @@ sample different slabs concurrently; they allocate only their output.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -116,7 +118,7 @@ class SparseBlocks:
         node = leaf >> NODE_LOG2
         self.node_min = node.min(axis=0)
         dims = node.max(axis=0) - self.node_min + 1
-        if int(np.prod(dims)) > MAX_TOP_ENTRIES:
+        if math.prod(int(d) for d in dims) > MAX_TOP_ENTRIES:
             raise DreamPrintError(f"grid {name!r}: active voxels spread over {dims * 128} voxels; "
                                   "too sparse to sample")
         rel = node - self.node_min
@@ -154,71 +156,71 @@ def _voxel(values, bg, leaf, i, j, k, c):
 
 
 @njit(cache=True, nogil=True)
+def _corner_planes(values, bg, node_min, top, nodes, i0, j0, k0, wj, wk, va, vb):
+    """Bilinear (y, z) values at index planes i0 and i0+1 into ``va``, ``vb``."""
+    nc = values.shape[4]
+    if (i0 & 7) != 7 and (j0 & 7) != 7 and (k0 & 7) != 7:
+        lf = _leaf_of(i0, j0, k0, node_min, top, nodes)       # all corners in one leaf
+        if lf < 0:
+            for c in range(nc):
+                va[c] = bg[c]
+                vb[c] = bg[c]
+            return
+        a = i0 & 7
+        b = j0 & 7
+        d = k0 & 7
+        for c in range(nc):
+            y0 = values[lf, a, b, d, c] * (1 - wj) + values[lf, a, b + 1, d, c] * wj
+            y1 = values[lf, a, b, d + 1, c] * (1 - wj) + values[lf, a, b + 1, d + 1, c] * wj
+            va[c] = y0 * (1 - wk) + y1 * wk
+            y0 = values[lf, a + 1, b, d, c] * (1 - wj) + values[lf, a + 1, b + 1, d, c] * wj
+            y1 = (values[lf, a + 1, b, d + 1, c] * (1 - wj)
+                  + values[lf, a + 1, b + 1, d + 1, c] * wj)
+            vb[c] = y0 * (1 - wk) + y1 * wk
+        return
+    for s in range(2):
+        i = i0 + s
+        l00 = _leaf_of(i, j0, k0, node_min, top, nodes)
+        l10 = _leaf_of(i, j0 + 1, k0, node_min, top, nodes)
+        l01 = _leaf_of(i, j0, k0 + 1, node_min, top, nodes)
+        l11 = _leaf_of(i, j0 + 1, k0 + 1, node_min, top, nodes)
+        for c in range(nc):
+            y0 = (_voxel(values, bg, l00, i, j0, k0, c) * (1 - wj)
+                  + _voxel(values, bg, l10, i, j0 + 1, k0, c) * wj)
+            y1 = (_voxel(values, bg, l01, i, j0, k0 + 1, c) * (1 - wj)
+                  + _voxel(values, bg, l11, i, j0 + 1, k0 + 1, c) * wj)
+            v = y0 * (1 - wk) + y1 * wk
+            if s == 0:
+                va[c] = v
+            else:
+                vb[c] = v
+
+
+@njit(cache=True, nogil=True)
 def _sparse_kernel(values, bg, node_min, top, nodes, uz, uy, ux, out):
     nc = values.shape[4]
+    va = np.empty(nc, np.float32)
+    vb = np.empty(nc, np.float32)
     for kk in range(uz.shape[0]):
         fk = np.floor(uz[kk])
         k0 = np.int64(fk)
-        wk = uz[kk] - fk
+        wk = np.float32(uz[kk] - fk)
         for jj in range(uy.shape[0]):
             fj = np.floor(uy[jj])
             j0 = np.int64(fj)
-            wj = uy[jj] - fj
+            wj = np.float32(uy[jj] - fj)
+            last = np.int64(-(1 << 62))
             for ii in range(ux.shape[0]):
                 fi = np.floor(ux[ii])
                 i0 = np.int64(fi)
-                wi = ux[ii] - fi
-                if (i0 & 7) != 7 and (j0 & 7) != 7 and (k0 & 7) != 7:
-                    # all eight corners in one leaf: one lookup
-                    lf = _leaf_of(i0, j0, k0, node_min, top, nodes)
-                    if lf < 0:
-                        for c in range(nc):
-                            out[kk, jj, ii, c] = bg[c]
-                        continue
-                    a = i0 & 7
-                    b = j0 & 7
-                    d = k0 & 7
-                    for c in range(nc):
-                        v000 = values[lf, a, b, d, c]
-                        v100 = values[lf, a + 1, b, d, c]
-                        v010 = values[lf, a, b + 1, d, c]
-                        v110 = values[lf, a + 1, b + 1, d, c]
-                        v001 = values[lf, a, b, d + 1, c]
-                        v101 = values[lf, a + 1, b, d + 1, c]
-                        v011 = values[lf, a, b + 1, d + 1, c]
-                        v111 = values[lf, a + 1, b + 1, d + 1, c]
-                        x00 = v000 + (v100 - v000) * wi
-                        x10 = v010 + (v110 - v010) * wi
-                        x01 = v001 + (v101 - v001) * wi
-                        x11 = v011 + (v111 - v011) * wi
-                        y0 = x00 + (x10 - x00) * wj
-                        y1 = x01 + (x11 - x01) * wj
-                        out[kk, jj, ii, c] = y0 + (y1 - y0) * wk
-                else:
-                    l000 = _leaf_of(i0, j0, k0, node_min, top, nodes)
-                    l100 = _leaf_of(i0 + 1, j0, k0, node_min, top, nodes)
-                    l010 = _leaf_of(i0, j0 + 1, k0, node_min, top, nodes)
-                    l110 = _leaf_of(i0 + 1, j0 + 1, k0, node_min, top, nodes)
-                    l001 = _leaf_of(i0, j0, k0 + 1, node_min, top, nodes)
-                    l101 = _leaf_of(i0 + 1, j0, k0 + 1, node_min, top, nodes)
-                    l011 = _leaf_of(i0, j0 + 1, k0 + 1, node_min, top, nodes)
-                    l111 = _leaf_of(i0 + 1, j0 + 1, k0 + 1, node_min, top, nodes)
-                    for c in range(nc):
-                        v000 = _voxel(values, bg, l000, i0, j0, k0, c)
-                        v100 = _voxel(values, bg, l100, i0 + 1, j0, k0, c)
-                        v010 = _voxel(values, bg, l010, i0, j0 + 1, k0, c)
-                        v110 = _voxel(values, bg, l110, i0 + 1, j0 + 1, k0, c)
-                        v001 = _voxel(values, bg, l001, i0, j0, k0 + 1, c)
-                        v101 = _voxel(values, bg, l101, i0 + 1, j0, k0 + 1, c)
-                        v011 = _voxel(values, bg, l011, i0, j0 + 1, k0 + 1, c)
-                        v111 = _voxel(values, bg, l111, i0 + 1, j0 + 1, k0 + 1, c)
-                        x00 = v000 + (v100 - v000) * wi
-                        x10 = v010 + (v110 - v010) * wi
-                        x01 = v001 + (v101 - v001) * wi
-                        x11 = v011 + (v111 - v011) * wi
-                        y0 = x00 + (x10 - x00) * wj
-                        y1 = x01 + (x11 - x01) * wj
-                        out[kk, jj, ii, c] = y0 + (y1 - y0) * wk
+                wi = np.float32(ux[ii] - fi)
+                if i0 != last:
+                    # printer voxels are finer than source voxels: the (y, z) interpolation at
+                    # the two bracketing index planes is shared by a run of x samples
+                    _corner_planes(values, bg, node_min, top, nodes, i0, j0, k0, wj, wk, va, vb)
+                    last = i0
+                for c in range(nc):
+                    out[kk, jj, ii, c] = va[c] + (vb[c] - va[c]) * wi
 
 
 def sample_sparse(blocks: SparseBlocks, uk: np.ndarray, uj: np.ndarray,

@@ -26,7 +26,7 @@ from .base import PrintGrid, check_slab
 from .dense import (
     DenseSource,
     DenseVolume,
-    apply_lut,
+    apply_window,
     check_claimed_size,
     colormap_lut,
 )
@@ -152,14 +152,14 @@ class ImageSource:
         check_slab(grid, z0, z1)
         v = self.volume.sample(grid, z0, z1)[..., 0]
         lo, hi = self.window
-        t = np.clip((v - np.float32(lo)) / np.float32(hi - lo), 0.0, 1.0).astype(np.float32)
-        rgb = apply_lut(self.lut, t)
-        sigma = t * np.float32(self.density * density_scale / grid.mm_per_unit)
-        # outside the image the sampler gives value 0, which a window below 0 would lift
-        out = _outside(self.volume, grid, z0, z1)
-        if out is not None:
-            sigma[out] = 0.0
-        return rgb, sigma.astype(np.float32)
+        rgb, sigma = apply_window(v, lo, hi, self.lut,
+                                  self.density * density_scale / grid.mm_per_unit)
+        if lo < 0:
+            # outside the image the sampler gives value 0, which a window below 0 would lift
+            out = _outside(self.volume, grid, z0, z1)
+            if out is not None:
+                sigma[out] = 0.0
+        return rgb, sigma
 
     def info(self) -> dict:
         return {"format": self.format, "grids": self._grids_info}

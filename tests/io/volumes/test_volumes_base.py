@@ -84,3 +84,26 @@ def test_demo_is_deterministic_bounded_and_zero_outside():
     _, d3 = s.sample_slab(g, 40, 60, density_scale=2.5)
     np.testing.assert_allclose(d3, 2.5 * d1, rtol=1e-5)
     assert math.isclose(g.mm_per_unit, 5.0)
+
+
+def test_concurrent_slabs_match_sequential(shared_data):
+    from concurrent.futures import ThreadPoolExecutor
+
+    for f in ("demo", shared_data / "volumes" / "ironProt.vtk"):
+        s = open_source(f)
+        g = grid_for_source(s, (0.2, 0.2, 0.1), height_mm=6)
+        cuts = list(range(0, g.shape_xyz[2], 7)) + [g.shape_xyz[2]]
+        spans = list(zip(cuts[:-1], cuts[1:], strict=True))
+        seq = [s.sample_slab(g, a, b)[1] for a, b in spans]
+        with ThreadPoolExecutor(4) as ex:
+            par = list(ex.map(lambda ab, s=s, g=g: s.sample_slab(g, *ab)[1], spans))
+        for x, y in zip(seq, par, strict=True):
+            assert np.array_equal(x, y)
+
+
+def test_unknown_reader_option_is_named(shared_data):
+    with pytest.raises(DreamPrintError, match="unknown reader option 'bogus'.*window"):
+        open_source(shared_data / "volumes" / "ironProt.vtk", bogus=1)
+    s = open_source(shared_data / "volumes" / "blender_mantaflow_fluid_data_0190.vdb",
+                    grid="shadow")
+    assert s.density.name == "shadow"
