@@ -30,6 +30,9 @@ def _parser() -> argparse.ArgumentParser:
                    "set (.toml) to open")
     p.add_argument("--profile", help="ink profile to start with (default: the built-in one)")
     p.add_argument("--tab", choices=("preview", "gamut"), help="page to show first")
+    p.add_argument("--table-size", type=int, default=None, metavar="N",
+                   help="colour table nodes per axis (default 100; fewer build faster but "
+                   "interpolate less accurately)")
     p.add_argument("--screenshot", metavar="FILE.png",
                    help="save a screenshot of the main window once the preview has rendered")
     p.add_argument("--quit-after", type=float, metavar="SECONDS",
@@ -86,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     install_exception_hook(interactive=not headless)
     log.info("dreamprint-gui starting; log file %s", log_file())
 
-    window = MainWindow()
+    window = MainWindow(table_size=args.table_size)
     window.interactive = not headless
     if args.tab:
         window.tabs.setCurrentIndex(0 if args.tab == "preview" else 1)

@@ -15,7 +15,7 @@ import os
 
 import pytest
 
-TABLE_SIZE = 9  # small colour tables keep the suite fast; the code path is the full one
+TABLE_SIZE = 16  # small colour tables keep the suite fast; the code path is the full one
 
 
 @pytest.fixture(scope="session")

@@ -1,0 +1,100 @@
+"""The gamut page renders and answers the colour picker; the export dialog runs the engine's
+conversion with progress, can be cancelled, and leaves nothing behind."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.engine.gamut import get_tables
+from dreamprint_gui.engine.mixture import predict
+from dreamprint_gui.engine.printer import load_printer
+from dreamprint_gui.engine.profile import INKS, default_profile
+from dreamprint_gui.gui.export import ExportDialog
+from dreamprint_gui.gui.gamut_view import GamutPage
+from dreamprint_gui.gui.volume_view import frame_statistics
+
+
+@pytest.fixture(scope="module")
+def job_profile(table_size):
+    p = default_profile().with_settings(
+        layer_thickness_mm=load_printer("j850-paper").layer_thickness_mm)
+    return p
+
+
+def test_gamut_page(qtbot, gl_display, job_profile, table_size):
+    page = GamutPage()
+    qtbot.addWidget(page)
+    page.resize(1200, 700)
+    page.show()
+    with qtbot.waitSignal(page.rendered, timeout=60000):
+        page.set_profile(job_profile)
+    img = page.plotter.screenshot(return_img=True)
+    h, w = img.shape[:2]
+    for half in (img[:, : w // 2], img[:, w // 2:]):
+        assert frame_statistics(half)["non_background_fraction"] > 0.05
+    # the printable gamut lies inside the lightness range of paper white and black ink
+    lab_l = page.meshes[0].points_ab_l[:, 2]
+    assert 0 <= lab_l.min() < 40 and 60 < lab_l.max() <= 100.5
+
+    with qtbot.waitSignal(page.chartReady, timeout=120000):
+        page.set_tables(get_tables(job_profile, size=table_size))
+    assert page.chart_image is not None and not page.chart_image.isNull()
+    # a printable grey on a table node (153/255 = 9/15 with 16 nodes per axis): the table's
+    # own optimum, reproduced closely
+    assert (table_size - 1) * 153 % 255 == 0
+    page.set_colour((0.6, 0.6, 0.6))
+    pick = page.last_pick
+    assert abs(sum(pick["concentrations"].values()) - 1) < 1e-5
+    assert pick["dE2000"] < 0.5
+    ink_white = np.clip(predict(job_profile, np.eye(len(INKS))[INKS.index("W")]).sRGB, 0, 1)
+    assert min(ink_white) > 0.6  # the grey is darker than white ink: inside the gamut
+    assert f"{pick['dE2000']:.2f}" in page.de_label.text()
+
+
+def _dialog(qtbot, tmp_path, table_size, height_mm):
+    dlg = ExportDialog(None, source_path="demo", profile_path=None, table_size=table_size,
+                       preview_params={"height_mm": height_mm})
+    qtbot.addWidget(dlg)
+    dlg.folder.setText(str(tmp_path))
+    dlg.job_name.setText("job")
+    dlg.show()
+    return dlg
+
+
+def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    seen = []
+    dlg.start()
+    dlg.task.progress.connect(seen.append)
+    with qtbot.waitSignal(dlg.task.done, timeout=180000):
+        pass
+    qtbot.waitUntil(lambda: dlg.manifest is not None or dlg.error.text(), timeout=5000)
+    assert dlg.task.outcome == "succeeded", dlg.error.text()
+    manifest = dlg.manifest
+    nx, ny, nz = manifest["grid_dimensions"]
+    assert len(list((tmp_path / "job" / "slices").glob("*.png"))) == nz
+    assert (tmp_path / "job" / "manifest.json").is_file()
+    assert any(p.stage == "converting" for p in seen)
+    assert dlg.progress.value() == 1000
+    assert dlg.summary.isVisible() and f"{nz} slices of {nx} x {ny}" in dlg.summary.toPlainText()
+
+
+def test_export_cancel_leaves_nothing(qtbot, tmp_path, table_size):
+    dlg = _dialog(qtbot, tmp_path, table_size, 30.0)  # big enough to be cancelled mid-way
+    cancelled = []
+
+    def on_progress(p):
+        if p.stage == "converting" and not cancelled:
+            cancelled.append(True)
+            dlg.cancel_button.click()
+
+    dlg.start()
+    dlg.task.progress.connect(on_progress)
+    with qtbot.waitSignal(dlg.task.done, timeout=180000):
+        pass
+    assert cancelled and dlg.task.outcome == "cancelled", dlg.error.text()
+    qtbot.waitUntil(lambda: "cancelled" in dlg.remaining.text(), timeout=5000)
+    assert not (tmp_path / "job").exists()
+    assert list(tmp_path.iterdir()) == []  # no temporary folder left beside the target
+    assert dlg.start_button.isEnabled()  # the operator can try again
