@@ -156,6 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         target = args.file or "demo"
         if not window.open_path(target):
             if headless:
+                print(f"dreamprint-gui: error: {window.last_error}", file=sys.stderr)
                 finish(2)
                 return
             if target != "demo":

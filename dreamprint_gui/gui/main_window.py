@@ -71,6 +71,7 @@ class MainWindow(QMainWindow):
         self._tables_task: Task | None = None
         self._tables_for: str | None = None
         self.interactive = True  # False: no modal message boxes (screenshot runs, tests)
+        self.last_error: str | None = None
 
         self.setWindowTitle("DreamPrint")
         self.setAcceptDrops(True)
@@ -223,6 +224,7 @@ class MainWindow(QMainWindow):
         return True
 
     def _file_problem(self, message: str) -> None:
+        self.last_error = message
         self.statusBar().showMessage(message, 15000)
         if self.isVisible() and self.interactive:
             QMessageBox.warning(self, "DreamPrint: cannot open", message)
