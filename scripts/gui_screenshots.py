@@ -1,0 +1,113 @@
+"""Screenshots of the real application for the README (docs/screenshots/).
+
+Run under a virtual screen:  xvfb-run -a -s "-screen 0 1600x1000x24" \
+    .venv/bin/python scripts/gui_screenshots.py [--table-size 100]
+
+Drives the application as an operator would: the main window on the default profile and the demo
+volume (preview), the gamut page with a picked colour and the hexagon chart, and the calibration
+wizard fitting ink measurements (generated from the default profile with the forward model and
+written as instrument files, so the wizard has something real to read).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", default=str(ROOT / "docs" / "screenshots"))
+    ap.add_argument("--table-size", type=int, default=None)
+    args = ap.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    from PySide6.QtCore import QEventLoop, QTimer
+    from PySide6.QtWidgets import QApplication
+
+    app = QApplication([sys.argv[0]])
+    app.setApplicationName("DreamPrint")
+    from dreamprint_gui.gui.app import grab_window
+    from dreamprint_gui.gui.crash import install_exception_hook
+    from dreamprint_gui.gui.main_window import MainWindow
+
+    install_exception_hook(interactive=False)
+
+    def wait(signal, timeout_s=900) -> None:
+        loop = QEventLoop()
+        signal.connect(loop.quit)
+        QTimer.singleShot(int(timeout_s * 1000), loop.quit)
+        loop.exec()
+
+    def settle(ms=1200) -> None:
+        loop = QEventLoop()
+        QTimer.singleShot(ms, loop.quit)
+        loop.exec()
+
+    w = MainWindow(table_size=args.table_size)
+    w.interactive = False
+    w.resize(1500, 900)
+    w.move(0, 0)
+    w.show()
+    w.use_default_profile()
+    w.open_path("demo")
+    wait(w.ready)
+    settle()
+    grab_window(w, str(out / "preview.png"))
+
+    w.tabs.setCurrentWidget(w.gamut)
+    if w.gamut.chart_image is None:
+        wait(w.gamut.chartReady)
+    w.gamut.set_colour((0.85, 0.35, 0.2))
+    w.gamut.side.setCurrentIndex(0)
+    settle()
+    grab_window(w, str(out / "gamut.png"))
+    w.gamut.side.setCurrentIndex(1)
+    settle(600)
+    grab_window(w, str(out / "gamut-chart.png"))
+
+    import numpy as np
+
+    from dreamprint_gui.engine.kubelka_munk import reflectance_transmittance
+    from dreamprint_gui.engine.profile import INKS, default_profile
+    from dreamprint_gui.gui.wizard import CalibrationWizard
+    from dreamprint_gui.io.spectra import Sample, write_spectra
+
+    prof = default_profile()
+    wl = prof.wavelengths_nm
+    t = 0.4
+    R, T = reflectance_transmittance(prof.K, prof.S, t)
+    rng = np.random.default_rng(1)
+    tmp = Path(tempfile.mkdtemp())
+    noisy = [Sample(ink, wl, np.clip(R[i] * (1 + 0.01 * rng.standard_normal(wl.size)), 0, 1))
+             for i, ink in enumerate(INKS)]
+    write_spectra(tmp / "inks_R.csv", noisy, quantity="reflectance", format="csv-rows")
+    write_spectra(tmp / "inks_T.csv", [Sample(ink, wl, T[i]) for i, ink in enumerate(INKS)],
+                  quantity="transmittance", format="csv-columns")
+    wiz = CalibrationWizard(w, settings=w.settings, base_profile=prof)
+    wiz.move(40, 40)
+    wiz.show()
+    for ink in INKS[:5]:
+        row = wiz.measurements_page.rows[ink]
+        row.thickness.setValue(t)
+        row.load("R", str(tmp / "inks_R.csv"))
+        row.load("T", str(tmp / "inks_T.csv"))
+    wiz.next()
+    wiz.next()
+    wait(wiz.fit_page.fitted)
+    settle()
+    grab_window(wiz, str(out / "wizard.png"))
+    wiz.close()
+    w.close()
+    print("screenshots in", out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
