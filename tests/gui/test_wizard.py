@@ -169,3 +169,21 @@ def test_chart_file_problem_is_inline(qtbot, tmp_path):
     chart.spectra_edit.setText(str(tmp_path / "absent.csv"))
     chart.load()
     assert chart.error.text() and not chart.isComplete()
+
+
+def test_calibration_set_fills_the_page(qtbot, tmp_path):
+    from pathlib import Path
+
+    set_path = Path(__file__).resolve().parents[1] / "data" / "calibration_set" / "set.toml"
+    wiz = CalibrationWizard(None, base_profile=default_profile(),
+                            calibration_set=str(set_path))
+    qtbot.addWidget(wiz)
+    page = wiz.measurements_page
+    assert page.set_measurements, page.set_label.text()
+    assert page.isComplete() and not page.rows["C"].edits["R"].isEnabled()
+    n_lines = sum(len(ax.lines) for ax in page.figure.axes)
+    assert n_lines == sum((m.R is not None) + (m.T is not None) for m in page.set_measurements)
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[inks\n")
+    page.load_set(str(bad))
+    assert page.set_measurements is None and "bad.toml" in page.set_label.text()
