@@ -16,6 +16,7 @@ References: VTK file formats (VTK User's Guide ch. 19, "VTK File Formats"); Meta
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -79,9 +80,6 @@ def _precheck(path: Path) -> None:
 
 def _read(path: Path):
     import pyvista as pv
-    from vtkmodules.vtkCommonCore import vtkObject
-
-    vtkObject.GlobalWarningDisplayOff()     # VTK prints to stderr instead of raising; we check
     if path.suffix.lower() in (".nrrd", ".nhdr"):
         from .nrrd import read_nrrd
 
@@ -92,9 +90,13 @@ def _read(path: Path):
         return img
     _precheck(path)
     try:
-        mesh = pv.read(path)
+        mesh, problems = _read_capturing(pv, path)
     except Exception as exc:  # noqa: BLE001 - VTK raises assorted types on bad input
         raise DreamPrintError(f"cannot read as VTK image data: {exc}", path) from None
+    if problems:
+        # VTK and MetaIO report short or unparsable data as messages and return a zero-padded
+        # image; a print job must never be made from that.
+        raise DreamPrintError(f"damaged or truncated file: {problems[0]}", path)
     if isinstance(mesh, pv.MultiBlock):
         blocks = [b for b in mesh if isinstance(b, pv.ImageData)]
         if not blocks:
@@ -110,6 +112,43 @@ def _read(path: Path):
         raise DreamPrintError("the image is rotated (direction matrix not identity): resample "
                               "it axis-aligned first", path)
     return mesh
+
+
+def _read_capturing(pv, path: Path):
+    """``pv.read`` with every complaint collected instead of printed.
+
+    VTK reports through its output window (caught by ``VtkErrorCatcher``), pyvista through Python
+    warnings, and MetaIO by writing straight to the process's stdout/stderr, so those two file
+    descriptors are redirected to a temporary file for the duration of the read.
+    """
+    import sys
+    import tempfile
+    import warnings
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 1)
+        os.dup2(sink.fileno(), 2)
+        try:
+            with warnings.catch_warnings(record=True) as caught, \
+                    pv.VtkErrorCatcher(raise_errors=False, send_to_logging=False) as vtk_errors:
+                warnings.simplefilter("always")
+                mesh = pv.read(path)
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+        sink.seek(0)
+        raw = sink.read().decode("utf-8", "replace")
+    problems = [e.alert.strip().splitlines()[-1] for e in vtk_errors.events if e.alert.strip()]
+    problems += [str(w.message).strip().splitlines()[-1] for w in caught
+                 if "error" in str(w.message).lower()]
+    problems += [re.sub(r"\x1b\[[0-9;]*m", "", line).strip() for line in raw.splitlines()
+                 if re.search(r"error|fail|not read completely|cannot", line, re.I)]
+    return mesh, list(dict.fromkeys(problems))
 
 
 def _arrays(mesh):

@@ -198,3 +198,22 @@ def test_inspect_cli_error_is_one_line(tmp_path, capsys):
     assert main(["inspect", str(p)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("dreamprint: error: ") and str(p) in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("name", ["ironProt.vtk", "HeadMRVolume.mhd"])
+def test_truncated_data_is_refused_not_zero_padded(shared_data, tmp_path, name):
+    src = shared_data / "volumes" / name
+    if name.endswith(".mhd"):
+        (tmp_path / name).write_text(src.read_text().replace("HeadMRVolume.raw", "short.raw"))
+        (tmp_path / "short.raw").write_bytes((src.parent / "HeadMRVolume.raw").read_bytes()[:50000])
+    else:
+        (tmp_path / name).write_bytes(src.read_bytes()[:30000])
+    with pytest.raises(DreamPrintError, match="damaged or truncated"):
+        open_source(tmp_path / name)
+
+
+def test_garbled_metaimage_header_is_called_damaged(tmp_path):
+    f = tmp_path / "rand.mhd"
+    f.write_bytes(np.random.default_rng(0).integers(0, 256, 3000, dtype=np.uint8).tobytes())
+    with pytest.raises(DreamPrintError, match="rand.mhd: damaged"):
+        open_source(f)
