@@ -34,6 +34,9 @@ def main(argv: list[str] | None = None) -> int:
         cli.main(args=args, prog_name="dreamprint", standalone_mode=False)
     except click.exceptions.Exit as exc:
         return exc.exit_code
+    except click.BadParameter as exc:  # e.g. a path that is missing or a folder
+        click.echo(f"dreamprint: error: {exc.format_message()}", err=True)
+        return 2
     except click.ClickException as exc:
         exc.show()
         return exc.exit_code

@@ -33,8 +33,10 @@ def _read_rgb_file(path: str) -> list[list[float]]:
             rows = list(csv.reader(fh))
     except FileNotFoundError:
         raise DreamPrintError("no such file", p) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DreamPrintError(f"cannot read: {exc}", p) from None
+    except UnicodeDecodeError:
+        raise DreamPrintError("not a text CSV file (expected a header row R,G,B)", p) from None
+    except OSError as exc:
+        raise DreamPrintError(f"cannot read: {exc.strerror or exc}", p) from None
     if not rows:
         raise DreamPrintError("empty file; expected a header row R,G,B", p)
     header = [h.strip().upper() for h in rows[0]]
@@ -120,6 +122,9 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, size, as_json) 
             "dE2000": float(de[i]),
             "sigma_per_mm": float(al.sigma[i]),
             "density_clamped": {-1: "low", 0: None, 1: "high"}[int(al.clamped[i])],
+            # how far the achieved sigma stays from the target (0 when reached), 1/mm
+            "density_shortfall_per_mm": float(abs(sig_target[i] - al.sigma[i]))
+            if al.clamped[i] else 0.0,
         })
     if as_json:
         click.echo(json.dumps(records, indent=1))

@@ -236,9 +236,11 @@ def fit_sigma_per_wavelength(
 ) -> NDArray[np.float64]:
     """Least-squares extinction ``sigma_hat`` (1/mm) of ``exp(-sigma t)`` to KM ``T(t)`` (eq. 8).
 
-    Vectorised over the broadcast shape of K and S (1/mm); thicknesses ``linspace(0, t_max,
-    n_samples)`` mm. ``exact=True`` solves every fit (slow); the default interpolates the exact
-    solution's tabulated invariant (see the module docstring). ``sigma = 0`` where K = S = 0.
+    Vectorised over the broadcast shape of K and S (1/mm). The fit minimises the integral of
+    eq. 8 over ``[0, t_max]`` mm (see the module docstring); ``n_samples`` is not used by the fit
+    (it is the paper's Table 1 sampling, used by :func:`exp_fit_errors`) and is accepted so that
+    callers pass the profile's settings unchanged. ``exact=True`` solves every fit (slow); the
+    default interpolates the exact solution's tabulated invariant. ``sigma = 0`` where K = S = 0.
     """
     K = np.asarray(K, dtype=np.float64)
     S = np.asarray(S, dtype=np.float64)

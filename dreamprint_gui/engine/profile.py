@@ -40,6 +40,9 @@ COLOUR_INKS: tuple[str, ...] = ("C", "M", "Y", "K", "W")
 FORMAT = "dreamprint-ink-profile"
 FORMAT_VERSION = 1
 DEFAULT_PROFILE_NAME = "polyjet-default"
+# 1e6 per mm (one per nanometre) is far beyond any ink; larger values are unit mistakes.
+_MAX_COEFFICIENT = 1e6
+UNITS = {"wavelength": "nm", "K": "1/mm", "S": "1/mm"}
 
 
 @dataclass(frozen=True)
@@ -76,7 +79,7 @@ class InkProfile:
             "format_version": FORMAT_VERSION,
             "name": self.name,
             "inks": list(INKS),
-            "units": {"wavelength": "nm", "K": "1/mm", "S": "1/mm"},
+            "units": UNITS,
             "wavelengths_nm": self.wavelengths_nm.tolist(),
             "K_per_mm": {ink: self.K[i].tolist() for i, ink in enumerate(INKS)},
             "S_per_mm": {ink: self.S[i].tolist() for i, ink in enumerate(INKS)},
@@ -115,12 +118,12 @@ def validate_arrays(wavelengths: ArrayLike, K: ArrayLike, S: ArrayLike,
             raise DreamPrintError(
                 f"{label} must have {len(INKS)} inks x {w.size} wavelengths, got "
                 f"{'x'.join(map(str, a.shape))}", source)
-        bad = ~np.isfinite(a) | (a < 0)
+        bad = ~np.isfinite(a) | (a < 0) | (a > _MAX_COEFFICIENT)
         if bad.any():
             i, j = np.argwhere(bad)[0]
             raise DreamPrintError(
-                f"{label} of ink {INKS[i]} at {w[j]:g} nm is {a[i, j]!r}: must be finite and "
-                f">= 0", source)
+                f"{label} of ink {INKS[i]} at {w[j]:g} nm is {float(a[i, j])!r}: must be finite, "
+                f">= 0 and <= {_MAX_COEFFICIENT:g} per mm", source)
 
 
 def _ink_table(d: Any, key: str, n: int, source: str) -> NDArray[np.float64]:
@@ -159,6 +162,9 @@ def profile_from_dict(d: Any, source: str = "<profile>") -> InkProfile:
     except (KeyError, TypeError, ValueError):
         raise DreamPrintError("'wavelengths_nm' is missing or not a list of numbers",
                               source) from None
+    if "units" in d and d["units"] != UNITS:
+        raise DreamPrintError(f"units {d['units']} are not DreamPrint's {UNITS}; convert the "
+                              "values (K and S per mm, wavelengths in nm)", source)
     if "inks" in d and list(d["inks"]) != list(INKS):
         raise DreamPrintError(f"inks {d['inks']} do not match the printer's {list(INKS)}", source)
     K = _ink_table(d.get("K_per_mm"), "K_per_mm", w.size, source)
@@ -230,8 +236,8 @@ def default_profile() -> InkProfile:
 def parse_mix(text: str) -> NDArray[np.float64]:
     """``"C=0.2,M=0.3,W=0.5"`` -> concentrations in INKS order; percent allowed (``C=20%``).
 
-    Absent inks are 0. The fractions must sum to 1 (within 1e-6), or to 100 when every value is
-    given in percent.
+    Absent inks are 0. The fractions must sum to 1 (within 1e-6); values summing to 100 are read
+    as percent, with or without the ``%`` sign.
     """
     c = np.zeros(len(INKS))
     seen = set()
@@ -254,7 +260,9 @@ def parse_mix(text: str) -> NDArray[np.float64]:
         except ValueError:
             raise DreamPrintError(f"'{value}' for ink {match} is not a number") from None
         c[INKS.index(match)] = v / 100.0 if pct else v
-    return check_concentrations(c, text)
+    if abs(c.sum() - 100.0) <= 1e-4:
+        c /= 100.0
+    return check_concentrations(c, f"mixture {text!r}")
 
 
 def check_concentrations(c: NDArray[np.float64], what: str = "mixture") -> NDArray[np.float64]:

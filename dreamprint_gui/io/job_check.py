@@ -50,6 +50,9 @@ def check_job(job: str | Path) -> dict[str, Any]:
     except (TypeError, ValueError, KeyError) as exc:
         raise DreamPrintError(f"malformed manifest field: {exc}", mpath) from None
     problems: list[str] = []
+    count = manifest["slices"].get("count") if isinstance(manifest["slices"], dict) else None
+    if count != nz:
+        problems.append(f"the manifest lists {count} slices but its grid has {nz} layers")
     if {width, height} != {nx, ny}:
         problems.append(f"slice size {width} x {height} does not match the grid {nx} x {ny}")
     counts = np.zeros(len(labels), np.int64)

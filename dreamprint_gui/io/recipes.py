@@ -71,8 +71,10 @@ def read_recipes(path: Path) -> NDArray[np.float64]:
         raise DreamPrintError(f"the header names no ink ({', '.join(INKS)})", path, header_line)
     c = np.zeros((len(rows) - 1, len(INKS)))
     for r, (line, row) in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise DreamPrintError(f"{len(row)} fields, the header has {len(header)}", path, line)
         for j, i in columns:
-            cell = row[j] if j < len(row) else ""
+            cell = row[j]
             c[r, i] = _number(cell, path, line, f"ink {INKS[i]}")
     if np.any(c < 0):
         r = int(np.argwhere(c < 0)[0][0])

@@ -289,7 +289,8 @@ def open_path(path: Path, fmt: str = "nanovdb", *, density_grid: str | None = No
                                   path)
     if chosen["class"] == 1 and level_set != "solid":
         raise DreamPrintError(f"grid {chosen['name']!r} is a level set, not a fog volume "
-                              "(convert it to a fog volume, or ask for a uniform solid)", path)
+                              "(convert it to a fog volume, or ask for a uniform solid "
+                              "with --option level_set=solid)", path)
     if chosen["voxels"] == 0:
         raise DreamPrintError(f"grid {chosen['name']!r} is empty (no active voxels)", path)
     return NanoVdbSource(path, chosen, info, colour=colour, level_set=level_set,

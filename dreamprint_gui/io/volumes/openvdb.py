@@ -122,8 +122,13 @@ def _info_entry(g: dict, path: Path) -> dict:
         bounds = None
     shape = [int(v) for v in (hi_i - lo_i + 1)] if not g["empty"] else [0, 0, 0]
     dtype = g["type"] + (" (half on disk)" if g.get("half") else "")
+    lo, hi = g["min"], g["max"]
+    if isinstance(lo, (list, tuple)):
+        # OpenVDB's evalMinMax orders vectors lexicographically, which is no range at all: the
+        # per-component range would need every value, so vector grids report none.
+        lo = hi = None
     return {"name": g["name"], "class": _class_name(g), "shape": shape,
-            "active_voxels": g["active_voxels"], "min": g["min"], "max": g["max"],
+            "active_voxels": g["active_voxels"], "min": lo, "max": hi,
             "dtype": dtype, "bounds": bounds}
 
 
@@ -233,7 +238,8 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
                            if level_set == "solid" else [])
             if not pool and any(_class_name(g) == "level set" for g in scalar):
                 raise DreamPrintError("the file holds a level set, not a fog volume (convert "
-                                      "it to a fog volume, or ask for a uniform solid)", path)
+                                      "it to a fog volume, or ask for a uniform solid with "
+                                      "--option level_set=solid)", path)
             if len(pool) != 1:
                 raise DreamPrintError("no grid named 'density'; choose one of: "
                                       f"{', '.join(grids)}", path)
