@@ -12,10 +12,12 @@ Defines
   (byte-identical to the layer in an exported job).
 
 Per slab of layers ``[z0, z1)``: sample the source on the printer grid (density in 1/mm, the
-volume source's rule) -> trilinear table lookup of C, M, Y, K, W and density alignment (Clear,
-K/W grey; ``gamut.lookup_and_align_into``) -> background threshold (``--background clear|empty``)
--> halftone (:mod:`.halftone`) -> labels -> PNG (:mod:`..io.png_slices`). Only a slab is ever in
-memory per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
+volume source's rule); then per layer one compiled kernel (``_layer_kernel``, nogil) does, per
+voxel, the background threshold (``--background clear|empty``) -> trilinear table lookup of
+C, M, Y, K, W and density alignment (Clear, K/W grey; ``gamut.alignment.align_voxel``, the body
+of ``lookup_and_align_into``) -> halftone (``halftone.pick_label``) -> label, with no
+per-voxel intermediate arrays -> PNG (:mod:`..io.png_slices`). Only a slab is ever in memory
+per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
 multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed`` cluster
 (``scheduler="tcp://host:8786"``) whose workers write the slices into the job's temporary folder
 directly, so that folder must be on a path every worker sees (docs/print-jobs.md). Every label is
