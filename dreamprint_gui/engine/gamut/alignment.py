@@ -29,6 +29,7 @@ than C* (bright colours: X is mostly white, whose sigma is low), are reported as
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numba as nb
@@ -201,6 +202,7 @@ def align_density(tables: ColourTables, rgb: ArrayLike, conc5: ArrayLike,
 _LOG_KNOTS = np.log(np.asarray(CLEAR_KNOTS))
 LANES = 16  # fields per node in the kernel's table, padded so a node is one 64-byte line
 _PADDED: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+_PADDED_LOCK = threading.Lock()
 
 
 def kernel_table(tables: ColourTables) -> np.ndarray:
@@ -210,17 +212,19 @@ def kernel_table(tables: ColourTables) -> np.ndarray:
     compiled trilinear interpolation load each node as whole vectors.
     """
     key = id(tables.packed)
-    hit = _PADDED.get(key)
-    if hit is not None and hit[0] is tables.packed:
-        return hit[1]
-    n = tables.packed.shape[0]
-    flat = np.zeros((n, n, n, LANES), np.float32)
-    flat[..., :N_FIELDS] = tables.packed
-    flat = flat.reshape(-1)
-    if len(_PADDED) >= 4:
-        _PADDED.clear()
-    _PADDED[key] = (tables.packed, flat)
-    return flat
+    with _PADDED_LOCK:  # concurrent slab workers build it once
+        hit = _PADDED.get(key)
+        if hit is not None and hit[0] is tables.packed:
+            return hit[1]
+        n = tables.packed.shape[0]
+        flat = np.empty((n, n, n, LANES), np.float32)
+        flat[..., :N_FIELDS] = tables.packed
+        flat[..., N_FIELDS:] = 0.0
+        flat = flat.reshape(-1)
+        if len(_PADDED) >= 4:
+            _PADDED.clear()
+        _PADDED[key] = (tables.packed, flat)
+        return flat
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
