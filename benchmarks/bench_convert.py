@@ -4,8 +4,10 @@ Prints, per job size (~1e7, 1e8, 1e9 voxels on the j850-paper grid): voxels, wal
 voxels per second end to end (source sampling, table lookup + density alignment, halftoning,
 PNG encoding and writing), the peak resident memory of the converting process (its own
 ``ru_maxrss``, measured in a fresh child process per job so sizes do not mix), and the 1 -> 2
-worker speed-up on the 1e8 job. Targets on a 2-core machine: >= 1e8 voxels/s, flat peak memory
-< 1.5 GB.
+worker speed-up on the 1e8 job. "cores busy" is the process's CPU seconds / wall seconds: with
+2 workers it should approach 2; well below 2 while the machine's load average (printed) exceeds
+its free cores means the other core was taken by other processes, not that the job serialises.
+Targets on a 2-core machine: >= 1e8 voxels/s, flat peak memory < 1.5 GB.
 
     python benchmarks/bench_convert.py                 # 1e7, 1e8 and the 1 -> 2 worker speed-up
     python benchmarks/bench_convert.py --sizes 1e7,1e8,1e9
@@ -43,6 +45,8 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
     from dreamprint_gui.engine.pipeline import prepare_job
 
     ctx = prepare_job(s)
+    load = os.getloadavg()[0]
+    ru0 = resource.getrusage(resource.RUSAGE_SELF)
     t = time.perf_counter()
     gen = run_conversion(s, context=ctx)
     while True:
@@ -52,11 +56,13 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
             m = stop.value
             break
     wall = time.perf_counter() - t
+    ru1 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
     nx, ny, nz = m["grid_dimensions"]
     return {"voxels": nx * ny * nz, "grid": [nx, ny, nz], "wall_s": wall,
             "voxels_per_s": nx * ny * nz / wall,
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-            "stages_s": m["timings_s"]["worker_stage_sum"],
+            "stages_s": m["timings_s"]["worker_stage_sum"], "cpu_s": cpu, "load_before": load,
             "job_mb": sum(f.stat().st_size for f in Path(out, "slices").iterdir()) / 1e6}
 
 
@@ -93,12 +99,13 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} cores; source {a.source} on j850-paper; "
           f"halftone {a.halftone}")
     print(f"{'voxels':>12} {'grid (x,y,z)':>20} {'workers':>7} {'wall s':>8} {'Mvox/s':>8} "
-          f"{'peak RSS MB':>11} {'job MB':>8}")
+          f"{'peak RSS MB':>11} {'job MB':>8} {'cores busy':>10} {'load':>5}")
     for n in (float(x) for x in a.sizes.split(",")):
         r = child(n, a.workers, a.halftone, a.scheduler, a.source)
         print(f"{r['voxels']:>12,} {str(tuple(r['grid'])):>20} {a.workers:>7} "
               f"{r['wall_s']:>8.1f} {r['voxels_per_s'] / 1e6:>8.1f} {r['peak_rss_mb']:>11.0f} "
-              f"{r['job_mb']:>8.0f}", flush=True)
+              f"{r['job_mb']:>8.0f} {r['cpu_s'] / r['wall_s']:>10.2f} {r['load_before']:>5.1f}",
+              flush=True)
         st = r["stages_s"]
         print(f"{'':>12} worker-seconds: sample {st['sample']:.1f}, lookup+halftone "
               f"{st['lookup_halftone']:.1f}, png {st['png']:.1f}, write {st['write']:.1f}",
@@ -108,7 +115,9 @@ def main() -> None:
         r2 = child(1e8, 2, a.halftone, a.scheduler, a.source)
         print(f"1 -> 2 workers on {r1['voxels']:,} voxels: {r1['voxels_per_s'] / 1e6:.1f} -> "
               f"{r2['voxels_per_s'] / 1e6:.1f} Mvox/s, speed-up "
-              f"{r2['voxels_per_s'] / r1['voxels_per_s']:.2f}x")
+              f"{r2['voxels_per_s'] / r1['voxels_per_s']:.2f}x; cores busy "
+              f"{r1['cpu_s'] / r1['wall_s']:.2f} -> {r2['cpu_s'] / r2['wall_s']:.2f} "
+              f"(1-min load before: {r1['load_before']:.1f}, {r2['load_before']:.1f})")
 
 
 if __name__ == "__main__":

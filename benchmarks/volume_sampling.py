@@ -41,7 +41,7 @@ def main() -> None:
         ("dense VTK image (hydrogen.vti), window + LUT", DATA / "volumes" / "hydrogen.vti", 40),
         ("sparse OpenVDB (Mantaflow smoke)", args.vdb, 40),
         ("MagicaVoxel (knight), nearest", DATA / "voxels" / "magicavoxel_chr_knight.vox", 40),
-        ("procedural demo (400 Gaussians)", "demo", 20),
+        ("procedural demo (400 Gaussians baked to 128^3)", "demo", 20),
         ("INRIA splats (9080 Gaussians)", DATA / "splats" / "inria3dgs_iter7000_sh3_9080.ply",
          40),
     ]

@@ -11,6 +11,8 @@ Defines
   the voxel's position, so the result does not depend on slab size, worker count or scheduler.
 - :class:`Halftoner`: the settings of one job (method, seed, mask, background); its
   :meth:`Halftoner.layer_into` labels one layer with a numba kernel that releases the GIL.
+- :func:`pick_label`, :func:`threshold_at`, :func:`mask_columns`: that kernel's per-voxel parts
+  (numba, inlined), shared with the print job's fused per-layer kernel.
 - :func:`fraction_variance_ratio`: the quality metric (variance of local fractions in boxes
   relative to the binomial i.i.d. variance, and the mean bias).
 
@@ -38,6 +40,7 @@ from numba import njit
 from .profile import INKS
 
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
+           "pick_label", "threshold_at", "mask_columns",
            "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS", "MASK_VERSION"]
 
 HALFTONE_METHODS = ("blue-noise", "random")
@@ -235,12 +238,51 @@ def blue_noise_mask(voxel_mm: tuple[float, float, float],
 
 
 # ----------------------------------------------------------------------------- kernel
+@njit(cache=True, nogil=True, inline="always")
+def pick_label(c, t, order, bg_label):
+    """Label of a voxel with concentrations ``c`` (6, INKS order) and threshold ``t`` in [0, 1):
+    the first ink (in ``order``) whose cumulative concentration exceeds ``t`` times the total."""
+    s = 0.0
+    for m in range(6):
+        s += c[m]
+    t = t * s
+    acc = 0.0
+    for q in range(6):
+        m = order[q]
+        acc += c[m]
+        if t < acc:
+            return m
+    # t*s rounded onto the total: take the last ink with a non-zero share
+    for q in range(5, -1, -1):
+        if c[order[q]] > 0.0:
+            return order[q]
+    return bg_label  # all-zero concentrations cannot come from the tables; be safe
+
+
+@njit(cache=True, nogil=True)
+def mask_columns(x0, nx, ox, mx):
+    """Mask x index of each of ``nx`` voxels from ``x0`` (one modulo per column, not voxel)."""
+    xs = np.empty(nx, np.int64)
+    for i in range(nx):
+        xs[i] = (x0 + i + ox) % mx
+    return xs
+
+
+@njit(cache=True, nogil=True, inline="always")
+def threshold_at(method, mask, mzz, myy, mxx, seed, x, y, z):
+    """The voxel's threshold: the blue-noise mask's (method 0) or the position hash's (1)."""
+    if method == 0:
+        return np.float64(mask[mzz, myy, mxx])
+    return _uniform(seed, x, y, z)
+
+
 @njit(cache=True, nogil=True)
 def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy, oz, seed,
-                    x0, y0, order, out, counts, conc_sums):
+                    order, x0, y0, out, counts, conc_sums):
     ny, nx = out.shape
     mz, my, mx = mask.shape
     mzz = (z + oz) % mz
+    xs = mask_columns(x0, nx, ox, mx)
     for j in range(ny):
         myy = (y0 + j + oy) % my
         for i in range(nx):
@@ -250,30 +292,11 @@ def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy,
                 counts[bg_label] += 1
                 conc_sums[bg_label] += 1.0
                 continue
-            s = 0.0
+            c = conc[p]
             for m in range(6):
-                s += conc[p, m]
-                conc_sums[m] += conc[p, m]
-            if method == 0:
-                t = mask[mzz, myy, (x0 + i + ox) % mx]
-            else:
-                t = _uniform(seed, x0 + i, y0 + j, z)
-            t *= s
-            lab = -1
-            c = 0.0
-            for q in range(6):
-                m = order[q]
-                c += conc[p, m]
-                if t < c:
-                    lab = m
-                    break
-            if lab < 0:  # t*s rounded onto the total: take the last ink with a non-zero share
-                for q in range(5, -1, -1):
-                    if conc[p, order[q]] > 0.0:
-                        lab = order[q]
-                        break
-            if lab < 0:  # all-zero concentrations cannot come from the tables; be safe
-                lab = bg_label
+                conc_sums[m] += c[m]
+            t = threshold_at(method, mask, mzz, myy, xs[i], seed, x0 + i, y0 + j, z)
+            lab = pick_label(c, t, order, bg_label)
             out[j, i] = lab
             counts[lab] += 1
 
@@ -324,12 +347,16 @@ class Halftoner:
         ``counts`` (7,) int64 and ``conc_sums`` (7,) float64 are accumulated (labels and
         intended concentrations, background voxels counting 1 for the background label).
         """
+        _halftone_layer(conc, density, np.float32(self.threshold), self.bg_label, z,
+                        *self.kernel_args(), x0, y0, out, counts, conc_sums)
+
+    def kernel_args(self) -> tuple:
+        """(method code, mask, ox, oy, oz, seed, order) as the compiled kernels take them
+        (:func:`threshold_at`, :func:`pick_label`)."""
         mask = self.mask if self.mask is not None else _NO_MASK
         ox, oy, oz = self.offset_xyz
-        _halftone_layer(conc, density, np.float32(self.threshold), self.bg_label, z,
-                        0 if self.method == "blue-noise" else 1, mask, ox, oy, oz,
-                        np.uint64(self.seed & 0xFFFFFFFFFFFFFFFF), x0, y0,
-                        np.asarray(self.order, dtype=np.int64), out, counts, conc_sums)
+        return (0 if self.method == "blue-noise" else 1, mask, ox, oy, oz,
+                np.uint64(self.seed & 0xFFFFFFFFFFFFFFFF), np.asarray(self.order, dtype=np.int64))
 
     def block(self, conc: np.ndarray, origin_xyz: tuple[int, int, int] = (0, 0, 0)) -> np.ndarray:
         """Labels of a (nz, ny, nx, 6) concentration block (no background) - for tests/metrics."""

@@ -12,10 +12,12 @@ Defines
   (byte-identical to the layer in an exported job).
 
 Per slab of layers ``[z0, z1)``: sample the source on the printer grid (density in 1/mm, the
-volume source's rule) -> trilinear table lookup of C, M, Y, K, W and density alignment (Clear,
-K/W grey; ``gamut.lookup_and_align_into``) -> background threshold (``--background clear|empty``)
--> halftone (:mod:`.halftone`) -> labels -> PNG (:mod:`..io.png_slices`). Only a slab is ever in
-memory per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
+volume source's rule); then per layer one compiled kernel (``_layer_kernel``, nogil) does, per
+voxel, the background threshold (``--background clear|empty``) -> trilinear table lookup of
+C, M, Y, K, W and density alignment (Clear, K/W grey; ``gamut.alignment.align_voxel``, the body
+of ``lookup_and_align_into``) -> halftone (``halftone.pick_label``) -> label, with no
+per-voxel intermediate arrays -> PNG (:mod:`..io.png_slices`). Only a slab is ever in memory
+per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
 multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed`` cluster
 (``scheduler="tcp://host:8786"``) whose workers write the slices into the job's temporary folder
 directly, so that folder must be on a path every worker sees (docs/print-jobs.md). Every label is
@@ -39,7 +41,8 @@ import numpy as np
 from numba import njit
 
 from ..errors import DreamPrintError
-from .halftone import HALFTONE_METHODS, Halftoner
+from .gamut.alignment import LANES, align_voxel
+from .halftone import HALFTONE_METHODS, Halftoner, mask_columns, pick_label, threshold_at
 from .printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from .profile import INKS
 
@@ -195,22 +198,6 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
 
 
 # ----------------------------------------------------------------------------- slab work
-def _counts_dict(c: Any) -> dict[str, float]:
-    """Normalise the clamp report of ``lookup_and_align_into`` to a flat dict of numbers."""
-    if c is None:
-        return {}
-    if isinstance(c, dict):
-        return {str(k): float(v) for k, v in c.items() if np.isscalar(v)}
-    if hasattr(c, "_asdict"):
-        return {str(k): float(v) for k, v in c._asdict().items() if np.isscalar(v)}
-    if hasattr(c, "__dataclass_fields__"):
-        return {k: float(getattr(c, k)) for k in c.__dataclass_fields__
-                if np.isscalar(getattr(c, k))}
-    arr = np.atleast_1d(np.asarray(c, dtype=np.float64))
-    names = ["n_clamped_low", "n_clamped_high", "max_shortfall"]
-    return {(names[i] if i < len(names) else f"count_{i}"): float(v) for i, v in enumerate(arr)}
-
-
 def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
     for k, v in add.items():
         if k.startswith("max"):
@@ -220,50 +207,84 @@ def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
 
 
 @njit(cache=True, nogil=True)
-def _gather_foreground(rgb, dens, threshold, idx, rgb_fg, dens_fg):
-    n = 0
-    for i in range(dens.shape[0]):
-        if dens[i] >= threshold:
-            idx[n] = i
-            rgb_fg[n, 0] = rgb[i, 0]
-            rgb_fg[n, 1] = rgb[i, 1]
-            rgb_fg[n, 2] = rgb[i, 2]
-            dens_fg[n] = dens[i]
-            n += 1
-    return n
+def _layer_kernel(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear, log_knots,
+                  method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
+    """One layer: background test -> lookup + alignment -> halftone -> label, per voxel.
 
-
-@njit(cache=True, nogil=True)
-def _scatter_conc(idx, n, conc_fg, conc):
-    for k in range(n):
-        i = idx[k]
-        for m in range(6):
-            conc[i, m] = conc_fg[k, m]
+    ``rgb`` (ny*nx, 3), ``dens`` (ny*nx,) -> ``labels`` (ny, nx). The concentrations are
+    rounded to float32 before halftoning, so the labels equal ``lookup_and_align_into``
+    followed by ``Halftoner.layer_into``. A voxel with the same colour and density as the one
+    before it reuses its concentrations (and its clamp report).
+    """
+    ny, nx = labels.shape
+    mz, my, mx = mask.shape
+    mzz = (z + oz) % mz
+    xs = mask_columns(0, nx, ox, mx)
+    f = np.empty(LANES, np.float32)
+    c = np.empty(6)
+    c32 = np.empty(6, np.float32)
+    pr = np.float32(np.nan)
+    pg = pr
+    pb = pr
+    pd = pr
+    d_low = 0.0
+    d_high = 0.0
+    for j in range(ny):
+        myy = (j + oy) % my
+        for i in range(nx):
+            p = j * nx + i
+            d = dens[p]
+            if not d >= threshold:  # NaN too
+                labels[j, i] = bg_label
+                counts[bg_label] += 1
+                sums[bg_label] += 1.0
+                continue
+            r = rgb[p, 0]
+            g = rgb[p, 1]
+            b = rgb[p, 2]
+            if r == pr and g == pg and b == pb and d == pd:
+                stats[0] += d_low
+                stats[1] += d_high
+            else:
+                lo0 = stats[0]
+                hi0 = stats[1]
+                align_voxel(flat, n, r, g, b, np.float64(d), rho_k, sigma_clear, log_knots, f, c,
+                            stats)
+                d_low = stats[0] - lo0
+                d_high = stats[1] - hi0
+                for m in range(6):
+                    c32[m] = c[m]
+                pr = r
+                pg = g
+                pb = b
+                pd = d
+            for m in range(6):
+                sums[m] += c32[m]
+            t = threshold_at(method, mask, mzz, myy, xs[i], seed, i, j, z)
+            lab = pick_label(c32, t, order, bg_label)
+            labels[j, i] = lab
+            counts[lab] += 1
 
 
 def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
-                     conc: np.ndarray, labels: np.ndarray, counts: np.ndarray,
-                     sums: np.ndarray, clamped: dict[str, float]) -> None:
-    from .gamut import lookup_and_align_into
+                     labels: np.ndarray, counts: np.ndarray, sums: np.ndarray,
+                     stats: np.ndarray) -> None:
+    from .gamut.alignment import _LOG_KNOTS, kernel_table
 
     _, tables = ctx.resources()
     rgb = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32)
     d = np.ascontiguousarray(dens.reshape(-1), dtype=np.float32)
     # Background voxels skip the lookup: faster, and they are not "clamped" (they become
     # background by choice, not for want of a reachable density).
-    n = d.size
-    idx = np.empty(n, dtype=np.int64)
-    rgb_fg = np.empty((n, 3), dtype=np.float32)
-    d_fg = np.empty(n, dtype=np.float32)
-    n_fg = _gather_foreground(rgb, d, np.float32(ctx.halftoner.threshold), idx, rgb_fg, d_fg)
-    if n_fg == n:
-        _merge_clamped(clamped, _counts_dict(lookup_and_align_into(tables, rgb, d, conc)))
-    elif n_fg:
-        sub = np.empty((n_fg, 6), dtype=np.float32)
-        _merge_clamped(clamped, _counts_dict(
-            lookup_and_align_into(tables, rgb_fg[:n_fg], d_fg[:n_fg], sub)))
-        _scatter_conc(idx, n_fg, sub, conc)
-    ctx.halftoner.layer_into(conc, d, z, labels, counts, sums)
+    _layer_kernel(rgb, d, z, np.float32(ctx.halftoner.threshold), ctx.halftoner.bg_label,
+                  kernel_table(tables), tables.packed.shape[0],
+                  tables.brightness_rho_k.astype(np.float64), float(tables.sigma_clear),
+                  _LOG_KNOTS, *ctx.halftoner.kernel_args(), labels, counts, sums, stats)
+
+
+def _clamp_report(stats: np.ndarray) -> dict[str, float]:
+    return {"n_clamped_low": float(stats[0]), "n_clamped_high": float(stats[1]),
+            "max_shortfall_low": float(stats[2]), "max_shortfall_high": float(stats[3])}
 
 
 def _oriented(ctx: JobContext, labels: np.ndarray) -> np.ndarray:
@@ -288,17 +309,16 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
     t0 = time.perf_counter()
     rgb, dens = source.sample_slab(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale)
     t1 = time.perf_counter()
-    conc = np.zeros((ny * nx, 6), dtype=np.float32)
     labels = np.empty((ny, nx), dtype=np.uint8)
     counts = np.zeros(7, dtype=np.int64)
     sums = np.zeros(7, dtype=np.float64)
-    clamped: dict[str, float] = {}
+    stats = np.zeros(4)
     t_lab = t_png = t_io = 0.0
     for k in range(z1 - z0):
         if _cancelled(slices_dir, cancel):
             raise JobCancelled()
         ta = time.perf_counter()
-        _labels_of_layer(ctx, rgb[k], dens[k], z0 + k, conc, labels, counts, sums, clamped)
+        _labels_of_layer(ctx, rgb[k], dens[k], z0 + k, labels, counts, sums, stats)
         tb = time.perf_counter()
         png = encode_labels_png(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
         tc = time.perf_counter()
@@ -311,8 +331,8 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
         t_png += tc - tb
         t_io += td - tc
     return {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
-            "clamped": clamped, "seconds": {"sample": t1 - t0, "lookup_halftone": t_lab,
-                                            "png": t_png, "write": t_io}}
+            "clamped": _clamp_report(stats),
+            "seconds": {"sample": t1 - t0, "lookup_halftone": t_lab, "png": t_png, "write": t_io}}
 
 
 def halftone_layer(settings: ConvertSettings, layer: int,
@@ -328,10 +348,9 @@ def halftone_layer(settings: ConvertSettings, layer: int,
         raise DreamPrintError(f"layer {layer} is outside the job's 0..{nz - 1}")
     rgb, dens = source.sample_slab(ctx.grid, layer, layer + 1,
                                    density_scale=ctx.settings.density_scale)
-    conc = np.zeros((ny * nx, 6), dtype=np.float32)
     labels = np.empty((ny, nx), dtype=np.uint8)
-    _labels_of_layer(ctx, rgb[0], dens[0], layer, conc, labels, np.zeros(7, np.int64),
-                     np.zeros(7), {})
+    _labels_of_layer(ctx, rgb[0], dens[0], layer, labels, np.zeros(7, np.int64), np.zeros(7),
+                     np.zeros(4))
     return labels
 
 

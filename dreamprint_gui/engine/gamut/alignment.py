@@ -12,6 +12,9 @@ Defines
   curves (sigma at Clear dilutions rho = 1 .. 1/32, log-log piecewise linear in rho; sigma with
   10 % grey, linear in the grey fraction). ``benchmarks/bench_gamut.py`` prints its speed and its
   sigma error against :func:`align_density`.
+- :func:`align_voxel`: that kernel's per-voxel body (numba, inlined), which the print job's
+  per-layer kernel calls directly; :func:`kernel_table`: the table it reads (the packed fields
+  padded to :data:`LANES` float32 per node, interpolated in float32 as whole vectors).
 - :func:`predicted_appearance`: what a voxel will look like after lookup + alignment (GUI).
 
 Lowering (eq. 12): ``C = rho C* + (1 - rho) Cl``. With an ideal Clear (K = S = 0) the mixture's
@@ -26,6 +29,7 @@ than C* (bright colours: X is mostly white, whose sigma is low), are reported as
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numba as nb
@@ -46,11 +50,10 @@ from .tables import (
     ColourTables,
     lookup,
     mixture_sigma,
-    trilinear_fields,
 )
 
 __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
-           "predicted_appearance"]
+           "predicted_appearance", "align_voxel", "kernel_table", "LANES"]
 
 _I_K = INKS.index("K")
 _I_W = INKS.index("W")
@@ -197,91 +200,159 @@ def align_density(tables: ColourTables, rgb: ArrayLike, conc5: ArrayLike,
 
 
 _LOG_KNOTS = np.log(np.asarray(CLEAR_KNOTS))
+LANES = 16  # fields per node in the kernel's table, padded so a node is one 64-byte line
+_PADDED: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+_PADDED_LOCK = threading.Lock()
+
+
+def kernel_table(tables: ColourTables) -> np.ndarray:
+    """The tables' ``packed`` fields padded to :data:`LANES` float32 per node, flattened.
+
+    Built once per table (memoised on the identity of ``packed``). The padding lets the
+    compiled trilinear interpolation load each node as whole vectors.
+    """
+    key = id(tables.packed)
+    with _PADDED_LOCK:  # concurrent slab workers build it once
+        hit = _PADDED.get(key)
+        if hit is not None and hit[0] is tables.packed:
+            return hit[1]
+        n = tables.packed.shape[0]
+        flat = np.empty((n, n, n, LANES), np.float32)
+        flat[..., :N_FIELDS] = tables.packed
+        flat[..., N_FIELDS:] = 0.0
+        flat = flat.reshape(-1)
+        if len(_PADDED) >= 4:
+            _PADDED.clear()
+        _PADDED[key] = (tables.packed, flat)
+        return flat
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _trilinear16(flat, n, r, g, b, f):
+    """Trilinear interpolation of a node's 16 float32 lanes at sRGB (r, g, b) in [0, 1].
+
+    Offsets are unsigned: with signed indices numba guards each access against negative
+    (wrap-around) indexing, which stops LLVM from loading a node's lanes as one vector.
+    """
+    m = n - 1
+    cx = r * np.float32(m)
+    cy = g * np.float32(m)
+    cz = b * np.float32(m)
+    i0 = min(int(cx), m - 1)
+    j0 = min(int(cy), m - 1)
+    k0 = min(int(cz), m - 1)
+    fx = cx - np.float32(i0)
+    fy = cy - np.float32(j0)
+    fz = cz - np.float32(k0)
+    one = np.float32(1.0)
+    gx = one - fx
+    gy = one - fy
+    gz = one - fz
+    w0 = gx * gy * gz
+    w1 = gx * gy * fz
+    w2 = gx * fy * gz
+    w3 = gx * fy * fz
+    w4 = fx * gy * gz
+    w5 = fx * gy * fz
+    w6 = fx * fy * gz
+    w7 = fx * fy * fz
+    sk = np.uint64(LANES)
+    sj = np.uint64(n * LANES)
+    si = np.uint64(n * n * LANES)
+    o0 = np.uint64(i0) * si + np.uint64(j0) * sj + np.uint64(k0) * sk
+    o1 = o0 + sk
+    o2 = o0 + sj
+    o3 = o2 + sk
+    o4 = o0 + si
+    o5 = o4 + sk
+    o6 = o4 + sj
+    o7 = o6 + sk
+    for qq in range(LANES):
+        q = np.uint64(qq)
+        f[qq] = (((((((w0 * flat[o0 + q] + w1 * flat[o1 + q]) + w2 * flat[o2 + q])
+                     + w3 * flat[o3 + q]) + w4 * flat[o4 + q]) + w5 * flat[o5 + q])
+                  + w6 * flat[o6 + q]) + w7 * flat[o7 + q])
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def align_voxel(flat, n, r, g, b, t, rho_k_table, sigma_clear, log_knots, f, out, stats):
+    """Lookup + alignment of one voxel into ``out`` (6,), INKS order; a pure function of
+    (r, g, b, t) and the tables. ``f`` is a (LANES,) float32 scratch buffer; ``stats`` (4,)
+    accumulates (clamped low, clamped high, worst low shortfall, worst high shortfall)."""
+    r = min(max(r, np.float32(0.0)), np.float32(1.0)) if r == r else np.float32(0.0)
+    g = min(max(g, np.float32(0.0)), np.float32(1.0)) if g == g else np.float32(0.0)
+    b = min(max(b, np.float32(0.0)), np.float32(1.0)) if b == b else np.float32(0.0)
+    _trilinear16(flat, n, r, g, b, f)
+    tot = 0.0
+    for i in range(N_COLOUR_INKS):
+        tot += max(np.float64(f[i]), 0.0)
+    inv = 1.0 / tot
+    if not (t >= 0.0):  # NaN or negative density: treat as empty
+        t = 0.0
+    s1 = np.float64(f[F_SIGMA])
+    if t <= s1:
+        # eq. 12: C = rho C* + (1 - rho) Cl
+        nk = log_knots.shape[0]
+        if t <= sigma_clear:
+            rho = 0.0
+            if t < sigma_clear:
+                stats[0] += 1.0
+                stats[2] = max(stats[2], sigma_clear - t)
+        else:
+            rho = -1.0
+            for k in range(nk - 1):
+                sb = np.float64(f[F_SIGMA + k + 1])
+                if t >= sb:
+                    sa = np.float64(f[F_SIGMA + k])
+                    if sa > sb:
+                        # log-log linear between the knots: rho = rho_b (rho_a / rho_b)^u
+                        u = math.log(t / sb) / math.log(sa / sb)
+                        rho = math.exp(log_knots[k + 1] + u * (log_knots[k] - log_knots[k + 1]))
+                    else:
+                        rho = math.exp(log_knots[k])
+                    break
+            if rho < 0.0:  # below the last knot: linear to pure Clear
+                sl = np.float64(f[F_SIGMA + nk - 1])
+                rl = math.exp(log_knots[nk - 1])
+                rho = rl * (t - sigma_clear) / max(sl - sigma_clear, 1e-30)
+            rho = min(max(rho, 0.0), 1.0)
+        for i in range(N_COLOUR_INKS):
+            out[i] = rho * (max(np.float64(f[i]), 0.0) * inv)
+        out[5] = 1.0 - rho
+    else:
+        # eq. 13: C = (1 - g) C* + g X, g <= 0.1, X of matching brightness (eq. 11)
+        sg = np.float64(f[F_GREY])
+        if sg <= s1:
+            gfrac = 0.0
+            stats[1] += 1.0
+            stats[3] = max(stats[3], t - s1)
+        else:
+            gfrac = GREY_MAX * (t - s1) / (sg - s1)
+            if gfrac > GREY_MAX:
+                gfrac = GREY_MAX
+                stats[1] += 1.0
+                stats[3] = max(stats[3], t - sg)
+        nb_table = rho_k_table.shape[0]
+        x = (np.float64(r) + np.float64(g) + np.float64(b)) / 3.0 * (nb_table - 1)
+        j = min(int(x), nb_table - 2)
+        u = x - j
+        rk = rho_k_table[j] * (1.0 - u) + rho_k_table[j + 1] * u
+        for i in range(N_COLOUR_INKS):
+            out[i] = (1.0 - gfrac) * (max(np.float64(f[i]), 0.0) * inv)
+        out[_I_K] += gfrac * rk
+        out[_I_W] += gfrac * (1.0 - rk)
+        out[5] = 0.0
 
 
 @nb.njit(cache=True, nogil=True)
-def _align_kernel(packed, rgb, target, rho_k_table, sigma_clear, log_knots, out, stats):
-    n = packed.shape[0]
-    nk = log_knots.shape[0]
-    f = np.empty(N_FIELDS)
-    nb_table = rho_k_table.shape[0]
-    n_low = 0
-    n_high = 0
-    worst_low = 0.0
-    worst_high = 0.0
+def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, log_knots, out, stats):
+    f = np.empty(LANES, np.float32)
+    c = np.empty(6)
     for v in range(rgb.shape[0]):
-        r = rgb[v, 0]
-        g = rgb[v, 1]
-        b = rgb[v, 2]
-        r = min(max(r, 0.0), 1.0) if r == r else 0.0
-        g = min(max(g, 0.0), 1.0) if g == g else 0.0
-        b = min(max(b, 0.0), 1.0) if b == b else 0.0
-        trilinear_fields(packed, n, r, g, b, N_FIELDS, f)
-        tot = 0.0
-        for i in range(N_COLOUR_INKS):
-            f[i] = max(f[i], 0.0)
-            tot += f[i]
-        for i in range(N_COLOUR_INKS):
-            f[i] /= tot
-        t = target[v]
-        if not (t >= 0.0):  # NaN or negative density: treat as empty
-            t = 0.0
-        s1 = f[F_SIGMA]
-        if t <= s1:
-            # eq. 12: C = rho C* + (1 - rho) Cl
-            if t <= sigma_clear:
-                rho = 0.0
-                if t < sigma_clear:
-                    n_low += 1
-                    worst_low = max(worst_low, sigma_clear - t)
-            else:
-                rho = -1.0
-                lt = math.log(t)
-                for k in range(nk - 1):
-                    sa = f[F_SIGMA + k]
-                    sb = f[F_SIGMA + k + 1]
-                    if t >= sb:
-                        if sa > sb:
-                            u = (lt - math.log(sb)) / (math.log(sa) - math.log(sb))
-                            rho = math.exp(log_knots[k + 1]
-                                           + u * (log_knots[k] - log_knots[k + 1]))
-                        else:
-                            rho = math.exp(log_knots[k])
-                        break
-                if rho < 0.0:  # below the last knot: linear to pure Clear
-                    sl = f[F_SIGMA + nk - 1]
-                    rl = math.exp(log_knots[nk - 1])
-                    rho = rl * (t - sigma_clear) / max(sl - sigma_clear, 1e-30)
-                rho = min(max(rho, 0.0), 1.0)
-            for i in range(N_COLOUR_INKS):
-                out[v, i] = rho * f[i]
-            out[v, 5] = 1.0 - rho
-        else:
-            # eq. 13: C = (1 - g) C* + g X, g <= 0.1, X of matching brightness (eq. 11)
-            sg = f[F_GREY]
-            if sg <= s1:
-                gfrac = 0.0
-                n_high += 1
-                worst_high = max(worst_high, t - s1)
-            else:
-                gfrac = GREY_MAX * (t - s1) / (sg - s1)
-                if gfrac > GREY_MAX:
-                    gfrac = GREY_MAX
-                    n_high += 1
-                    worst_high = max(worst_high, t - sg)
-            x = (r + g + b) / 3.0 * (nb_table - 1)
-            j = min(int(x), nb_table - 2)
-            u = x - j
-            rk = rho_k_table[j] * (1.0 - u) + rho_k_table[j + 1] * u
-            for i in range(N_COLOUR_INKS):
-                out[v, i] = (1.0 - gfrac) * f[i]
-            out[v, _I_K] += gfrac * rk
-            out[v, _I_W] += gfrac * (1.0 - rk)
-            out[v, 5] = 0.0
-    stats[0] = n_low
-    stats[1] = n_high
-    stats[2] = worst_low
-    stats[3] = worst_high
+        align_voxel(flat, n, rgb[v, 0], rgb[v, 1], rgb[v, 2], np.float64(target[v]),
+                    rho_k_table, sigma_clear, log_knots, f, c, stats)
+        for i in range(6):
+            out[v, i] = c[i]
 
 
 def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDArray,
@@ -290,17 +361,20 @@ def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDAr
 
     ``rgb`` (N, 3) and ``sigma_target`` (N,) float32 (any float accepted), encoded sRGB in
     [0, 1] and 1/mm; writes C, M, Y, K, W, Cl into ``out_conc6`` (N, 6). Runs on the calling
-    thread (call it from several threads on separate slabs to use several cores).
+    thread (call it from several threads on separate slabs to use several cores). Each voxel's
+    result is a pure function of its inputs (:func:`align_voxel`, also used by the print job's
+    fused per-layer kernel).
     """
-    rgb = np.ascontiguousarray(rgb)
+    rgb = np.ascontiguousarray(rgb, dtype=np.float32)
     target = np.ascontiguousarray(sigma_target).reshape(-1)
     if rgb.ndim != 2 or rgb.shape[1] != 3 or target.shape[0] != rgb.shape[0]:
         raise ValueError("rgb must be (N, 3) and sigma_target (N,)")
     if out_conc6.shape != (rgb.shape[0], len(INKS)):
         raise ValueError("out_conc6 must be (N, 6)")
     stats = np.zeros(4)
-    _align_kernel(tables.packed, rgb, target, tables.brightness_rho_k.astype(np.float64),
-                  float(tables.sigma_clear), _LOG_KNOTS, out_conc6, stats)
+    _align_kernel(kernel_table(tables), tables.packed.shape[0], rgb, target,
+                  tables.brightness_rho_k.astype(np.float64), float(tables.sigma_clear),
+                  _LOG_KNOTS, out_conc6, stats)
     return AlignCounts(int(stats[0]), int(stats[1]), float(stats[2]), float(stats[3]))
 
 

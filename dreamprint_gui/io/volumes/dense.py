@@ -13,7 +13,7 @@ from numba import njit
 
 from ...errors import DreamPrintError
 from .base import PrintGrid, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
-from .sampling import sample_dense
+from .sampling import sample_dense, sample_dense_density
 
 __all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_window",
            "bounds_list"]
@@ -53,11 +53,21 @@ class DenseVolume:
         hi = self.origin + (nxyz - 1 + self.pad) * self.spacing
         self.bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
 
+    def _indices(self, grid: PrintGrid, z0: int, z1: int) -> list[np.ndarray]:
+        return [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None)))
+                 - self.origin[a]) / self.spacing[a] for a in range(3)]
+
     def sample(self, grid: PrintGrid, z0: int, z1: int) -> np.ndarray:
         """Trilinear samples at the printer voxel centres of layers z0..z1-1: (Z, Y, X, C)."""
-        u = [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None)))
-              - self.origin[a]) / self.spacing[a] for a in range(3)]
+        u = self._indices(grid, z0, z1)
         return sample_dense(self.data, u[2], u[1], u[0], self.pad)
+
+    def sample_density(self, grid: PrintGrid, z0: int, z1: int, scale: float):
+        """(colour (Z, Y, X, 3) or None, density x ``scale`` (Z, Y, X)) of a density grid
+        (channel 0 density, channels 1-3 colour premultiplied by it): see
+        :func:`.sampling.sample_dense_density`."""
+        u = self._indices(grid, z0, z1)
+        return sample_dense_density(self.data, u[2], u[1], u[0], self.pad, scale)
 
 
 def colormap_lut(name: str | None, colour=None, n: int = 256) -> np.ndarray:
@@ -112,12 +122,14 @@ class DenseSource:
 
     ``volume.data`` channel 0 is density; channels 1-3 (if present) colour in
     ``colour_encoding``; with one channel, ``uniform_colour`` (sRGB-encoded) is used.
-    Colour is interpolated density-weighted (stored premultiplied), so a transparent voxel's
-    colour does not bleed into its neighbours.
+    Colour is interpolated density-weighted (stored premultiplied, in place, unless
+    ``premultiplied`` says it already is), so a transparent voxel's colour does not bleed into
+    its neighbours.
     """
 
     def __init__(self, name: str, fmt: str, volume: DenseVolume, colour_encoding: str = "srgb",
-                 uniform_colour=(1.0, 1.0, 1.0), grids_info: list[dict] | None = None):
+                 uniform_colour=(1.0, 1.0, 1.0), grids_info: list[dict] | None = None,
+                 premultiplied: bool = False):
         self.name = name
         self.format = fmt
         self.volume = volume
@@ -125,26 +137,17 @@ class DenseSource:
         self.uniform_colour = np.asarray(uniform_colour, np.float32)
         self.bounds = volume.bounds
         self._grids_info = grids_info or []
-        if volume.data.shape[3] == 4:
+        if volume.data.shape[3] == 4 and not premultiplied:
             d = volume.data
             d[..., 1:4] *= d[..., :1]       # premultiply once, in the source's own storage
 
     def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
         check_slab(grid, z0, z1)
-        s = self.volume.sample(grid, z0, z1)
-        dens = s[..., 0]
-        if s.shape[3] == 4:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                rgb = np.where(dens[..., None] > 0, s[..., 1:4] / dens[..., None], 0.0)
-            rgb = rgb.astype(np.float32)
-            if self.colour_encoding == "linear":
-                rgb = linear_to_srgb(rgb)
-            else:
-                np.clip(rgb, 0.0, 1.0, out=rgb)
-        else:
-            rgb = uniform_rgb(dens.shape, self.uniform_colour)
-        sigma = (dens * np.float32(density_scale / grid.mm_per_unit)).astype(np.float32)
-        np.maximum(sigma, 0.0, out=sigma)
+        rgb, sigma = self.volume.sample_density(grid, z0, z1, density_scale / grid.mm_per_unit)
+        if rgb is None:
+            rgb = uniform_rgb(sigma.shape, self.uniform_colour)
+        elif self.colour_encoding == "linear":
+            rgb = linear_to_srgb(rgb)
         return rgb, sigma
 
     def info(self) -> dict:

@@ -1,13 +1,17 @@
 """Compiled samplers that fill a slab of printer voxels from a source's own storage.
 
 Defines :func:`axis_map` (per-axis trilinear indices/weights), :func:`sample_dense`
-(trilinear on a regular grid), :class:`SparseBlocks` / :func:`sample_sparse` (trilinear on
+(trilinear on a regular grid), :func:`sample_dense_density` (the same, straight to density and
+un-premultiplied colour), :class:`SparseBlocks` / :func:`sample_sparse` (trilinear on
 8^3 leaf blocks, the OpenVDB layout, with a two-level lookup table) and
 :func:`rasterise_gaussians` (density-weighted Gaussian kernels with 3-sigma support).
 
 Trilinear interpolation is separable for an axis-aligned grid, so each axis is mapped once per
-slab (numpy, O(n)) and only the 3D loop is compiled.  Kernels are ``nogil`` so Dask threads
-sample different slabs concurrently; they allocate only their output.
+slab (numpy, O(n)) and only the 3D loop is compiled.  The dense kernel also evaluates it
+separably: per output row it interpolates the two bracketing source rows in z (kept while
+consecutive output rows share them), then in y, leaving one lerp in x per output voxel, and it
+skips rows whose source rows hold no density.  Kernels are ``nogil`` so Dask threads sample
+different slabs concurrently; they allocate only their output and row-sized buffers.
 """
 
 from __future__ import annotations
@@ -19,7 +23,8 @@ from numba import njit
 
 from ...errors import DreamPrintError
 
-__all__ = ["axis_map", "sample_dense", "SparseBlocks", "sample_sparse", "rasterise_gaussians"]
+__all__ = ["axis_map", "sample_dense", "sample_dense_density", "SparseBlocks", "sample_sparse",
+           "rasterise_gaussians"]
 
 
 def axis_map(u: np.ndarray, n: int, pad: float):
@@ -41,34 +46,95 @@ def axis_map(u: np.ndarray, n: int, pad: float):
 
 
 @njit(cache=True, nogil=True)
-def _dense_kernel(vol, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, out):
+def _z_row(vol, a0, a1, gz, fz, b, lo, zr):
+    """Source row ``b`` (x from ``lo``) interpolated between layers a0 and a1; True if any
+    channel-0 value is non-zero."""
     nc = vol.shape[3]
+    nonzero = False
+    for s in range(zr.shape[0]):
+        for c in range(nc):
+            zr[s, c] = vol[a0, b, lo + s, c] * gz + vol[a1, b, lo + s, c] * fz
+        if zr[s, 0] != 0.0:
+            nonzero = True
+    return nonzero
+
+
+@njit(cache=True, nogil=True)
+def _dense_rows(vol, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, out, rgb, sigma,
+                mode, scale):
+    nc = vol.shape[3]
+    lo = -1
+    hi = -1
+    for i in range(ix0.shape[0]):
+        if vx[i]:
+            if lo < 0 or ix0[i] < lo:
+                lo = ix0[i]
+            hi = max(hi, ix1[i])
+    if lo < 0:
+        return
+    w = hi - lo + 1
+    zr0 = np.empty((w, nc), np.float32)
+    zr1 = np.empty((w, nc), np.float32)
+    row = np.empty((w, nc), np.float32)
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
     for k in range(iz0.shape[0]):
         if not vz[k]:
             continue
         a0 = iz0[k]
         a1 = iz1[k]
         fz = wz[k]
+        gz = one - fz
+        cb0 = -1
+        cb1 = -1
+        nz0 = False
+        nz1 = False
         for j in range(iy0.shape[0]):
             if not vy[j]:
                 continue
             b0 = iy0[j]
             b1 = iy1[j]
+            # the z-interpolated source rows are shared by consecutive output rows
+            if b0 != cb0:
+                if b0 == cb1:
+                    zr0, zr1 = zr1, zr0
+                    nz0 = nz1
+                    cb1 = -1
+                else:
+                    nz0 = _z_row(vol, a0, a1, gz, fz, b0, lo, zr0)
+                cb0 = b0
+            if b1 != cb1:
+                nz1 = _z_row(vol, a0, a1, gz, fz, b1, lo, zr1)
+                cb1 = b1
+            if mode != 0 and not (nz0 or nz1):
+                continue  # no density anywhere along this row: the outputs stay zero
             fy = wy[j]
+            gy = one - fy
+            for s in range(w):
+                for c in range(nc):
+                    row[s, c] = zr0[s, c] * gy + zr1[s, c] * fy
             for i in range(ix0.shape[0]):
                 if not vx[i]:
                     continue
-                c0 = ix0[i]
-                c1 = ix1[i]
+                c0 = ix0[i] - lo
+                c1 = ix1[i] - lo
                 fx = wx[i]
-                for c in range(nc):
-                    v00 = vol[a0, b0, c0, c] * (1 - fx) + vol[a0, b0, c1, c] * fx
-                    v01 = vol[a0, b1, c0, c] * (1 - fx) + vol[a0, b1, c1, c] * fx
-                    v10 = vol[a1, b0, c0, c] * (1 - fx) + vol[a1, b0, c1, c] * fx
-                    v11 = vol[a1, b1, c0, c] * (1 - fx) + vol[a1, b1, c1, c] * fx
-                    v0 = v00 * (1 - fy) + v01 * fy
-                    v1 = v10 * (1 - fy) + v11 * fy
-                    out[k, j, i, c] = v0 * (1 - fz) + v1 * fz
+                gx = one - fx
+                if mode == 0:
+                    for c in range(nc):
+                        out[k, j, i, c] = row[c0, c] * gx + row[c1, c] * fx
+                    continue
+                d = row[c0, 0] * gx + row[c1, 0] * fx
+                sigma[k, j, i] = max(d * scale, zero)
+                if mode == 2 and d > zero:
+                    for c in range(3):
+                        v = (row[c0, c + 1] * gx + row[c1, c + 1] * fx) / d
+                        rgb[k, j, i, c] = min(max(v, zero), one)
+
+
+def _dense_maps(vol, uz, uy, ux, pad):
+    nz, ny, nx, _ = vol.shape
+    return (*axis_map(uz, nz, pad), *axis_map(uy, ny, pad), *axis_map(ux, nx, pad))
 
 
 def sample_dense(vol: np.ndarray, uz: np.ndarray, uy: np.ndarray, ux: np.ndarray,
@@ -77,13 +143,37 @@ def sample_dense(vol: np.ndarray, uz: np.ndarray, uy: np.ndarray, ux: np.ndarray
 
     Returns float32 (len(uz), len(uy), len(ux), C); 0 outside the valid range (see axis_map).
     """
-    nz, ny, nx, nc = vol.shape
-    out = np.zeros((len(uz), len(uy), len(ux), nc), np.float32)
-    mz = axis_map(uz, nz, pad)
-    my = axis_map(uy, ny, pad)
-    mx = axis_map(ux, nx, pad)
-    _dense_kernel(vol, *mz, *my, *mx, out)
+    out = np.zeros((len(uz), len(uy), len(ux), vol.shape[3]), np.float32)
+    _dense_rows(vol, *_dense_maps(vol, uz, uy, ux, pad), out, _NO_RGB, _NO_SIGMA, 0,
+                np.float32(1.0))
     return out
+
+
+def sample_dense_density(vol: np.ndarray, uz: np.ndarray, uy: np.ndarray, ux: np.ndarray,
+                         pad: float, scale: float) -> tuple[np.ndarray | None, np.ndarray]:
+    """Density and colour of a (nz, ny, nx, 1 or 4) grid whose channel 0 is density and
+    channels 1-3 (if it has 4) colour premultiplied by density, in one compiled pass.
+
+    Returns (colour (Z, Y, X, 3) = interpolated premultiplied colour / density clipped to [0, 1],
+    0 where the density is not positive; None unless the grid has 4 channels) and ``max(density *
+    scale, 0)`` (Z, Y, X), both float32.
+    """
+    shape = (len(uz), len(uy), len(ux))
+    sigma = np.zeros(shape, np.float32)
+    if vol.shape[3] == 4:
+        rgb = np.zeros(shape + (3,), np.float32)
+        mode = 2
+    else:
+        rgb = None
+        mode = 1
+    _dense_rows(vol, *_dense_maps(vol, uz, uy, ux, pad), _NO_OUT,
+                _NO_RGB if rgb is None else rgb, sigma, mode, np.float32(scale))
+    return rgb, sigma
+
+
+_NO_OUT = np.zeros((1, 1, 1, 1), np.float32)
+_NO_RGB = np.zeros((1, 1, 1, 3), np.float32)
+_NO_SIGMA = np.zeros((1, 1, 1), np.float32)
 
 
 # ---------------------------------------------------------------------------- sparse leaf blocks
