@@ -6,6 +6,10 @@ and the sRGB gamut with the printable gamut as a wireframe inside it. Right, a c
 (any colour -> the table's C, M, Y, K, W concentrations, the reproduced colour and the dE2000;
 both colours are marked in the 3D view) and the paper's Fig. 7-style hexagon chart (target vs
 reproduced per cell), drawn by the engine's ``gamut.charts.hexagon_chart`` on a worker thread.
+
+The page can be put on hold (:meth:`GamutPage.set_hold`): the main window holds it while the
+preview starts up, so the two pages do not compete for the cores; and it draws into its 3D
+view (created on first use) only while it is visible.
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ from PySide6.QtWidgets import (
 
 from ..engine.profile import COLOUR_INKS
 from .gamut_data import pick_colour, printable_gamut_mesh, srgb_gamut_mesh
-from .volume_view import make_plotter
+from .volume_view import ViewHost
 from .workers import Task, run_task
 
 __all__ = ["GamutPage"]
@@ -60,9 +64,13 @@ class GamutPage(QWidget):
         self.meshes = None
         self.last_pick: dict | None = None
         self._task: Task | None = None
+        self._chart_task: Task | None = None
+        self._hold = False
+        self._held: set[str] = set()  # work waiting for the hold to end: "meshes", "tables"
+        self._draw_pending = False
+        self._drawn = False
 
-        self.plotter = make_plotter(self, (1, 2))
-        self.plotter.setMinimumSize(400, 300)
+        self.view = ViewHost(self, (1, 2), "the printable gamut appears here once computed")
 
         # colour picker
         self.pick_button = QPushButton("Pick a colour...")
@@ -132,7 +140,7 @@ class GamutPage(QWidget):
         right.setMinimumWidth(300)
 
         split = QSplitter()
-        split.addWidget(self.plotter)
+        split.addWidget(self.view)
         split.addWidget(right)
         split.setStretchFactor(0, 3)
         split.setStretchFactor(1, 1)
@@ -141,11 +149,35 @@ class GamutPage(QWidget):
         lay.addWidget(split)
         self._spins_changed()
 
+    @property
+    def plotter(self):
+        """The two linked 3D views (created on first use)."""
+        return self.view.plotter
+
+    def set_hold(self, hold: bool) -> None:
+        """While held, the page only records its inputs; the work starts when released."""
+        self._hold = hold
+        if hold:
+            return
+        held, self._held = self._held, set()
+        if "meshes" in held and self.profile is not None:
+            self.set_profile(self.profile)
+        if "tables" in held and self.tables is not None:
+            self.set_tables(self.tables)
+
     # inputs -----------------------------------------------------------------------------------
     def set_profile(self, profile) -> None:
         self.profile = profile
         self.tables = None
+        self.meshes = None
+        self._held.discard("tables")
+        if self._hold:
+            self._held.add("meshes")
+            self.status.setText("the printable gamut is computed once the preview is ready")
+            self.view.set_message("the printable gamut is computed once the preview is ready")
+            return
         self.status.setText("computing the printable gamut ...")
+        self.view.set_message("computing the printable gamut ...")
 
         def job(report, cancel):
             return printable_gamut_mesh(profile), srgb_gamut_mesh(profile)
@@ -160,6 +192,9 @@ class GamutPage(QWidget):
 
     def set_tables(self, tables) -> None:
         self.tables = tables
+        if self._hold:
+            self._held.add("tables")
+            return
         self._spins_changed()
         self._draw_chart()
 
@@ -168,31 +203,50 @@ class GamutPage(QWidget):
         if profile is not self.profile:
             return
         self.meshes = meshes
+        self._drawn = False
+        if not self.isVisible():  # drawn when the page is first shown
+            self._draw_pending = True
+            self.status.setText("printable gamut computed")
+            return
+        self._draw()
+
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().showEvent(event)
+        if self._draw_pending and self.meshes is not None:
+            self._draw()
+
+    def _draw(self) -> None:
+        self._draw_pending = False
+        profile, meshes = self.profile, self.meshes
         printable, srgb = (m.to_pyvista() for m in meshes)
         pl = self.plotter
         pl.subplot(0, 0)
-        pl.add_mesh(printable, scalars="rgb", rgb=True, name="printable", smooth_shading=True)
-        pl.add_text(f"Printable gamut ({profile.name})", font_size=10, name="t0")
+        pl.add_mesh(printable, scalars="rgb", rgb=True, name="printable", smooth_shading=True,
+                    render=False)
+        pl.add_text(f"Printable gamut ({profile.name})", font_size=10, name="t0", render=False)
         pl.show_axes()
         pl.subplot(0, 1)
-        pl.add_mesh(srgb, scalars="rgb", rgb=True, name="srgb", opacity=0.55)
+        pl.add_mesh(srgb, scalars="rgb", rgb=True, name="srgb", opacity=0.55,
+                    render=False)
         pl.add_mesh(printable, color="white", style="wireframe", name="printable_wire",
-                    line_width=1, opacity=0.6)
-        pl.add_text("sRGB gamut, printable as wireframe", font_size=10, name="t1")
+                    line_width=1, opacity=0.6, render=False)
+        pl.add_text("sRGB gamut, printable as wireframe", font_size=10, name="t1",
+                    render=False)
         for i in (0, 1):
             pl.subplot(0, i)
             pl.add_text("a* right, b* back, L* up", position="lower_left", font_size=7,
-                        name=f"axes{i}")
+                        name=f"axes{i}", render=False)
         pl.subplot(0, 0)
-        pl.view_isometric()
-        pl.reset_camera()
+        pl.view_isometric(render=False)
+        pl.renderer.reset_camera(render=False)  # the plotter-level one always renders
+        self._drawn = True
         self._mark_pick()
         pl.render()
         self.status.setText("CIELAB (D65); grey = achromatic axis at a* = b* = 0")
         self.rendered.emit()
 
     def _mark_pick(self) -> None:
-        if self.last_pick is None or self.meshes is None:
+        if self.last_pick is None or not self._drawn:
             return
         import pyvista as pv
 
@@ -202,12 +256,13 @@ class GamutPage(QWidget):
         for i in (0, 1):
             pl.subplot(0, i)
             pl.add_mesh(pv.Sphere(radius=3.0, center=(t[1], t[2], t[0])),
-                        color=self.last_pick["rgb"], name=f"target{i}", reset_camera=False)
+                        color=self.last_pick["rgb"], name=f"target{i}", reset_camera=False,
+                        render=False)
             pl.add_mesh(pv.Cube(center=(r[1], r[2], r[0]), x_length=5, y_length=5, z_length=5),
                         color=[max(0.0, min(1.0, c)) for c in self.last_pick["sRGB"]],
-                        name=f"repro{i}", reset_camera=False)
+                        name=f"repro{i}", reset_camera=False, render=False)
             pl.add_mesh(pv.Line((t[1], t[2], t[0]), (r[1], r[2], r[0])), color="white",
-                        name=f"link{i}", reset_camera=False, line_width=2)
+                        name=f"link{i}", reset_camera=False, line_width=2, render=False)
         pl.render()
 
     # colour picker ----------------------------------------------------------------------------
@@ -293,6 +348,7 @@ class GamutPage(QWidget):
         self._update_chart_pixmap()
 
     def shutdown(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-        self.plotter.close()
+        for t in (self._task, self._chart_task):
+            if t is not None:
+                t.cancel()
+        self.view.close_view()

@@ -3,8 +3,12 @@
 Defines :class:`MainWindow` and :func:`classify_path` (what a dropped or opened file is: an ink
 profile, a calibration set, or a volume source). The window holds the active profile, its colour
 tables (``gamut.get_tables``, built on a worker thread and cached on disk by the engine) and the
-active source (``io.volumes.open_source``), and hands them to the pages. It starts on the
-built-in default profile and the demo volume.
+active source (``io.volumes.open_source``, also on a worker thread: a large file takes time to
+open), and hands them to the pages. It starts on the built-in default profile and the demo
+volume. Nothing heavy runs on the GUI thread at start: the window shows first, the 3D stack is
+imported on a worker meanwhile (:func:`.volume_view.import_3d`), and the gamut page is held
+until the preview has rendered (or the operator opens that page) so that the two do not compete
+for the cores.
 """
 
 from __future__ import annotations
@@ -56,6 +60,7 @@ class MainWindow(QMainWindow):
     sourceChanged = Signal(object)
     tablesReady = Signal(object)
     ready = Signal()  # the preview has rendered the current source with the current profile
+    openFailed = Signal(str, str)  # path, problem: a volume could not be opened
 
     def __init__(self, settings: AppSettings | None = None, table_size: int | None = None,
                  with_gamut: bool = True) -> None:
@@ -70,6 +75,9 @@ class MainWindow(QMainWindow):
         self.printer = None
         self._tables_task: Task | None = None
         self._tables_for: str | None = None
+        self._source_task: Task | None = None
+        self._source_request: str | None = None
+        self._warm_task: Task | None = None
         self.interactive = True  # False: no modal message boxes (screenshot runs, tests)
         self.last_error: str | None = None
 
@@ -92,9 +100,12 @@ class MainWindow(QMainWindow):
             from .gamut_view import GamutPage
 
             self.gamut = GamutPage(self)
+            self.gamut.set_hold(True)  # until the preview is ready or the page is opened
             self.tabs.addTab(self.gamut, "Gamut")
         self.setCentralWidget(self.tabs)
         self.preview.rendered.connect(self.ready)
+        self.ready.connect(self._release_gamut)
+        self.tabs.currentChanged.connect(self._tab_changed)
         self.preview.failed.connect(lambda m: self.statusBar().showMessage(m))
         self.preview.set_params(
             height_mm=self.settings.get("preview/height_mm", 40.0, float),
@@ -121,6 +132,22 @@ class MainWindow(QMainWindow):
         idx = self.settings.get("window/tab", 0, int)
         if 0 <= idx < self.tabs.count():
             self.tabs.setCurrentIndex(idx)
+
+    def _tab_changed(self, index: int) -> None:
+        if self.gamut is not None and self.tabs.widget(index) is self.gamut:
+            self._release_gamut()
+
+    def _release_gamut(self) -> None:
+        if self.gamut is not None:
+            self.gamut.set_hold(False)
+
+    def warm_up(self) -> None:
+        """Import the 3D stack on a worker while the window is already showing."""
+        if self._warm_task is not None:
+            return
+        from .volume_view import import_3d
+
+        self._warm_task = run_task(Task(lambda report, cancel: import_3d(), "import-3d"))
 
     # menus ------------------------------------------------------------------------------------
     def _build_menus(self) -> None:
@@ -200,7 +227,12 @@ class MainWindow(QMainWindow):
             self.open_path(path)
 
     def open_path(self, path: str | os.PathLike) -> bool:
-        """Open a volume, an ink profile or a calibration set; problems go to a message box."""
+        """Open a volume, an ink profile or a calibration set; problems go to a message box.
+
+        A profile opens at once (False if it cannot be read). A volume opens on a worker
+        thread: True means the opening has started; a problem is reported when it is found
+        (message box, status bar and :attr:`openFailed`).
+        """
         path = str(path)
         kind = classify_path(path)
         try:
@@ -214,14 +246,16 @@ class MainWindow(QMainWindow):
                 return True
             else:
                 self.set_source(path)
-                if path != "demo":
-                    self.settings.set_last_folder("volume", path)
+                return True
         except DreamPrintError as exc:
             self._file_problem(str(exc))
             return False
+        self._remember(path)
+        return True
+
+    def _remember(self, path: str) -> None:
         self.settings.add_recent(path)
         self._fill_recent()
-        return True
 
     def _file_problem(self, message: str) -> None:
         self.last_error = message
@@ -229,16 +263,50 @@ class MainWindow(QMainWindow):
         if self.isVisible() and self.interactive:
             QMessageBox.warning(self, "DreamPrint: cannot open", message)
 
-    def set_source(self, path: str) -> None:
-        from ..io.volumes import open_source
+    def set_source(self, path: str) -> Task:
+        """Open the volume ``path`` on a worker thread; it becomes the source once open."""
+        name = "demo volume" if path == "demo" else Path(path).name
+        self._source_request = path
+        if self._source_task is not None and self._source_task.outcome is None:
+            self._source_task.cancel()  # its result is ignored (see _source_opened)
+        self.statusBar().showMessage(f"Opening {name} ...")
+        if self.source is None:
+            self.preview.show_waiting(f"opening {name} ...")
 
-        source = open_source(path)
+        def job(report, cancel):
+            from ..io.volumes import open_source
+
+            return open_source(path)
+
+        task = Task(job, "open-source")
+        task.succeeded.connect(lambda src, path=path: self._source_opened(path, src))
+        task.failed.connect(lambda msg, _tb, path=path: self._source_failed(path, msg))
+        self._source_task = run_task(task)
+        return task
+
+    def _source_opened(self, path: str, source) -> None:
+        if path != self._source_request:
+            return  # another file was asked for since
         self.source, self.source_path = source, path
         name = "demo volume" if path == "demo" else Path(path).name
         self.source_label.setText(f"Source: {name}")
         self.setWindowTitle(f"DreamPrint - {name}")
+        if self.statusBar().currentMessage().startswith("Opening "):
+            self.statusBar().clearMessage()
+        if path != "demo":
+            self.settings.set_last_folder("volume", path)
+        self._remember(path)
         self.sourceChanged.emit(source)
         self.preview.set_inputs(source_path=path, printer=self._ensure_printer())
+
+    def _source_failed(self, path: str, message: str) -> None:
+        if path != self._source_request:
+            return
+        self._source_request = self.source_path  # the previous source stays
+        if self.source is None:
+            self.preview.show_waiting(f"<span style='color:#e55'>{message}</span>")
+        self._file_problem(message)
+        self.openFailed.emit(path, message)
 
     def _ensure_printer(self):
         if self.printer is None:
@@ -302,11 +370,17 @@ class MainWindow(QMainWindow):
         task.failed.connect(self._tables_failed)
         self.progress.setVisible(True)
         self.progress.setValue(0)
-        self.statusBar().showMessage("Building the colour tables of the profile ...")
+        self.statusBar().showMessage("Loading the colour tables of the profile ...")
+        self.preview.show_waiting("loading the colour tables of the profile ...")
         self._tables_task = run_task(task)
 
     def _tables_progress(self, fraction: float) -> None:
         self.progress.setValue(int(100 * fraction))
+        if fraction < 1.0:  # reported during a build only (a cached table loads in one go)
+            text = (f"building the colour tables of the profile: {100 * fraction:.0f}% "
+                    "(first start with this profile only; they are cached afterwards)")
+            self.statusBar().showMessage(text)
+            self.preview.show_waiting(text)
 
     def _tables_done(self, tables, fingerprint: str) -> None:
         if fingerprint != self._tables_for:
@@ -383,8 +457,9 @@ class MainWindow(QMainWindow):
         self.settings.sync()
         from .workers import wait_all
 
-        if self._tables_task is not None:
-            self._tables_task.cancel()
+        for task in (self._tables_task, self._source_task):
+            if task is not None:
+                task.cancel()
         self.preview.shutdown()
         if self.gamut is not None:
             self.gamut.shutdown()

@@ -6,7 +6,9 @@ lookup and density alignment (``gamut.predicted_appearance``), so washed-out or 
 regions show before printing. Controls: physical height, density scale, background (clear or
 empty), and a slice scrubber showing the halftoned material labels of any printer layer
 (``pipeline.halftone_layer``) in the profile's ink colours. Sampling, prediction and
-halftoning run on worker threads (:mod:`.workers`); the page only draws.
+halftoning run on worker threads (:mod:`.workers`); the page only draws. Its 3D view is created
+when there is first something to draw (:class:`.volume_view.ViewHost`); until then it says what
+is being prepared.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from PySide6.QtWidgets import (
 )
 
 from .preview_data import PreviewData, compute_preview, job_context
-from .volume_view import add_rgba_volume, make_plotter
+from .volume_view import ViewHost, add_rgba_volume
 from .workers import Task, run_task
 
 __all__ = ["PreviewPage"]
@@ -66,8 +68,7 @@ class PreviewPage(QWidget):
         self._slice_pending = False
         self._await_slice = False
 
-        self.plotter = make_plotter(self, (1, 2))
-        self.plotter.setMinimumSize(400, 300)
+        self.view = ViewHost(self, (1, 2), "preparing the preview ...")
 
         self.height_mm = QDoubleSpinBox(suffix=" mm", decimals=1, minimum=1.0, maximum=500.0,
                                         value=40.0, singleStep=5.0)
@@ -120,7 +121,7 @@ class PreviewPage(QWidget):
         side.setMinimumWidth(260)
 
         split = QSplitter()
-        split.addWidget(self.plotter)
+        split.addWidget(self.view)
         split.addWidget(side)
         split.setStretchFactor(0, 4)
         split.setStretchFactor(1, 1)
@@ -135,7 +136,18 @@ class PreviewPage(QWidget):
         for w in (self.height_mm, self.density_scale):
             w.valueChanged.connect(self._params_changed)
         self.background.currentIndexChanged.connect(self._params_changed)
-        self.slice_slider.valueChanged.connect(self._slice_moved)
+        self.slice_slider.valueChanged.connect(lambda _v: self._slice_moved())
+
+    @property
+    def plotter(self):
+        """The two linked 3D views (created on first use)."""
+        return self.view.plotter
+
+    def show_waiting(self, text: str) -> None:
+        """Say what the preview is waiting for (in the view until it has drawn, and below)."""
+        self.status.setText(text)
+        if self.data is None:
+            self.view.set_message(text)
 
     # inputs -----------------------------------------------------------------------------------
     def params(self) -> dict:
@@ -177,7 +189,7 @@ class PreviewPage(QWidget):
         if self.ready_to_compute():
             self.recompute()
         elif self.source_path is not None and self.tables is None:
-            self.status.setText("building the colour tables of the profile ...")
+            self.show_waiting("waiting for the colour tables of the profile ...")
 
     def ready_to_compute(self) -> bool:
         return (self.source_path is not None and self.profile is not None
@@ -216,10 +228,13 @@ class PreviewPage(QWidget):
 
         def job(report, cancel):
             ctx = job_context(settings, previous)
-            return ctx, profile, compute_preview(ctx, profile)
+            return ctx, profile, compute_preview(ctx, profile, progress=report, cancel=cancel)
 
-        self.status.setText(f"sampling {Path(str(self.source_path)).name} ...")
+        name = Path(str(self.source_path)).name
+        self.show_waiting(f"sampling {name} and predicting the print ...")
         task = Task(job, "preview")
+        task.progress.connect(lambda f, name=name: self.show_waiting(
+            f"sampling {name} and predicting the print ... {100 * f:.0f}%"))
         task.succeeded.connect(self._show)
         task.failed.connect(self._failed)
         task.done.connect(self._task_done)
@@ -232,7 +247,7 @@ class PreviewPage(QWidget):
             self.recompute()
 
     def _failed(self, message: str, _tb: str) -> None:
-        self.status.setText(f"<span style='color:#e55'>Preview failed: {message}</span>")
+        self.show_waiting(f"<span style='color:#e55'>Preview failed: {message}</span>")
         self.failed.emit(message)
 
     def _show(self, result) -> None:
@@ -240,6 +255,9 @@ class PreviewPage(QWidget):
             return
         self.ctx, self.profile_eff, data = result
         self.data = data
+        # The halftoned layer is computed on a worker while this thread draws the volumes.
+        self._await_slice = True  # `rendered` once the halftoned layer is shown too
+        self._setup_slider(at_once=True)
         pl = self.plotter
         first = not pl.renderers[0].actors
         for i, (rgb, sigma, title) in enumerate((
@@ -249,21 +267,21 @@ class PreviewPage(QWidget):
             add_rgba_volume(pl, rgb, sigma, data.voxel_mm, name=f"volume{i}")
             box = _box(data.size_mm)
             pl.add_mesh(box, color="#888888", style="wireframe", name=f"box{i}",
-                        reset_camera=False, line_width=1)
-            pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}")
+                        reset_camera=False, line_width=1, render=False)
+            pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}",
+                        render=False)
         pl.subplot(0, 0)
-        pl.add_text(data.downsample_note(), position="lower_left", font_size=7, name="note")
+        pl.add_text(data.downsample_note(), position="lower_left", font_size=7, name="note",
+                    render=False)
         if first:
             pl.subplot(0, 0)
-            pl.view_isometric()
-            pl.reset_camera()
+            pl.view_isometric(render=False)
+            pl.renderer.reset_camera(render=False)  # the plotter-level one always renders
         pl.render()
         sx, sy, sz = data.size_mm
         self.status.setText(f"{Path(str(self.source_path)).name}: print "
                             f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {self.printer.name}")
         self.note.setText(data.downsample_note())
-        self._await_slice = True  # `rendered` once the halftoned layer is shown too
-        self._setup_slider()
         if not self.slice_slider.isEnabled():
             self._emit_rendered()
 
@@ -272,7 +290,7 @@ class PreviewPage(QWidget):
         self.rendered.emit()
 
     # slice scrubber ---------------------------------------------------------------------------
-    def _setup_slider(self) -> None:
+    def _setup_slider(self, at_once: bool = False) -> None:
         if self.data is None or self.data.print_shape_xyz is None:
             self.slice_slider.setEnabled(False)
             return
@@ -283,12 +301,16 @@ class PreviewPage(QWidget):
         self.slice_slider.setValue(min(keep, nz - 1))
         self.slice_slider.blockSignals(False)
         self.slice_slider.setEnabled(True)
-        self._slice_moved()
+        self._slice_moved(at_once)
 
-    def _slice_moved(self) -> None:
+    def _slice_moved(self, at_once: bool = False) -> None:
         nz = self.slice_slider.maximum() + 1
         self.slice_label.setText(f"layer {self.slice_slider.value()} of {nz}")
-        self._slice_debounce.start()
+        if at_once:  # new preview data: no dragging to wait for
+            self._slice_debounce.stop()
+            self._compute_slice()
+        else:
+            self._slice_debounce.start()
 
     def _compute_slice(self) -> None:
         if self.data is None or self.ctx is None:
@@ -302,7 +324,7 @@ class PreviewPage(QWidget):
         def job(report, cancel):
             from ..engine.pipeline import halftone_layer
 
-            return layer, np.asarray(halftone_layer(ctx.settings, layer, context=ctx))
+            return ctx, layer, np.asarray(halftone_layer(ctx.settings, layer, context=ctx))
 
         task = Task(job, "slice")
         task.succeeded.connect(self._show_slice)
@@ -312,7 +334,7 @@ class PreviewPage(QWidget):
 
     def _slice_failed(self, message: str, _tb: str) -> None:
         self.legend.setText(f"<span style='color:#e55'>{message}</span>")
-        if self._await_slice:
+        if self._await_slice and not self._slice_pending:
             self._emit_rendered()
 
     def _slice_done(self) -> None:
@@ -322,7 +344,9 @@ class PreviewPage(QWidget):
             self._compute_slice()
 
     def _show_slice(self, result) -> None:
-        layer, labels = result
+        ctx, layer, labels = result
+        if ctx is not self.ctx or self._slice_pending:
+            return  # a layer of earlier settings; the current one is on its way
         from .materials import label_colours
 
         colours, names = label_colours(self.profile_eff, self.printer)
@@ -367,7 +391,7 @@ class PreviewPage(QWidget):
         for t in (self._task, self._slice_task):
             if t is not None:
                 t.cancel()
-        self.plotter.close()
+        self.view.close_view()
 
 
 def _box(size_mm):

@@ -1,21 +1,77 @@
 """Volume rendering helpers shared by the preview and the gamut view (pyvista / pyvistaqt).
 
 Defines :func:`make_plotter` (a QtInteractor with one or two linked views that leaves file
-drops to the main window), :func:`add_rgba_volume` (sRGB colour + Beer-Lambert opacity per
-voxel, rendered directly as RGBA) and :func:`frame_statistics` (what tests and the screenshot
-check: the share of pixels differing from the background).
+drops to the main window), :class:`ViewHost` (where a page's 3D view goes: a message until the
+view is first needed, so a window shows before VTK is even imported), :func:`import_3d` (imports
+VTK, pyvista and pyvistaqt, about 2.5 s, meant for a worker thread while the window is already
+up), :func:`add_rgba_volume` (sRGB colour + Beer-Lambert opacity per voxel, rendered directly
+as RGBA) and :func:`frame_statistics` (what tests and the screenshot check: the share of pixels
+differing from the background).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+from PySide6.QtCore import QSize, Qt
+from PySide6.QtWidgets import QLabel, QStackedLayout, QWidget
 
 from .preview_data import opacity_per_voxel
 
-__all__ = ["make_plotter", "add_rgba_volume", "frame_statistics", "BACKGROUND"]
+__all__ = ["make_plotter", "ViewHost", "import_3d", "add_rgba_volume", "frame_statistics",
+           "BACKGROUND"]
 
 BACKGROUND = (0.16, 0.16, 0.18)
+
+
+def import_3d() -> None:
+    """Import the 3D stack (VTK, pyvista, pyvistaqt). Safe on a worker thread: it creates no
+    widget, and a GUI-thread import of the same modules just waits for it to finish."""
+    import pyvista  # noqa: F401
+    import pyvistaqt  # noqa: F401
+    import vtk  # noqa: F401
+
+
+class ViewHost(QWidget):
+    """A page's 3D view, created on first use of :attr:`plotter` (a message shows until then)."""
+
+    def __init__(self, parent: QWidget | None, shape: tuple[int, int], message: str) -> None:
+        super().__init__(parent)
+        self._shape = shape
+        self._plotter = None
+        self.message = QLabel(message)
+        self.message.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.message.setWordWrap(True)
+        r, g, b = (int(round(255 * c)) for c in BACKGROUND)
+        self.message.setStyleSheet(f"background: rgb({r},{g},{b}); color: #ccc; padding: 20px;")
+        self.setMinimumSize(400, 300)
+        self._stack = QStackedLayout(self)
+        self._stack.setContentsMargins(0, 0, 0, 0)
+        self._stack.addWidget(self.message)
+
+    def sizeHint(self) -> QSize:  # noqa: N802 - Qt override
+        return QSize(1000, 700)  # the 3D views take the room a splitter gives (not the text's)
+
+    @property
+    def has_plotter(self) -> bool:
+        return self._plotter is not None
+
+    @property
+    def plotter(self):
+        """The QtInteractor (created, and the 3D stack imported, on first access)."""
+        if self._plotter is None:
+            self._plotter = make_plotter(self, self._shape)
+            self._stack.addWidget(self._plotter)
+            self._stack.setCurrentWidget(self._plotter)
+        return self._plotter
+
+    def set_message(self, text: str) -> None:
+        """What the placeholder says while there is nothing to draw yet."""
+        self.message.setText(text)
+
+    def close_view(self) -> None:
+        if self._plotter is not None:
+            self._plotter.close()
 
 
 def make_plotter(parent, shape: tuple[int, int] = (1, 1), link: bool = True):
@@ -34,7 +90,9 @@ def add_rgba_volume(plotter, rgb: NDArray, sigma_per_mm: NDArray, voxel_mm: floa
                     name: str, origin: tuple[float, float, float] = (0.0, 0.0, 0.0)):
     """Render colour (z, y, x, 3) sRGB and density (z, y, x) 1/mm as an emission-absorption
     volume in millimetres. Each voxel's alpha is 1 - exp(-sigma * voxel) and the opacity unit
-    distance is one voxel, so VTK's per-sample correction keeps Beer-Lambert at any step."""
+    distance is one voxel, so VTK's per-sample correction keeps Beer-Lambert at any step. Not
+    rendered here: the caller renders once when everything is added (each render of a volume
+    takes a visible moment in software OpenGL)."""
     import pyvista as pv
     import vtk
 
@@ -46,7 +104,7 @@ def add_rgba_volume(plotter, rgb: NDArray, sigma_per_mm: NDArray, voxel_mm: floa
     grid = pv.ImageData(dimensions=(nx, ny, nz), spacing=(voxel_mm,) * 3, origin=origin)
     grid.point_data["rgba"] = rgba.reshape(-1, 4)  # (z, y, x) C order = VTK's x-fastest order
     actor = plotter.add_volume(grid, scalars="rgba", name=name, opacity_unit_distance=voxel_mm,
-                               show_scalar_bar=False, reset_camera=False)
+                               show_scalar_bar=False, reset_camera=False, render=False)
     opacity = vtk.vtkPiecewiseFunction()  # alpha byte -> opacity, identity
     opacity.AddPoint(0.0, 0.0)
     opacity.AddPoint(255.0, 1.0)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 import traceback
 from collections.abc import Callable, Generator
 from typing import Any
@@ -78,6 +79,7 @@ class Task(QObject):
         self.cancel_event.set()
 
     def run(self) -> None:
+        t0 = time.monotonic()
         try:
             result = self._job(self.progress.emit, self.cancel_event)
         except Cancelled:
@@ -103,6 +105,8 @@ class Task(QObject):
                 self.outcome = "succeeded"
                 self.succeeded.emit(result)
         finally:
+            log.info("task %s %s after %.2f s", self.name, self.outcome,
+                     time.monotonic() - t0)
             self.done.emit()
 
 
