@@ -160,10 +160,11 @@ class GamutPage(QWidget):
         if hold:
             return
         held, self._held = self._held, set()
+        tables = self.tables  # set_profile forgets them (tables belong to a profile)
         if "meshes" in held and self.profile is not None:
             self.set_profile(self.profile)
-        if "tables" in held and self.tables is not None:
-            self.set_tables(self.tables)
+        if "tables" in held and tables is not None:
+            self.set_tables(tables)
 
     # inputs -----------------------------------------------------------------------------------
     def set_profile(self, profile) -> None:

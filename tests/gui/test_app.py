@@ -26,7 +26,7 @@ def test_screenshot_and_quit(tmp_path, gl_display, table_size):
     r = _run(["--screenshot", str(shot), "--quit-after", "0", "--table-size", str(table_size)],
              tmp_path)
     assert r.returncode == 0, r.stderr[-2000:]
-    assert "screenshot" in r.stdout
+    assert "screenshot" in r.stdout and "window shown in" in r.stdout
     img = np.asarray(Image.open(shot).convert("RGB"))
     assert img.shape[0] > 300 and img.shape[1] > 500
     # the 3D views (left part of the window) show the rendered volumes
