@@ -9,8 +9,10 @@ Defines :class:`CalibrationWizard` (a QWizard) and its pages:
 2. :class:`ChartPage` (optional): a mixture chart, recipes (``--mix-file`` CSV) and the measured
    reflectance of each patch.
 3. :class:`FitPage`: runs ``calibration.calibrate_profile`` (and ``chart_calibration.fit_chart``)
-   on a worker thread and plots measured vs fitted R and T per ink, the residuals, and the
-   chart's cross-validated dE2000.
+   on a worker thread, showing the stage and the elapsed time, with a Stop button that returns
+   the page at once (the fit has no cancel token: it is abandoned, ``workers.abandonable``,
+   and its result dropped); then plots measured vs fitted R and T per ink, the residuals, and
+   the chart's cross-validated dE2000.
 4. :class:`SavePage`: name and file; saving makes the profile active (``profileSaved``).
 """
 
@@ -18,11 +20,12 @@ from __future__ import annotations
 
 import datetime as _dt
 import logging
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import Signal
+from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -32,6 +35,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QLineEdit,
+    QProgressBar,
     QPushButton,
     QSpinBox,
     QTabWidget,
@@ -44,7 +48,7 @@ from PySide6.QtWidgets import (
 from ..engine.profile import INKS
 from ..errors import DreamPrintError
 from .settings import AppSettings
-from .workers import Task, run_task
+from .workers import Task, abandonable, run_task
 
 __all__ = ["CalibrationWizard", "MeasurementsPage", "ChartPage", "FitPage", "SavePage",
            "SPECTRA_FILTER"]
@@ -415,6 +419,26 @@ class FitPage(QWizardPage):
         self.setSubTitle("Kubelka-Munk K and S per wavelength, fitted to your measurements.")
         self.status = QLabel("")
         self.status.setWordWrap(True)
+        self.busy = QProgressBar(minimum=0, maximum=0)  # no fraction to show: a busy bar
+        self.busy.setTextVisible(False)
+        self.busy.setMaximumWidth(160)
+        self.elapsed = QLabel("")
+        self.elapsed.setObjectName("fitElapsed")
+        self.stop_button = QPushButton("Stop")
+        self.stop_button.setToolTip("Stop fitting: the page returns at once and the running "
+                                    "fit's result is discarded")
+        self.stop_button.clicked.connect(self.stop)
+        self.again_button = QPushButton("Fit again")
+        self.again_button.clicked.connect(self.start)
+        run_row = QHBoxLayout()
+        run_row.addWidget(self.busy)
+        run_row.addWidget(self.elapsed, 1)
+        run_row.addWidget(self.stop_button)
+        run_row.addWidget(self.again_button)
+        self._stage = ""
+        self._t0 = 0.0
+        self._clock = QTimer(self, interval=500)
+        self._clock.timeout.connect(self._tick)
         self.tabs = QTabWidget()
         self.fit_fig, self.fit_canvas = _canvas((8, 4.5))
         self.res_fig, self.res_canvas = _canvas((8, 3))
@@ -423,12 +447,54 @@ class FitPage(QWizardPage):
         self.tabs.addTab(self.res_canvas, "Residuals")
         self.tabs.addTab(self.chart_canvas, "Chart dE2000")
         lay = QVBoxLayout(self)
+        lay.addLayout(run_row)
         lay.addWidget(self.status)
         lay.addWidget(self.tabs, 1)
+        self._set_running(False)
 
     def initializePage(self) -> None:  # noqa: N802 - Qt override
+        self.start()
+
+    @property
+    def running(self) -> bool:
+        return self._task is not None and self._task.outcome is None \
+            and not self._task.cancel_event.is_set()
+
+    def _set_running(self, running: bool) -> None:
+        self.busy.setVisible(running)
+        self.stop_button.setVisible(running)
+        self.again_button.setVisible(not running)
+        if running:
+            self._t0 = time.monotonic()
+            self._tick()
+            self._clock.start()
+        else:
+            self._clock.stop()
+
+    def _tick(self) -> None:
+        self.elapsed.setText(f"{self._stage} {time.monotonic() - self._t0:.0f} s")
+
+    def _progress(self, stage: str) -> None:
+        self._stage = stage
+        self._tick()
+
+    def stop(self) -> None:
+        """Abandon the running fit: the page is ready again at once, its result is dropped."""
+        if not self.running:
+            return
+        self._task.cancel()
+        self._set_running(False)
+        self.elapsed.setText(f"stopped after {time.monotonic() - self._t0:.0f} s")
+        self.status.setText("The fit was stopped. Change the inputs (Back) or fit again.")
+        self.status.setStyleSheet("")
+        self.completeChanged.emit()
+
+    def start(self) -> None:
+        """Fit the current inputs on a worker thread (a running fit is abandoned first)."""
+        self.stop()
         self.result = None
         self.error_text = ""
+        self.completeChanged.emit()
         measurements = self.wiz.measurements_page.measurements()
         chart = self.wiz.chart_page
         recipes, refl, folds = chart.recipes, chart.reflectance, int(chart.folds.value())
@@ -441,27 +507,53 @@ class FitPage(QWizardPage):
             if not measurements and recipes is None:
                 raise DreamPrintError("nothing to fit: choose ink measurements (first page) or "
                                       "a mixture chart (second page)")
-            profile, fits = (calibrate_profile(measurements, base, name=name) if measurements
-                             else (base.with_settings(name=name), []))
+            if measurements:
+                report("fitting K and S of each ink:")
+                profile, fits = abandonable(
+                    lambda: calibrate_profile(measurements, base, name=name), cancel,
+                    name="calibrate-profile")
+            else:
+                profile, fits = base.with_settings(name=name), []
             chart_fit = None
             if recipes is not None:
                 from ..engine.chart_calibration import fit_chart
 
-                chart_fit = fit_chart(profile, recipes, refl, name=name, folds=folds)
+                report(f"refitting the inks to the chart's {len(recipes)} patches with "
+                       f"{folds}-fold cross-validation (this can take a minute):")
+                start = profile
+                chart_fit = abandonable(
+                    lambda: fit_chart(start, recipes, refl, name=name, folds=folds), cancel,
+                    name="fit-chart")
                 profile = chart_fit.profile
             return profile, fits, chart_fit, measurements
 
-        self.status.setText("fitting ...")
+        self.status.setText("")
         self.status.setStyleSheet("")
+        self._stage = "fitting:"
         task = Task(job, "calibration")
-        task.succeeded.connect(self._done)
-        task.failed.connect(self._failed)
-        task.done.connect(self.completeChanged)
+        task.progress.connect(self._if_current(task, self._progress))
+        task.succeeded.connect(self._if_current(task, self._done))
+        task.failed.connect(self._if_current(task, self._failed))
+        task.done.connect(self._if_current(task, self._finished))
         self._task = run_task(task)
+        self._set_running(True)
+
+    def _if_current(self, task: Task, slot):
+        """``slot`` for ``task``'s signals, dropped once another fit has replaced it."""
+        def call(*args) -> None:
+            if task is self._task:
+                slot(*args)
+        return call
+
+    def _finished(self) -> None:
+        if self._task.outcome != "cancelled":  # a stop has already reset the page
+            self._set_running(False)
+            self.elapsed.setText(f"fitted in {time.monotonic() - self._t0:.0f} s"
+                                 if self._task.outcome == "succeeded" else "")
+        self.completeChanged.emit()
 
     def cleanupPage(self) -> None:  # noqa: N802 - Qt override
-        if self._task is not None:
-            self._task.cancel()
+        self.stop()
 
     def isComplete(self) -> bool:  # noqa: N802 - Qt override
         return self.result is not None
@@ -639,3 +731,8 @@ class CalibrationWizard(QWizard):
         self.resize(1000, 720)
         if calibration_set:
             self.measurements_page.load_set(calibration_set)
+
+    def done(self, result: int) -> None:
+        """Closing the wizard (Cancel, Esc, Finish) abandons a fit still running."""
+        self.fit_page.stop()
+        super().done(result)

@@ -2,12 +2,15 @@
 
 Defines :class:`Task` (a QObject living in the GUI thread whose signals, emitted from the worker
 thread, carry progress, the result, a failure or a cancellation back to the GUI thread),
-:func:`run_task` (starts one on its own QThread), :func:`generator_job` and :func:`wait_all`.
+:func:`run_task` (starts one on its own QThread), :func:`generator_job`, :func:`abandonable`
+and :func:`wait_all`.
 
 The engine's long operations are generators yielding progress (``pipeline.run_conversion``)
 or functions taking a progress callback (``gamut.get_tables``); both are driven by the same
 code as on the command line. Cancel is a :class:`threading.Event` the engine checks, plus a
 check between yields, so a cancelled generator is closed (its ``finally`` clean-up runs).
+An engine call that cannot stop part-way (e.g. ``chart_calibration.fit_chart``) runs through
+:func:`abandonable`: Cancel ends the task at once and the call's eventual result is dropped.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from PySide6.QtCore import QObject, QThread, Signal
 
 from ..errors import DreamPrintError
 
-__all__ = ["Task", "Cancelled", "run_task", "generator_job"]
+__all__ = ["Task", "Cancelled", "run_task", "generator_job", "abandonable", "wait_all"]
 
 log = logging.getLogger(__name__)
 
@@ -56,6 +59,34 @@ def generator_job(make: Callable[[threading.Event], Generator[Any, None, Any]]) 
             gen.close()  # runs the engine's clean-up (e.g. removes a partial job folder)
 
     return job
+
+
+def abandonable(fn: Callable[[], Any], cancel: threading.Event, poll_s: float = 0.05,
+                name: str = "abandonable") -> Any:
+    """``fn()`` on a daemon thread; raises :class:`Cancelled` as soon as ``cancel`` is set.
+
+    For engine calls with no cancel token: the caller (a task) returns at once, ``fn`` runs on
+    to its end in the background and its result or error is dropped. Being a daemon thread it
+    never holds up quitting the application.
+    """
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = fn()
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller below
+            box["error"] = exc
+
+    thread = threading.Thread(target=target, name=name, daemon=True)
+    thread.start()
+    while thread.is_alive():
+        if cancel.is_set():
+            log.info("%s abandoned while running; its result will be dropped", name)
+            raise Cancelled()
+        thread.join(poll_s)
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
 
 
 class Task(QObject):

@@ -187,3 +187,55 @@ def test_calibration_set_fills_the_page(qtbot, tmp_path):
     bad.write_text("[inks\n")
     page.load_set(str(bad))
     assert page.set_measurements is None and "bad.toml" in page.set_label.text()
+
+
+def test_stopping_a_running_chart_fit(qtbot, tmp_path, truth, monkeypatch):
+    """Stop returns the page at once; the abandoned fit's result, when it comes, is dropped."""
+    import threading
+
+    from dreamprint_gui.engine import chart_calibration
+    from dreamprint_gui.engine.mixture import predict
+
+    started, release, returned = threading.Event(), threading.Event(), threading.Event()
+
+    def slow_fit(profile, recipes, reflectance, **kw):  # stands in for a minute-long fit
+        started.set()
+        release.wait(60)
+        returned.set()
+        return chart_calibration.ChartFit.__new__(chart_calibration.ChartFit)
+
+    monkeypatch.setattr(chart_calibration, "fit_chart", slow_fit)
+    rng = np.random.default_rng(4)
+    recipes = rng.dirichlet(np.ones(5), size=12)
+    R = predict(truth, recipes, thickness_mm=np.inf).R
+    rec_path, spec_path = tmp_path / "recipes.csv", tmp_path / "patches.csv"
+    rec_path.write_text("C,M,Y,K,W\n" + "\n".join(",".join(f"{v:.10f}" for v in r)
+                                                 for r in recipes) + "\n")
+    write_spectra(spec_path, [Sample(f"P{i}", truth.wavelengths_nm, R[i])
+                              for i in range(len(R))], quantity="reflectance",
+                  format="csv-rows")
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    wiz.next()
+    wiz.chart_page.recipes_edit.setText(str(rec_path))
+    wiz.chart_page.spectra_edit.setText(str(spec_path))
+    wiz.chart_page.load()
+    wiz.next()
+    page = wiz.fit_page
+    fitted: list = []
+    page.fitted.connect(fitted.append)
+    assert started.wait(30) and page.running
+    assert page.stop_button.isVisibleTo(wiz) and not page.again_button.isVisibleTo(wiz)
+    qtbot.waitUntil(lambda: "12 patches" in page.elapsed.text(), timeout=10000)
+
+    page.stop_button.click()  # returns at once although the fit is still running
+    assert not returned.is_set()
+    assert not page.running and not page.isComplete()
+    assert page.again_button.isVisibleTo(wiz) and not page.stop_button.isVisibleTo(wiz)
+    assert "stopped" in page.status.text() and "stopped after" in page.elapsed.text()
+
+    release.set()
+    assert returned.wait(30)
+    qtbot.wait(300)  # the late result would arrive by now: it is dropped
+    assert page.result is None and fitted == [] and not page.isComplete()

@@ -68,3 +68,33 @@ def test_unexpected_failure_names_the_type(qtbot):
     with qtbot.waitSignal(task.failed, timeout=5000) as blocker:
         run_task(task)
     assert blocker.args[0].startswith("ZeroDivisionError")
+
+
+def test_abandonable_returns_at_once_on_cancel():
+    import threading
+
+    import pytest
+
+    from dreamprint_gui.gui.workers import Cancelled, abandonable
+
+    release, finished, cancel = threading.Event(), threading.Event(), threading.Event()
+
+    def slow():  # an engine call with no cancel token
+        release.wait(30)
+        finished.set()
+        return "late result"
+
+    cancel.set()
+    with pytest.raises(Cancelled):
+        abandonable(slow, cancel)
+    assert not finished.is_set()  # the caller did not wait for the call to end
+    release.set()
+    assert finished.wait(30)  # the abandoned call runs to its end in the background
+
+    assert abandonable(lambda: 42, threading.Event()) == 42
+
+    def broken():
+        raise DreamPrintError("bad chart", "chart.csv")
+
+    with pytest.raises(DreamPrintError, match="bad chart"):
+        abandonable(broken, threading.Event())
