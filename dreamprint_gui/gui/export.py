@@ -1,10 +1,13 @@
-"""The export dialog: printer, size, halftoning, seed, folder -> a finished print job.
+"""The export dialog: printer, size, halftoning, seed, folder, workers -> a finished print job.
 
 Defines :func:`convert_settings` (the GUI's choices as the engine's ``ConvertSettings``, the
 same object ``dreamprint convert`` builds), :func:`export_job` (``pipeline.run_conversion`` as
 a worker job) and :class:`ExportDialog`, which runs it on a worker thread with a progress bar,
 time remaining and Cancel (the engine removes a cancelled job's partial folder), then shows a
-summary from the manifest.
+summary from the manifest. Where the slabs run is the engine's choice too
+(``ConvertSettings.workers`` and ``.scheduler``): this computer's threads or processes with a
+worker count, or a ``dask.distributed`` cluster by address (:data:`SCHEDULERS`,
+:func:`check_scheduler_address`); the choices persist with QSettings (``export/...``).
 """
 
 from __future__ import annotations
@@ -41,9 +44,33 @@ from .settings import AppSettings
 from .workers import Task, generator_job, run_task
 
 __all__ = ["ExportDialog", "convert_settings", "export_job", "format_duration",
-           "manifest_summary"]
+           "manifest_summary", "check_scheduler_address", "SCHEDULERS"]
 
 log = logging.getLogger(__name__)
+
+# (settings value, label); "distributed" takes an address (ConvertSettings.scheduler).
+SCHEDULERS = (("threads", "this computer, threads (default)"),
+              ("processes", "this computer, processes"),
+              ("distributed", "Dask cluster (dask.distributed)"))
+
+
+def check_scheduler_address(address: str) -> str:
+    """A dask.distributed scheduler address as the engine takes it (``tcp://host:port``)."""
+    a = address.strip()
+    if not a:
+        raise DreamPrintError("give the Dask scheduler's address, e.g. tcp://host:8786")
+    if "://" not in a:
+        a = "tcp://" + a  # what dask.distributed assumes for host:port
+    scheme, _, rest = a.partition("://")
+    host, _, port = rest.rpartition(":")
+    if scheme in ("tcp", "tls", "ws", "wss"):
+        ok = bool(host) and port.isdigit() and 0 < int(port) < 65536
+    else:  # an in-process cluster, or UCX: no port to check
+        ok = scheme in ("inproc", "ucx") and bool(rest)
+    if not ok:
+        raise DreamPrintError(f"'{address}' is not a Dask scheduler address "
+                              "(like tcp://host:8786)")
+    return a
 
 
 def convert_settings(source_path: str, profile_path: str | None, printer, *,
@@ -52,7 +79,8 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      density_scale: float = 1.0, background: str = "clear",
                      halftone: str = "blue-noise", seed: int = 0,
                      output: str | os.PathLike | None = None, overwrite: bool = False,
-                     workers: int | None = None, table_size: int | None = None):
+                     workers: int | None = None, scheduler: str | None = None,
+                     table_size: int | None = None):
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile)."""
     from ..engine.pipeline import ConvertSettings
 
@@ -63,7 +91,8 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            printer=printer, height_mm=height_mm,
                            size_mm=None if size_mm is None else tuple(size_mm),
                            density_scale=float(density_scale), halftone=halftone,
-                           seed=int(seed), workers=workers, background=background,
+                           seed=int(seed), workers=workers, scheduler=scheduler,
+                           background=background,
                            overwrite=overwrite, **extra)
 
 
@@ -97,6 +126,10 @@ def manifest_summary(manifest: dict, target: str) -> str:
     clamp_text = ", ".join(f"{k} {v:,.0f}" if isinstance(v, int | float) else f"{k} {v}"
                            for k, v in clamped.items()) or "none"
     t = manifest.get("timings_s", {})
+    ex = manifest.get("execution") or {}
+    run_on = (f"; run on {ex.get('scheduler', 'threads')}"
+              + (f", {ex['workers']} workers" if ex.get("workers") else "")
+              + (f", {ex['slabs']} slabs" if ex.get("slabs") else "")) if ex else ""
     return (
         f"<p><b>Job complete</b>: {target}</p>"
         f"<p>{nz} slices of {nx} x {ny} voxels ({total:,} voxels), "
@@ -108,7 +141,7 @@ def manifest_summary(manifest: dict, target: str) -> str:
         f"<p>Density targets clamped: {clamp_text}</p>"
         f"<p>Time {format_duration(t.get('total'))}"
         + (f", {t['voxels_per_second']:.3g} voxels/s" if "voxels_per_second" in t else "")
-        + "</p>")
+        + run_on + "</p>")
 
 
 class ExportDialog(QDialog):
@@ -186,6 +219,27 @@ class ExportDialog(QDialog):
         frow.addWidget(self.folder, 1)
         frow.addWidget(browse)
 
+        cores = os.cpu_count() or 1
+        self.workers = QSpinBox(minimum=0, maximum=max(256, 4 * cores))
+        self.workers.setSpecialValueText(f"all cores ({cores})")  # 0: the engine's default
+        self.workers.setValue(self.settings.get("export/workers", 0, int) or 0)
+        self.workers.setToolTip("Slabs converted at the same time on this computer")
+        self.scheduler = QComboBox()
+        for value, label in SCHEDULERS:
+            self.scheduler.addItem(label, value)
+        self.scheduler.setCurrentIndex(max(0, self.scheduler.findData(
+            self.settings.get("export/scheduler", "threads", str))))
+        self.scheduler_address = QLineEdit(self.settings.get("export/scheduler_address", "",
+                                                             str))
+        self.scheduler_address.setPlaceholderText("tcp://host:8786")
+        self.scheduler_address.setToolTip(
+            "The cluster's scheduler; its workers must see the job's folder (shared storage)")
+        self.scheduler.currentIndexChanged.connect(self._scheduler_changed)
+        run_row = QHBoxLayout()
+        run_row.addWidget(self.scheduler, 1)
+        run_row.addWidget(self.scheduler_address, 1)
+        self._scheduler_changed()
+
         form = QFormLayout()
         form.addRow("Printer", self.printer)
         form.addRow("", self.printer_info)
@@ -197,6 +251,8 @@ class ExportDialog(QDialog):
         form.addRow("Folder", frow)
         form.addRow("Job name", self.job_name)
         form.addRow("", self.overwrite)
+        form.addRow("Run on", run_row)
+        form.addRow("Workers", self.workers)
 
         self.progress = QProgressBar(minimum=0, maximum=1000)
         self.progress.setValue(0)
@@ -225,7 +281,8 @@ class ExportDialog(QDialog):
         lay.addWidget(self.buttons)
         self._form_widgets = [self.printer, self.by_height, self.by_box, self.height, *self.box,
                               self.density_scale, self.background, self.halftone, self.seed,
-                              self.folder, browse, self.job_name, self.overwrite]
+                              self.folder, browse, self.job_name, self.overwrite,
+                              self.scheduler, self.scheduler_address, self.workers]
         self._printer_obj = None
         self._update_printer()
 
@@ -259,6 +316,21 @@ class ExportDialog(QDialog):
                                   f"tray {tx:.0f} x {ty:.0f} x {tz:.0f} mm")
         self.printerChanged.emit(p)
 
+    def _scheduler_changed(self) -> None:
+        cluster = self.scheduler.currentData() == "distributed"
+        self.scheduler_address.setVisible(cluster)
+        self.workers.setEnabled(not cluster)  # a cluster has its own workers
+        self.workers.setToolTip("The cluster's own workers run the slabs" if cluster else
+                                "Slabs converted at the same time on this computer")
+
+    def scheduler_choice(self) -> tuple[int | None, str | None]:
+        """(workers, scheduler) for ``ConvertSettings``; None means the engine's default."""
+        kind = self.scheduler.currentData()
+        if kind == "distributed":
+            return None, check_scheduler_address(self.scheduler_address.text())
+        workers = int(self.workers.value()) or None
+        return workers, (None if kind == "threads" else kind)
+
     def _browse(self) -> None:
         folder = QFileDialog.getExistingDirectory(self, "Folder for the job", self.folder.text())
         if folder:
@@ -277,13 +349,14 @@ class ExportDialog(QDialog):
             height = float(self.height.value())
         else:
             size = tuple(float(b.value()) for b in self.box)
+        workers, scheduler = self.scheduler_choice()
         return convert_settings(
             self.source_path, self.profile_path, self.printer.currentData(),
             height_mm=height, size_mm=size, density_scale=float(self.density_scale.value()),
             background=str(self.background.currentData()),
             halftone=str(self.halftone.currentData()), seed=int(self.seed.value()),
             output=self.target_path(), overwrite=self.overwrite.isChecked(),
-            table_size=self.table_size)
+            workers=workers, scheduler=scheduler, table_size=self.table_size)
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:
@@ -297,6 +370,9 @@ class ExportDialog(QDialog):
         self.settings.set("export/printer", self.printer.currentData())
         self.settings.set("export/halftone", self.halftone.currentData())
         self.settings.set("export/seed", int(self.seed.value()))
+        self.settings.set("export/workers", int(self.workers.value()))
+        self.settings.set("export/scheduler", self.scheduler.currentData())
+        self.settings.set("export/scheduler_address", self.scheduler_address.text().strip())
         self.settings.set_last_folder("export", self.folder.text().strip() or ".")
         self.target = settings.output
         for w in self._form_widgets:

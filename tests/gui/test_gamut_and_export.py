@@ -98,3 +98,66 @@ def test_export_cancel_leaves_nothing(qtbot, tmp_path, table_size):
     assert not (tmp_path / "job").exists()
     assert list(tmp_path.iterdir()) == []  # no temporary folder left beside the target
     assert dlg.start_button.isEnabled()  # the operator can try again
+
+
+def test_export_workers_and_scheduler(qtbot, tmp_path, table_size):
+    """Worker count and scheduler reach the engine's settings, persist, and a bad cluster
+    address is reported inline."""
+    from dreamprint_gui.gui.export import check_scheduler_address
+    from dreamprint_gui.gui.settings import AppSettings
+
+    settings = AppSettings()
+    dlg = ExportDialog(None, source_path="demo", profile_path=None, table_size=table_size,
+                       preview_params={"height_mm": 2.0}, settings=settings)
+    qtbot.addWidget(dlg)
+    dlg.folder.setText(str(tmp_path))
+    dlg.job_name.setText("job")
+    assert dlg.workers.value() == 0 and dlg.settings_for_job().workers is None  # all cores
+    assert dlg.settings_for_job().scheduler is None  # the engine's default (threads)
+
+    dlg.scheduler.setCurrentIndex(dlg.scheduler.findData("distributed"))
+    assert not dlg.workers.isEnabled()
+    dlg.scheduler_address.setText("")
+    dlg.start()
+    assert "address" in dlg.error.text() and dlg.task is None
+    dlg.scheduler_address.setText("not an address")
+    dlg.start()
+    assert "not an address" in dlg.error.text() and dlg.task is None
+    assert check_scheduler_address("cluster.lan:8786") == "tcp://cluster.lan:8786"
+    dlg.scheduler_address.setText("tcp://10.0.0.5:8786")
+    assert dlg.settings_for_job().scheduler == "tcp://10.0.0.5:8786"
+    assert dlg.settings_for_job().workers is None
+
+    dlg.scheduler.setCurrentIndex(dlg.scheduler.findData("threads"))
+    dlg.workers.setValue(1)
+    assert dlg.settings_for_job().workers == 1
+    dlg.start()
+    with qtbot.waitSignal(dlg.task.done, timeout=180000):
+        pass
+    assert dlg.task.outcome == "succeeded", dlg.error.text()
+    assert dlg.manifest["execution"]["workers"] == 1
+    assert "1 workers" in dlg.summary.toPlainText()
+
+    again = ExportDialog(None, source_path="demo", profile_path=None, table_size=table_size,
+                         settings=AppSettings())  # the choices came back from QSettings
+    qtbot.addWidget(again)
+    assert again.workers.value() == 1 and again.scheduler.currentData() == "threads"
+    assert again.scheduler_address.text() == "tcp://10.0.0.5:8786"
+
+
+def test_export_to_a_dask_cluster(qtbot, tmp_path, table_size):
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        assert cluster.scheduler_address.startswith("tcp://")
+        dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+        dlg.scheduler.setCurrentIndex(dlg.scheduler.findData("distributed"))
+        dlg.scheduler_address.setText(cluster.scheduler_address)
+        dlg.start()
+        with qtbot.waitSignal(dlg.task.done, timeout=180000):
+            pass
+        assert dlg.task.outcome == "succeeded", dlg.error.text()
+    assert dlg.manifest["execution"]["scheduler"] == cluster.scheduler_address
+    nz = dlg.manifest["grid_dimensions"][2]
+    assert len(list((tmp_path / "job" / "slices").glob("*.png"))) == nz
