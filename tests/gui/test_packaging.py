@@ -41,3 +41,30 @@ def test_pyinstaller_recipe():
     assert "COLLECT(" in spec  # one-folder
     entry = (PKG / "dreamprint_gui_entry.py").read_text()
     assert "from dreamprint_gui.gui.app import main" in entry
+
+
+def test_metainfo_screenshots_are_real_files_at_the_declared_address():
+    """No invented address: screenshot URLs only under the repository pyproject declares,
+    each naming a screenshot that exists in docs/screenshots (none while there is no URL)."""
+    import re
+    import xml.etree.ElementTree as ET
+
+    meta = ET.parse(PKG / "io.github.dreamprint.DreamPrint.metainfo.xml").getroot()
+    images = [e.text.strip() for e in meta.iter("image")]
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    repo = (project.get("urls") or {}).get("Repository")
+    if repo is None:
+        assert images == [], "screenshot URLs without a public repository address"
+    m = re.match(r"https://github\.com/([^/]+)/([^/]+?)(?:\.git)?/?$", repo or "")
+    for url in images:
+        assert url.startswith("https://"), url
+        if m:
+            assert url.startswith(f"https://raw.githubusercontent.com/{m[1]}/{m[2]}/"), url
+        else:
+            assert url.startswith(repo.rstrip("/") + "/"), url
+        tail = url.split("/docs/screenshots/", 1)
+        assert len(tail) == 2 and (ROOT / "docs" / "screenshots" / tail[1]).is_file(), url
+    # the block the packaging README offers names files that exist
+    readme = (PKG / "README.md").read_text()
+    for name in re.findall(r"BASE/docs/screenshots/([\w.-]+)", readme):
+        assert (ROOT / "docs" / "screenshots" / name).is_file(), name
