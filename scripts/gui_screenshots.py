@@ -64,6 +64,8 @@ def main() -> int:
     w.tabs.setCurrentWidget(w.gamut)
     if w.gamut.chart_image is None:
         wait(w.gamut.chartReady)
+    if not w.gamut.drawn:  # the page draws its 3D view once it is shown
+        wait(w.gamut.rendered)
     w.gamut.set_colour((0.85, 0.35, 0.2))
     w.gamut.side.setCurrentIndex(0)
     settle()

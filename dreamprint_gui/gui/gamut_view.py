@@ -154,6 +154,11 @@ class GamutPage(QWidget):
         """The two linked 3D views (created on first use)."""
         return self.view.plotter
 
+    @property
+    def drawn(self) -> bool:
+        """The 3D view shows the current profile's gamut."""
+        return self._drawn
+
     def set_hold(self, hold: bool) -> None:
         """While held, the page only records its inputs; the work starts when released."""
         self._hold = hold
