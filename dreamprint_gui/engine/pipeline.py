@@ -330,12 +330,9 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
         if _cancelled(slices_dir, cancel):
             raise JobCancelled()
         ta = time.perf_counter()
-        before = counts.copy()
         _labels_of_layer(ctx, rgb[k], dens[k], z0 + k, labels, counts, sums, stats)
         tb = time.perf_counter()
-        share = float((counts - before).max()) / (nx * ny)
-        png = encode_labels_png(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode,
-                                dominant_share=share)
+        png = encode_labels_png(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
         tc = time.perf_counter()
         # Never create folders here: after a cancel the job's temporary folder is removed and
         # a straggling task must fail rather than recreate it.

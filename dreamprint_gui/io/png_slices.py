@@ -10,14 +10,12 @@ Defines
 PNG (ISO/IEC 15948, W3C PNG 2nd ed.): the image data is a zlib stream (RFC 1950) of the
 scanlines, each preceded by its filter-type byte (section 9; type 0 = None is used here: with
 random halftone labels no filter predicts better, and it keeps the encoder one pass). The zlib
-stream is produced at level 1 by zlib-ng (``imagecodecs.zlibng_encode``) for nearly uniform
-slices (one label >= 90 % of the pixels: most layers of a print job, mostly Clear or empty),
-where it measured 5x faster than libdeflate, and by libdeflate (``imagecodecs.deflate_encode``)
-otherwise, where it is as fast and its files are ~half the size; both several times faster
-than Pillow's encoder (``/work/shared/MEASURED.md``). The choice depends only on the labels.
-zlib-ng's bytes are deterministic for one build on one CPU architecture (the decoded pixels
-are identical everywhere). Chunks carry a CRC-32
-over type + data (section 5.3), computed with :func:`zlib.crc32`.
+stream is produced at level 1 by libdeflate (``imagecodecs.deflate_encode``), several times
+faster than Pillow's encoder (MEASURED.md), whose portable match finder gives the same bytes on
+every machine. zlib-ng was measured 5x faster on nearly uniform slices (0.6 vs 3.3 ns per voxel)
+but is not used: it picks SIMD code paths by CPU at run time and its output bytes then differ
+between machines (zlib-ng issue #795), which would break byte-identical jobs on a mixed Dask
+cluster. Chunks carry a CRC-32 over type + data (section 5.3), computed with :func:`zlib.crc32`.
 """
 
 from __future__ import annotations
@@ -81,22 +79,12 @@ def png_bytes(width: int, height: int, colour_type: int, idat: bytes | bytearray
     return b"".join(parts)
 
 
-# A slice whose most frequent label covers at least this share is deflated with zlib-ng, else
-# with libdeflate (both level 1). Measured per voxel on one core (j850-paper 1e9 demo layers):
-# nearly uniform slices zlib-ng 0.6 ns vs libdeflate 3.3 ns (files 12-26 KB either way);
-# random six-label slices zlib-ng 6.6 ns vs libdeflate 7.1 ns, but 1.85x larger files.
-UNIFORM_SHARE = 0.9
-
-
 def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb",
-                      level: int = 1, dominant_share: float | None = None) -> bytes:
+                      level: int = 1) -> bytes:
     """PNG bytes of a label image: pixel = ``palette[label]``.
 
     ``labels`` (rows, cols) uint8 (any strides: a transposed or flipped view is fine);
     ``palette`` (n, 3) uint8 with every label < n; ``mode`` "rgb" or "palette".
-    ``dominant_share``: the share of the most frequent label if the caller knows it (else it is
-    counted); it picks the deflate encoder (:data:`UNIFORM_SHARE`), so the bytes are a function
-    of the labels alone.
     """
     import imagecodecs
 
@@ -116,13 +104,7 @@ def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb"
         ctype = 3
     else:
         raise ValueError(f"unknown PNG mode {mode!r}")
-    if dominant_share is None:
-        dominant_share = float(np.bincount(labels.ravel(), minlength=1).max()) / (h * w)
-    # Both give a zlib-wrapped (RFC 1950) stream.
-    if dominant_share >= UNIFORM_SHARE:
-        idat = imagecodecs.zlibng_encode(raw, level=level)
-    else:
-        idat = imagecodecs.deflate_encode(raw, level=level)
+    idat = imagecodecs.deflate_encode(raw, level=level)  # zlib-wrapped (RFC 1950)
     return png_bytes(w, h, ctype, idat, pal if ctype == 3 else None)
 
 
