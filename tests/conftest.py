@@ -4,6 +4,8 @@ from pathlib import Path
 
 import pytest
 
+import dreamprint_gui  # noqa: F401  (sets the numba cache folder before numba is imported)
+
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 

@@ -72,14 +72,18 @@ class _Model:
         return (2 * len(self.inks) - 1) * self.nb
 
     def unpack(self, p: NDArray) -> tuple[NDArray, NDArray]:
-        n = len(self.inks) * self.nb
-        a = p[:n].reshape(len(self.inks), self.nb)
-        c = np.insert(p[n:].reshape(-1, self.nb), self.anchor, 0.0, axis=0)
-        K, S = self.base.K.copy(), self.base.S.copy()
-        for row, i in enumerate(self.inks):
-            K[i] = np.exp(self.lnK0[i] + self.P @ a[row])
-            S[i] = np.exp(self.lnS0[i] + self.P @ c[row])
-        return K, S
+        """K, S (6, n_wl) of one parameter vector, or (B, 6, n_wl) of a batch (B, n_params)."""
+        p = np.asarray(p, dtype=np.float64)
+        batch = p.reshape(-1, p.shape[-1])
+        n_inks, n = len(self.inks), len(self.inks) * self.nb
+        a = batch[:, :n].reshape(-1, n_inks, self.nb)
+        c = np.insert(batch[:, n:].reshape(-1, n_inks - 1, self.nb), self.anchor, 0.0, axis=1)
+        K = np.repeat(self.base.K[None], batch.shape[0], axis=0)
+        S = np.repeat(self.base.S[None], batch.shape[0], axis=0)
+        K[:, self.inks] = np.exp(self.lnK0[self.inks] + a @ self.P.T)
+        S[:, self.inks] = np.exp(self.lnS0[self.inks] + c @ self.P.T)
+        shape = p.shape[:-1] + K.shape[1:]
+        return K.reshape(shape), S.reshape(shape)
 
     def lab(self, K: NDArray, S: NDArray, recipes: NDArray, saunderson: tuple | None) -> NDArray:
         Km, Sm = mix(recipes, K, S)
@@ -95,12 +99,24 @@ def _fit(model: _Model, recipes: NDArray, target_lab: NDArray, p0: NDArray, ridg
          saunderson: tuple | None) -> NDArray:
     from scipy.optimize import least_squares
 
-    def residuals(p: NDArray) -> NDArray:
-        K, S = model.unpack(p)
-        dE = delta_E2000(model.lab(K, S, recipes, saunderson), target_lab)
-        return np.concatenate([dE, ridge * p])
+    def dE(params: NDArray) -> NDArray:
+        K, S = model.unpack(params)
+        return delta_E2000(model.lab(K, S, recipes, saunderson), target_lab)
 
-    sol = least_squares(residuals, p0, method="trf", max_nfev=100, xtol=1e-8, ftol=1e-8)
+    def residuals(p: NDArray) -> NDArray:
+        return np.concatenate([dE(p), ridge * p])
+
+    def jacobian(p: NDArray) -> NDArray:
+        # Forward differences, all parameters in one batched evaluation (one model call instead
+        # of n_params): the model is cheap per patch but costly per call.
+        h = 1.5e-8 * np.maximum(1.0, np.abs(p))  # sqrt(machine epsilon), as scipy's 2-point
+        stack = np.vstack([p, p + np.diag(h)])
+        values = dE(stack)
+        J = ((values[1:] - values[0]) / h[:, None]).T
+        return np.vstack([J, ridge * np.eye(p.size)])
+
+    sol = least_squares(residuals, p0, jac=jacobian, method="trf", max_nfev=100, xtol=1e-8,
+                        ftol=1e-8)
     return sol.x
 
 

@@ -35,7 +35,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .kubelka_munk import reflectance_transmittance
+from .kubelka_munk import layer_rt, reflectance_transmittance
 
 __all__ = ["fit_sigma_per_wavelength", "scalar_sigma", "exp_fit_errors", "sigma_from_sigma_hat",
            "DEFAULT_T_MAX_MM", "DEFAULT_SAMPLES"]
@@ -54,16 +54,7 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 
 @numba.njit(cache=True, nogil=True)
 def _km_T(k: float, s: float, t: float) -> float:
-    # Same stable form as kubelka_munk.reflectance_transmittance (T only), scalar.
-    beta = math.sqrt(k * k + 2.0 * k * s)
-    x = beta * t
-    if x < 1e-4:
-        tanhc = 1.0 - x * x / 3.0
-    else:
-        tanhc = math.tanh(x) / x
-    e = math.exp(-x)
-    sech = 2.0 * e / (1.0 + e * e)
-    return sech / ((s + k) * t * tanhc + 1.0)
+    return layer_rt(k, s, t)[1]
 
 
 @numba.njit(cache=True, nogil=True)

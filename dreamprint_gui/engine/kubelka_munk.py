@@ -19,10 +19,14 @@ References
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["reflectance_transmittance", "reflectance_infinite", "mix", "attenuation"]
+__all__ = ["reflectance_transmittance", "reflectance_infinite", "mix", "attenuation",
+           "layer_rt"]
 
 _SMALL_X = 1e-4
 
@@ -91,6 +95,24 @@ def reflectance_transmittance(
         empty = (K == 0.0) & (S == 0.0)  # an infinite layer of nothing transmits all
         T = np.where(infinite, np.where(empty, 1.0, 0.0), T)
     return R, T
+
+
+@numba.njit(cache=True, nogil=True)
+def layer_rt(k: float, s: float, t: float) -> tuple[float, float]:
+    """R and T of one wavelength: the compiled scalar twin of :func:`reflectance_transmittance`
+    (same stable form and limits), for kernels that loop over mixtures and wavelengths."""
+    beta = math.sqrt(k * k + 2.0 * k * s)
+    if math.isinf(t):
+        d = s + k + beta
+        return (s / d if d > 0.0 else 0.0), (1.0 if d == 0.0 else 0.0)
+    x = beta * t
+    if x < _SMALL_X:
+        tt = t * (1.0 - x * x / 3.0)
+    else:
+        tt = math.tanh(x) / beta
+    e = math.exp(-x)
+    q = (s + k) * tt + 1.0
+    return s * tt / q, 2.0 * e / (1.0 + e * e) / q
 
 
 def reflectance_infinite(K: ArrayLike, S: ArrayLike) -> NDArray[np.float64]:

@@ -41,7 +41,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import DreamPrintError
-from .gamut.alignment import LANES, align_voxel
+from .gamut.alignment import LANES, _trilinear16, align_fields, clean_rgb
 from .halftone import HALFTONE_METHODS, Halftoner, mask_columns, pick_label, threshold_at
 from .printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from .profile import INKS
@@ -207,28 +207,30 @@ def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
 
 
 @njit(cache=True, nogil=True)
-def _layer_kernel(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear, log_knots,
+def _layer_kernel(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear, log2_knots,
                   method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
     """One layer: background test -> lookup + alignment -> halftone -> label, per voxel.
 
-    ``rgb`` (ny*nx, 3), ``dens`` (ny*nx,) -> ``labels`` (ny, nx). The concentrations are
-    rounded to float32 before halftoning, so the labels equal ``lookup_and_align_into``
-    followed by ``Halftoner.layer_into``. A voxel with the same colour and density as the one
-    before it reuses its concentrations (and its clamp report).
+    ``rgb`` (ny*nx, 3), ``dens`` (ny*nx,) -> ``labels`` (ny, nx). The labels equal
+    ``lookup_and_align_into`` followed by ``Halftoner.layer_into``. A voxel with the same
+    colour as the one before it reuses its interpolated table fields, and with the same density
+    too its concentrations (and its clamp report): uniform-colour sources (density-only VDB,
+    voxel models) pay the table interpolation once per run of voxels.
     """
     ny, nx = labels.shape
     mz, my, mx = mask.shape
     mzz = (z + oz) % mz
     xs = mask_columns(0, nx, ox, mx)
     f = np.empty(LANES, np.float32)
-    c = np.empty(6)
-    c32 = np.empty(6, np.float32)
+    c = np.empty(6, np.float32)
+    acc = np.zeros(6)
     pr = np.float32(np.nan)
     pg = pr
     pb = pr
     pd = pr
     d_low = 0.0
     d_high = 0.0
+    n_bg = 0
     for j in range(ny):
         myy = (j + oy) % my
         for i in range(nx):
@@ -236,40 +238,49 @@ def _layer_kernel(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear
             d = dens[p]
             if not d >= threshold:  # NaN too
                 labels[j, i] = bg_label
-                counts[bg_label] += 1
-                sums[bg_label] += 1.0
+                n_bg += 1
                 continue
-            r = rgb[p, 0]
-            g = rgb[p, 1]
-            b = rgb[p, 2]
-            if r == pr and g == pg and b == pb and d == pd:
-                stats[0] += d_low
-                stats[1] += d_high
+            r = clean_rgb(rgb[p, 0])
+            g = clean_rgb(rgb[p, 1])
+            b = clean_rgb(rgb[p, 2])
+            if r == pr and g == pg and b == pb:
+                if d == pd:
+                    stats[0] += d_low
+                    stats[1] += d_high
+                else:
+                    lo0 = stats[0]
+                    hi0 = stats[1]
+                    align_fields(f, r, g, b, d, rho_k, sigma_clear, log2_knots, c, stats)
+                    d_low = stats[0] - lo0
+                    d_high = stats[1] - hi0
+                    pd = d
             else:
                 lo0 = stats[0]
                 hi0 = stats[1]
-                align_voxel(flat, n, r, g, b, np.float64(d), rho_k, sigma_clear, log_knots, f, c,
-                            stats)
+                _trilinear16(flat, n, r, g, b, f)
+                align_fields(f, r, g, b, d, rho_k, sigma_clear, log2_knots, c, stats)
                 d_low = stats[0] - lo0
                 d_high = stats[1] - hi0
-                for m in range(6):
-                    c32[m] = c[m]
                 pr = r
                 pg = g
                 pb = b
                 pd = d
             for m in range(6):
-                sums[m] += c32[m]
+                acc[m] += c[m]
             t = threshold_at(method, mask, mzz, myy, xs[i], seed, i, j, z)
-            lab = pick_label(c32, t, order, bg_label)
+            lab = pick_label(c, t, order, bg_label)
             labels[j, i] = lab
             counts[lab] += 1
+    counts[bg_label] += n_bg
+    sums[bg_label] += n_bg
+    for m in range(6):
+        sums[m] += acc[m]
 
 
 def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
                      labels: np.ndarray, counts: np.ndarray, sums: np.ndarray,
                      stats: np.ndarray) -> None:
-    from .gamut.alignment import _LOG_KNOTS, kernel_table
+    from .gamut.alignment import _LOG2_KNOTS, kernel_table
 
     _, tables = ctx.resources()
     rgb = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32)
@@ -278,8 +289,9 @@ def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
     # background by choice, not for want of a reachable density).
     _layer_kernel(rgb, d, z, np.float32(ctx.halftoner.threshold), ctx.halftoner.bg_label,
                   kernel_table(tables), tables.packed.shape[0],
-                  tables.brightness_rho_k.astype(np.float64), float(tables.sigma_clear),
-                  _LOG_KNOTS, *ctx.halftoner.kernel_args(), labels, counts, sums, stats)
+                  tables.brightness_rho_k.astype(np.float64),
+                  np.float32(tables.sigma_clear), _LOG2_KNOTS, *ctx.halftoner.kernel_args(), labels,
+                  counts, sums, stats)
 
 
 def _clamp_report(stats: np.ndarray) -> dict[str, float]:

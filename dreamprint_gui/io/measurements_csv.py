@@ -9,7 +9,6 @@ same ink and thickness form one layer. Rows are resampled onto the profile's gri
 from __future__ import annotations
 
 import csv
-import io
 from pathlib import Path
 
 import numpy as np
@@ -19,21 +18,13 @@ from ..engine.calibration_types import LayerMeasurement
 from ..engine.profile import INKS
 from ..engine.spectral_grid import resample
 from ..errors import DreamPrintError
+from .recipes import read_csv_rows
 
 __all__ = ["read_measurements_csv", "write_measurements_csv"]
 
 
 def read_measurements_csv(path: Path, wavelengths_nm: NDArray) -> list[LayerMeasurement]:
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise DreamPrintError("no such file", path) from None
-    except UnicodeDecodeError:
-        raise DreamPrintError("not a text CSV file", path) from None
-    rows = [(n, [c.strip() for c in r]) for n, r in enumerate(csv.reader(io.StringIO(text)), 1)
-            if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
-    if len(rows) < 2:
-        raise DreamPrintError("needs a header row and at least one measurement", path)
+    rows = read_csv_rows(path)
     hline, header = rows[0]
     if [h.lower() for h in header[:3]] != ["ink", "quantity", "thickness_mm"]:
         raise DreamPrintError("header must start with ink,quantity,thickness_mm", path, hline)

@@ -20,12 +20,13 @@ from numpy.typing import NDArray
 from ..engine.profile import INKS
 from ..errors import DreamPrintError
 
-__all__ = ["read_recipes", "read_spectra_rows"]
+__all__ = ["read_recipes", "read_spectra_rows", "read_csv_rows"]
 
 _LABEL_COLUMNS = {"id", "name", "sample", "sample_id", "sample_name", "patch"}
 
 
-def _rows(path: Path) -> list[tuple[int, list[str]]]:
+def read_csv_rows(path: Path) -> list[tuple[int, list[str]]]:
+    """Non-blank, non-comment rows of a CSV file with their line numbers (header first)."""
     try:
         text = Path(path).read_text(encoding="utf-8-sig")
     except FileNotFoundError:
@@ -56,7 +57,7 @@ def _number(cell: str, path: Path, line: int, what: str) -> float:
 
 def read_recipes(path: Path) -> NDArray[np.float64]:
     """Concentrations (n, 6) in ``INKS`` order from a recipes CSV."""
-    rows = _rows(path)
+    rows = read_csv_rows(path)
     header_line, header = rows[0]
     lookup = {ink.lower(): ink for ink in INKS}
     columns: list[tuple[int, int]] = []
@@ -93,7 +94,7 @@ def read_recipes(path: Path) -> NDArray[np.float64]:
 
 def read_spectra_rows(path: Path) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(wavelengths_nm, spectra (n, n_wl)) from a CSV with a header of wavelengths."""
-    rows = _rows(path)
+    rows = read_csv_rows(path)
     header_line, header = rows[0]
     wl_cols: list[tuple[int, float]] = []
     for j, name in enumerate(header):

@@ -74,3 +74,17 @@ def test_mixing_is_linear_in_concentration():
     K, S = mix([[0.25, 0.75]], Ki, Si)
     np.testing.assert_allclose(K, [[2.5, 0.875]])
     np.testing.assert_allclose(S, [[0.325, 0.65]])
+
+
+def test_compiled_scalar_twin_matches_the_array_form():
+    from dreamprint_gui.engine.kubelka_munk import layer_rt
+
+    rng = np.random.default_rng(3)
+    cases = [(0.0, 0.0, np.inf), (0.0, 2.0, np.inf), (3.0, 0.0, 1.0), (0.0, 0.0, 0.5),
+             (2.0, 3.0, 1e300)]
+    cases += [tuple(x) for x in np.c_[10 ** rng.uniform(-4, 3, (50, 2)), rng.uniform(0, 5, 50)]]
+    for k, s, t in cases:
+        R, T = reflectance_transmittance(k, s, t)
+        r, tr = layer_rt(k, s, t)
+        assert r == pytest.approx(float(R), rel=1e-12, abs=1e-300)
+        assert tr == pytest.approx(float(T), rel=1e-12, abs=1e-300)

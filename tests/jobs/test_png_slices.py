@@ -9,11 +9,15 @@ from dreamprint_gui.errors import DreamPrintError
 from dreamprint_gui.io.png_slices import encode_labels_png, read_png_labels
 
 
+@pytest.mark.parametrize("uniform", [False, True])  # libdeflate and zlib-ng IDAT streams
 @pytest.mark.parametrize("mode", ["rgb", "palette"])
-@pytest.mark.parametrize("shape", [(1, 1), (7, 13), (64, 3)])
-def test_round_trip_through_pillow(tmp_path, mode, shape):
+@pytest.mark.parametrize("shape", [(1, 1), (7, 13), (64, 3), (300, 211)])
+def test_round_trip_through_pillow(tmp_path, mode, shape, uniform):
     pal = load_printer().palette()
-    lab = np.random.default_rng(1).integers(0, 7, shape).astype(np.uint8)
+    rng = np.random.default_rng(1)
+    lab = rng.integers(0, 7, shape).astype(np.uint8)
+    if uniform:  # a mostly-Clear layer with a few specks
+        lab = np.where(rng.random(shape) < 0.97, 5, lab).astype(np.uint8)
     f = tmp_path / "s.png"
     f.write_bytes(encode_labels_png(lab, pal, mode))
     with Image.open(f) as im:
@@ -39,3 +43,14 @@ def test_foreign_colour_is_reported(tmp_path):
     Image.new("RGB", (3, 2), (1, 2, 3)).save(f)
     with pytest.raises(DreamPrintError, match=r"\(1, 2, 3\)"):
         read_png_labels(f, pal)
+
+
+def test_idat_is_libdeflate_level_1_so_bytes_do_not_depend_on_the_cpu():
+    import imagecodecs
+
+    pal = load_printer().palette()
+    rng = np.random.default_rng(3)
+    lab = np.where(rng.random((40, 50)) < 0.95, 5, rng.integers(0, 7, (40, 50))).astype(np.uint8)
+    png = encode_labels_png(lab, pal)
+    rows = np.concatenate([np.zeros((40, 1), np.uint8), pal[lab].reshape(40, 150)], axis=1)
+    assert imagecodecs.deflate_encode(rows.tobytes(), level=1) in png

@@ -43,10 +43,10 @@ from .forward import N_COLOUR_INKS
 from .grey import grey_concentrations, rho_k_for
 from .tables import (
     CLEAR_KNOTS,
+    F_CONC,
     F_GREY,
     F_SIGMA,
     GREY_MAX,
-    N_FIELDS,
     ColourTables,
     lookup,
     mixture_sigma,
@@ -199,14 +199,20 @@ def align_density(tables: ColourTables, rgb: ArrayLike, conc5: ArrayLike,
                      float(short_high.max(initial=0.0)))
 
 
-_LOG_KNOTS = np.log(np.asarray(CLEAR_KNOTS))
+_LOG2_KNOTS = np.log2(np.asarray(CLEAR_KNOTS))
 LANES = 16  # fields per node in the kernel's table, padded so a node is one 64-byte line
+# Lanes of a kernel-table node (float32), derived once per node so the per-voxel work is the
+# interpolation plus a few operations.
+K_CONC = 0           # 0..4: C, M, Y, K, W normalised to sum 1 (the tables' are, to rounding)
+K_SIG = 5            # 5..10: sigma (1/mm) at the Clear knots rho = 1 .. 1/32
+K_GREY = K_SIG + len(CLEAR_KNOTS)  # 11: sigma with 10 % grey (1/mm)
 _PADDED: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 _PADDED_LOCK = threading.Lock()
 
 
 def kernel_table(tables: ColourTables) -> np.ndarray:
-    """The tables' ``packed`` fields padded to :data:`LANES` float32 per node, flattened.
+    """The tables' ``packed`` fields as the kernel reads them: :data:`LANES` float32 per node
+    (concentrations normalised, sigma at the Clear knots, grey sigma), flattened.
 
     Built once per table (memoised on the identity of ``packed``). The padding lets the
     compiled trilinear interpolation load each node as whole vectors.
@@ -216,10 +222,14 @@ def kernel_table(tables: ColourTables) -> np.ndarray:
         hit = _PADDED.get(key)
         if hit is not None and hit[0] is tables.packed:
             return hit[1]
-        n = tables.packed.shape[0]
-        flat = np.empty((n, n, n, LANES), np.float32)
-        flat[..., :N_FIELDS] = tables.packed
-        flat[..., N_FIELDS:] = 0.0
+        p = tables.packed
+        n = p.shape[0]
+        nk = len(CLEAR_KNOTS)
+        flat = np.zeros((n, n, n, LANES), np.float32)
+        c = np.maximum(p[..., F_CONC].astype(np.float64), 0.0)
+        flat[..., K_CONC:K_CONC + N_COLOUR_INKS] = c / c.sum(-1, keepdims=True)
+        flat[..., K_SIG:K_SIG + nk] = p[..., F_SIGMA:F_SIGMA + nk]
+        flat[..., K_GREY] = p[..., F_GREY]
         flat = flat.reshape(-1)
         if len(_PADDED) >= 4:
             _PADDED.clear()
@@ -275,82 +285,99 @@ def _trilinear16(flat, n, r, g, b, f):
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def align_voxel(flat, n, r, g, b, t, rho_k_table, sigma_clear, log_knots, f, out, stats):
-    """Lookup + alignment of one voxel into ``out`` (6,), INKS order; a pure function of
-    (r, g, b, t) and the tables. ``f`` is a (LANES,) float32 scratch buffer; ``stats`` (4,)
-    accumulates (clamped low, clamped high, worst low shortfall, worst high shortfall)."""
-    r = min(max(r, np.float32(0.0)), np.float32(1.0)) if r == r else np.float32(0.0)
-    g = min(max(g, np.float32(0.0)), np.float32(1.0)) if g == g else np.float32(0.0)
-    b = min(max(b, np.float32(0.0)), np.float32(1.0)) if b == b else np.float32(0.0)
-    _trilinear16(flat, n, r, g, b, f)
-    tot = 0.0
-    for i in range(N_COLOUR_INKS):
-        tot += max(np.float64(f[i]), 0.0)
-    inv = 1.0 / tot
-    if not (t >= 0.0):  # NaN or negative density: treat as empty
-        t = 0.0
-    s1 = np.float64(f[F_SIGMA])
+def clean_rgb(v):
+    """A colour channel clamped to [0, 1]; NaN -> 0 (a damaged voxel never indexes outside)."""
+    return min(max(v, np.float32(0.0)), np.float32(1.0)) if v == v else np.float32(0.0)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def align_fields(f, r, g, b, t, rho_k_table, sigma_clear, log2_knots, out, stats):
+    """Density alignment of one voxel from its interpolated node fields ``f`` (kernel-table
+    lanes) into ``out`` (6,) float32, INKS order. ``r, g, b`` clean (see :func:`clean_rgb`),
+    ``t`` float32 target; ``stats`` (4,) accumulates (clamped low, clamped high, worst low
+    shortfall, worst high shortfall)."""
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    if not (t >= zero):  # NaN or negative density: treat as empty
+        t = zero
+    s1 = f[K_SIG]
     if t <= s1:
         # eq. 12: C = rho C* + (1 - rho) Cl
-        nk = log_knots.shape[0]
         if t <= sigma_clear:
-            rho = 0.0
+            rho = zero
             if t < sigma_clear:
                 stats[0] += 1.0
-                stats[2] = max(stats[2], sigma_clear - t)
+                stats[2] = max(stats[2], sigma_clear - np.float64(t))
         else:
-            rho = -1.0
-            for k in range(nk - 1):
-                sb = np.float64(f[F_SIGMA + k + 1])
-                if t >= sb:
-                    sa = np.float64(f[F_SIGMA + k])
-                    if sa > sb:
-                        # log-log linear between the knots: rho = rho_b (rho_a / rho_b)^u
-                        u = math.log(t / sb) / math.log(sa / sb)
-                        rho = math.exp(log_knots[k + 1] + u * (log_knots[k] - log_knots[k + 1]))
-                    else:
-                        rho = math.exp(log_knots[k])
-                    break
-            if rho < 0.0:  # below the last knot: linear to pure Clear
-                sl = np.float64(f[F_SIGMA + nk - 1])
-                rl = math.exp(log_knots[nk - 1])
-                rho = rl * (t - sigma_clear) / max(sl - sigma_clear, 1e-30)
-            rho = min(max(rho, 0.0), 1.0)
+            nk = log2_knots.shape[0]
+            sl = f[K_SIG + nk - 1]
+            if t < sl:  # below the last knot: linear to pure Clear
+                rl = np.float32(2.0 ** log2_knots[nk - 1])
+                rho = rl * (t - sigma_clear) / max(sl - sigma_clear, np.float32(1e-30))
+            else:
+                # log-log linear between the bracketing knots a = k-1, b = k:
+                # rho = rho_b (rho_a / rho_b)^u, u = log(t / s_b) / log(s_a / s_b)
+                k = 1
+                while k < nk - 1 and t < f[K_SIG + k]:
+                    k += 1
+                sa = f[K_SIG + k - 1]
+                sb = f[K_SIG + k]
+                if sa > sb:
+                    u = np.float32(math.log2(t / sb)) / np.float32(math.log2(sa / sb))
+                    u = min(max(u, zero), one)
+                else:
+                    u = one
+                rho = np.float32(2.0) ** (np.float32(log2_knots[k])
+                                          + u * np.float32(log2_knots[k - 1] - log2_knots[k]))
+            rho = min(max(rho, zero), one)
         for i in range(N_COLOUR_INKS):
-            out[i] = rho * (max(np.float64(f[i]), 0.0) * inv)
-        out[5] = 1.0 - rho
+            out[i] = rho * f[K_CONC + i]
+        out[5] = one - rho
     else:
         # eq. 13: C = (1 - g) C* + g X, g <= 0.1, X of matching brightness (eq. 11)
-        sg = np.float64(f[F_GREY])
+        sg = f[K_GREY]
+        gmax = np.float32(GREY_MAX)
         if sg <= s1:
-            gfrac = 0.0
+            gfrac = zero
             stats[1] += 1.0
-            stats[3] = max(stats[3], t - s1)
+            stats[3] = max(stats[3], np.float64(t) - np.float64(s1))
         else:
-            gfrac = GREY_MAX * (t - s1) / (sg - s1)
-            if gfrac > GREY_MAX:
-                gfrac = GREY_MAX
+            gfrac = gmax * (t - s1) / (sg - s1)
+            if gfrac > gmax:
+                gfrac = gmax
                 stats[1] += 1.0
-                stats[3] = max(stats[3], t - sg)
+                stats[3] = max(stats[3], np.float64(t) - np.float64(sg))
         nb_table = rho_k_table.shape[0]
-        x = (np.float64(r) + np.float64(g) + np.float64(b)) / 3.0 * (nb_table - 1)
+        x = (r + g + b) / np.float32(3.0) * np.float32(nb_table - 1)
         j = min(int(x), nb_table - 2)
-        u = x - j
-        rk = rho_k_table[j] * (1.0 - u) + rho_k_table[j + 1] * u
+        u = x - np.float32(j)
+        rk = np.float32(rho_k_table[j] * (1.0 - u) + rho_k_table[j + 1] * u)
         for i in range(N_COLOUR_INKS):
-            out[i] = (1.0 - gfrac) * (max(np.float64(f[i]), 0.0) * inv)
+            out[i] = (one - gfrac) * f[K_CONC + i]
         out[_I_K] += gfrac * rk
-        out[_I_W] += gfrac * (1.0 - rk)
-        out[5] = 0.0
+        out[_I_W] += gfrac * (one - rk)
+        out[5] = zero
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def align_voxel(flat, n, r, g, b, t, rho_k_table, sigma_clear, log2_knots, f, out, stats):
+    """Lookup + alignment of one voxel into ``out`` (6,) float32, INKS order; a pure function
+    of (r, g, b, t) and the tables. ``f`` is a (LANES,) float32 scratch buffer; ``stats`` (4,)
+    accumulates (clamped low, clamped high, worst low shortfall, worst high shortfall)."""
+    r = clean_rgb(r)
+    g = clean_rgb(g)
+    b = clean_rgb(b)
+    _trilinear16(flat, n, r, g, b, f)
+    align_fields(f, r, g, b, np.float32(t), rho_k_table, sigma_clear, log2_knots, out, stats)
 
 
 @nb.njit(cache=True, nogil=True)
 def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, log_knots, out, stats):
     f = np.empty(LANES, np.float32)
-    c = np.empty(6)
+    c = np.empty(6, np.float32)
     for v in range(rgb.shape[0]):
-        align_voxel(flat, n, rgb[v, 0], rgb[v, 1], rgb[v, 2], np.float64(target[v]),
-                    rho_k_table, sigma_clear, log_knots, f, c, stats)
+        align_voxel(flat, n, rgb[v, 0], rgb[v, 1], rgb[v, 2], target[v], rho_k_table,
+                    np.float32(sigma_clear), log_knots, f, c, stats)
         for i in range(6):
             out[v, i] = c[i]
 
@@ -374,7 +401,7 @@ def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDAr
     stats = np.zeros(4)
     _align_kernel(kernel_table(tables), tables.packed.shape[0], rgb, target,
                   tables.brightness_rho_k.astype(np.float64), float(tables.sigma_clear),
-                  _LOG_KNOTS, out_conc6, stats)
+                  _LOG2_KNOTS, out_conc6, stats)
     return AlignCounts(int(stats[0]), int(stats[1]), float(stats[2]), float(stats[3]))
 
 

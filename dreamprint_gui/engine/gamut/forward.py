@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..colorimetry import observer_for
+from ..kubelka_munk import layer_rt
 from ..profile import InkProfile
 
 __all__ = ["ForwardModel", "forward_model", "mixtures_xyz", "mixtures_lab", "mixtures_srgb"]
@@ -64,20 +65,9 @@ def forward_model(profile: InkProfile) -> ForwardModel:
 
 @nb.njit(cache=True, fastmath=False)
 def _layer_rt(k: float, s: float, t: float) -> float:
-    """R + T of one wavelength, the same closed forms as kubelka_munk (eqs. 3-4, R_inf)."""
-    beta = math.sqrt(k * k + 2.0 * k * s)
-    if math.isinf(t):
-        d = s + k + beta
-        return s / d if d > 0.0 else 0.0
-    x = beta * t
-    if x < 1e-4:
-        tanhc = 1.0 - x * x / 3.0
-    else:
-        tanhc = math.tanh(x) / x
-    e = math.exp(-x)
-    sech = 2.0 * e / (1.0 + e * e)
-    q = (s + k) * t * tanhc + 1.0
-    return (s * t * tanhc + sech) / q
+    """R + T of one wavelength (eqs. 3-4, R_inf at t = inf; colour is eq. 7 on R + T)."""
+    r, tr = layer_rt(k, s, t)
+    return r + tr
 
 
 @nb.njit(cache=True)
