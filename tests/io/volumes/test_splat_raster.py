@@ -50,7 +50,7 @@ def _direct(means, sig, quats, opac, rgb, g, cut):
 def test_support_and_values_match_a_direct_sum():
     cloud = _cloud()
     s = GaussianCloud("c", "t", *cloud, bounds=((-1, -1, -1), (1, 1, 1)))
-    g = grid_for_source(s, (0.03, 0.04, 0.05), size_mm=(2, 2, 2))   # 67 x 50 x 40: many tiles
+    g = grid_for_source(s, (0.012, 0.04, 0.05), size_mm=(2, 2, 2))  # 167 x 50 x 40: many tiles
     rgb, d = s.sample_slab(g, 0, g.shape_xyz[2])
     # the cut is q <= 9: voxels within rounding of the boundary may fall either side
     lo, _ = _direct(*cloud, g, 9.0 - 1e-9)
@@ -66,7 +66,7 @@ def test_support_and_values_match_a_direct_sum():
 
 def test_bit_identical_across_slab_boundaries_and_threads():
     s = GaussianCloud("c", "t", *_cloud(60, 5), bounds=((-1, -1, -1), (1, 1, 1)))
-    g = grid_for_source(s, (0.02, 0.03, 0.01), size_mm=(2, 2, 2))
+    g = grid_for_source(s, (0.01, 0.03, 0.01), size_mm=(2, 2, 2))   # 200 x 67 x 200
     nz = g.shape_xyz[2]
     whole = s.sample_slab(g, 0, nz)
     for size in (1, 7, 13):
