@@ -33,7 +33,7 @@ import numpy as np
 from ...errors import DreamPrintError
 from .base import PrintGrid, check_slab, voxel_centres
 from .dense import bounds_list
-from .sampling import rasterise_gaussians
+from .splat_raster import rasterise_splats
 
 __all__ = ["GaussianCloud", "peak_density", "open_path", "SH_C0"]
 
@@ -109,13 +109,8 @@ class GaussianCloud:
         n = np.searchsorted(self._zmin_sorted, zs[-1], side="right")
         cand = self._order[:n]
         cand = np.sort(cand[self._zmax[cand] >= zs[0]])      # fixed order: deterministic sums
-        dens, col = rasterise_gaussians(cand, self.mean, self.inv_cov, self.peak, self.rgb,
-                                        self.half, xs, ys, zs)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rgb = np.where(dens[..., None] > 0, col / dens[..., None], 0.0).astype(np.float32)
-        np.clip(rgb, 0.0, 1.0, out=rgb)
-        sigma = dens * np.float32(density_scale / grid.mm_per_unit)
-        return rgb, sigma.astype(np.float32, copy=False)
+        return rasterise_splats(cand, self.mean, self.inv_cov, self.peak, self.rgb, self.half,
+                                xs, ys, zs, density_scale / grid.mm_per_unit)
 
     def info(self) -> dict:
         return {"format": self.format, "gaussians": int(self.n_total),
