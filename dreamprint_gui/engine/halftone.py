@@ -246,12 +246,20 @@ def pick_label(c, t, order, bg_label):
     for m in range(6):
         s += c[m]
     t = t * s
+    # The first q with t < acc_q (acc_q = c_order[0] + ... + c_order[q]) is the number of q
+    # for which t < max(acc_0..acc_q) fails: counted without a data-dependent branch, which the
+    # blue-noise thresholds would mispredict about once per voxel. The running maximum keeps
+    # this exact even for a negative concentration; the maximum skips a NaN sum, so a NaN (in t,
+    # or in acc from some q on) gives the same answer as the early-exit search.
     acc = 0.0
+    hi = -math.inf
+    n = 0
     for q in range(6):
-        m = order[q]
-        acc += c[m]
-        if t < acc:
-            return m
+        acc += c[order[q]]
+        hi = acc if acc > hi else hi
+        n += 0 if t < hi else 1
+    if n < 6:
+        return order[n]
     # t*s rounded onto the total: take the last ink with a non-zero share
     for q in range(5, -1, -1):
         if c[order[q]] > 0.0:

@@ -223,6 +223,7 @@ def _layer_kernel(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear
     xs = mask_columns(0, nx, ox, mx)
     f = np.empty(LANES, np.float32)
     c = np.empty(6, np.float32)
+    crow = np.empty((nx, 6), np.float32)  # the row's concentrations, between the passes
     acc = np.zeros(6)
     pr = np.float32(np.nan)
     pg = pr
@@ -267,8 +268,14 @@ def _layer_kernel(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear
                 pd = d
             for m in range(6):
                 acc[m] += c[m]
+                crow[i, m] = c[m]
+        # Second pass: halftone the row. Two short loops of independent iterations let the CPU
+        # overlap neighbouring voxels' latency chains, which one long loop body does not.
+        for i in range(nx):
+            if not dens[j * nx + i] >= threshold:
+                continue
             t = threshold_at(method, mask, mzz, myy, xs[i], seed, i, j, z)
-            lab = pick_label(c, t, order, bg_label)
+            lab = pick_label(crow[i], t, order, bg_label)
             labels[j, i] = lab
             counts[lab] += 1
     counts[bg_label] += n_bg

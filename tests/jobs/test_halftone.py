@@ -98,3 +98,48 @@ def test_background_threshold_and_label():
     h.layer_into(conc, dens, 0, out, counts, sums)
     assert out.ravel().tolist() == [6, 0, 6, 0]
     assert counts.tolist() == [2, 0, 0, 0, 0, 0, 2]
+
+
+def _first_crossing(c, t, order):
+    """The label rule written out: the first ink (in ``order``) whose cumulative concentration
+    exceeds t times the total; on a rounding miss the last ink with a positive share."""
+    c = [float(v) for v in c]
+    tt = t * sum(c)
+    acc = 0.0
+    for m in order:
+        acc += c[m]
+        if tt < acc:
+            return m
+    for m in reversed(order):
+        if c[m] > 0.0:
+            return m
+    return 6
+
+
+def test_pick_label_is_the_first_crossing():
+    from numba import njit
+
+    from dreamprint_gui.engine.halftone import INK_ORDER, pick_label
+
+    @njit
+    def labels(conc, t, order):
+        out = np.empty(conc.shape[0], np.int64)
+        for i in range(conc.shape[0]):
+            out[i] = pick_label(conc[i], t[i], order, 6)
+        return out
+
+    rng = np.random.default_rng(5)
+    n = 4000
+    conc = (rng.random((n, 6)) * (rng.random((n, 6)) < 0.6)).astype(np.float32)
+    conc[:400] -= np.float32(0.3) * (rng.random((400, 6)) < 0.2)  # a negative share
+    conc[400:450] = 0.0                                          # nothing to draw
+    conc[450:500, 2] = np.nan                                    # a damaged voxel
+    t = rng.random(n)
+    t[500:550] = 0.0
+    t[550:600] = 1.0                                             # t * s rounds onto s
+    t[600:650] = np.nan
+    order = np.asarray(INK_ORDER, np.int64)
+    got = labels(conc, t, order)
+    want = [_first_crossing(conc[i], t[i], INK_ORDER) for i in range(n)]
+    assert got.tolist() == want
+    assert len(set(want)) == 7  # every ink and the fallback label are exercised
