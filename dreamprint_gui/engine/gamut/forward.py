@@ -96,26 +96,14 @@ def spectrum_xyz_jac(c, K, S, W, t, xyz, jac, tmp):
     if not math.isinf(t):
         spectrum_xyz(c, K, S, W, t, xyz)
         h = 1e-7
+        shifted = np.empty(3)
         for i in range(n_ink):
             for m in range(n_ink):
                 tmp[m] = c[m]
             tmp[i] += h
-            x0 = 0.0
-            x1 = 0.0
-            x2 = 0.0
-            for j in range(n_wl):
-                k = 0.0
-                s = 0.0
-                for m in range(n_ink):
-                    k += tmp[m] * K[m, j]
-                    s += tmp[m] * S[m, j]
-                r = _layer_rt(k, s, t)
-                x0 += r * W[j, 0]
-                x1 += r * W[j, 1]
-                x2 += r * W[j, 2]
-            jac[0, i] = (x0 - xyz[0]) / h
-            jac[1, i] = (x1 - xyz[1]) / h
-            jac[2, i] = (x2 - xyz[2]) / h
+            spectrum_xyz(tmp, K, S, W, t, shifted)
+            for a in range(3):
+                jac[a, i] = (shifted[a] - xyz[a]) / h
         return
     for a in range(3):
         xyz[a] = 0.0
