@@ -12,11 +12,11 @@ Defines
   (byte-identical to the layer in an exported job).
 
 Per slab of layers ``[z0, z1)``: sample the source on the printer grid (density in 1/mm, the
-volume source's rule); then per layer one compiled kernel (``_layer_kernel``, nogil) does, per
-voxel, the background threshold (``--background clear|empty``) -> trilinear table lookup of
-C, M, Y, K, W and density alignment (Clear, K/W grey; ``gamut.alignment.align_voxel``, the body
-of ``lookup_and_align_into``) -> halftone (``halftone.pick_label``) -> label, with no
-per-voxel intermediate arrays -> PNG (:mod:`..io.png_slices`). Only a slab is ever in memory
+volume source's rule); then per layer one compiled kernel (:func:`.layer_kernel.layer_labels`,
+nogil) does the background threshold (``--background clear|empty``) -> trilinear table lookup
+of C, M, Y, K, W -> density alignment (Clear, K/W grey; the code of ``lookup_and_align_into``)
+-> halftone (the rule of ``halftone.pick_label``) -> label, row by row -> PNG
+(:mod:`..io.png_slices`). Only a slab is ever in memory
 per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
 multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed`` cluster
 (``scheduler="tcp://host:8786"``) whose workers write the slices into the job's temporary folder
@@ -38,11 +38,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from ..errors import DreamPrintError
-from .gamut.alignment import LANES, _trilinear16, align_fields, clean_rgb
-from .halftone import HALFTONE_METHODS, Halftoner, mask_columns, pick_label, threshold_at
+from .halftone import HALFTONE_METHODS, Halftoner
+from .layer_kernel import layer_labels
 from .printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from .profile import INKS
 
@@ -206,99 +205,20 @@ def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
             acc[k] = acc.get(k, 0.0) + v
 
 
-@njit(cache=True, nogil=True)
-def _layer_kernel(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear, log2_knots,
-                  method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
-    """One layer: background test -> lookup + alignment -> halftone -> label, per voxel.
-
-    ``rgb`` (ny*nx, 3), ``dens`` (ny*nx,) -> ``labels`` (ny, nx). The labels equal
-    ``lookup_and_align_into`` followed by ``Halftoner.layer_into``. A voxel with the same
-    colour as the one before it reuses its interpolated table fields, and with the same density
-    too its concentrations (and its clamp report): uniform-colour sources (density-only VDB,
-    voxel models) pay the table interpolation once per run of voxels.
-    """
-    ny, nx = labels.shape
-    mz, my, mx = mask.shape
-    mzz = (z + oz) % mz
-    xs = mask_columns(0, nx, ox, mx)
-    f = np.empty(LANES, np.float32)
-    c = np.empty(6, np.float32)
-    crow = np.empty((nx, 6), np.float32)  # the row's concentrations, between the passes
-    acc = np.zeros(6)
-    pr = np.float32(np.nan)
-    pg = pr
-    pb = pr
-    pd = pr
-    d_low = 0.0
-    d_high = 0.0
-    n_bg = 0
-    for j in range(ny):
-        myy = (j + oy) % my
-        for i in range(nx):
-            p = j * nx + i
-            d = dens[p]
-            if not d >= threshold:  # NaN too
-                labels[j, i] = bg_label
-                n_bg += 1
-                continue
-            r = clean_rgb(rgb[p, 0])
-            g = clean_rgb(rgb[p, 1])
-            b = clean_rgb(rgb[p, 2])
-            if r == pr and g == pg and b == pb:
-                if d == pd:
-                    stats[0] += d_low
-                    stats[1] += d_high
-                else:
-                    lo0 = stats[0]
-                    hi0 = stats[1]
-                    align_fields(f, r, g, b, d, rho_k, sigma_clear, log2_knots, c, stats)
-                    d_low = stats[0] - lo0
-                    d_high = stats[1] - hi0
-                    pd = d
-            else:
-                lo0 = stats[0]
-                hi0 = stats[1]
-                _trilinear16(flat, n, r, g, b, f)
-                align_fields(f, r, g, b, d, rho_k, sigma_clear, log2_knots, c, stats)
-                d_low = stats[0] - lo0
-                d_high = stats[1] - hi0
-                pr = r
-                pg = g
-                pb = b
-                pd = d
-            for m in range(6):
-                acc[m] += c[m]
-                crow[i, m] = c[m]
-        # Second pass: halftone the row. Two short loops of independent iterations let the CPU
-        # overlap neighbouring voxels' latency chains, which one long loop body does not.
-        for i in range(nx):
-            if not dens[j * nx + i] >= threshold:
-                continue
-            t = threshold_at(method, mask, mzz, myy, xs[i], seed, i, j, z)
-            lab = pick_label(crow[i], t, order, bg_label)
-            labels[j, i] = lab
-            counts[lab] += 1
-    counts[bg_label] += n_bg
-    sums[bg_label] += n_bg
-    for m in range(6):
-        sums[m] += acc[m]
-
-
 def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
                      labels: np.ndarray, counts: np.ndarray, sums: np.ndarray,
                      stats: np.ndarray) -> None:
-    from .gamut.alignment import _LOG2_KNOTS, kernel_table
+    from .gamut.alignment import kernel_table
 
     _, tables = ctx.resources()
     rgb = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32)
     d = np.ascontiguousarray(dens.reshape(-1), dtype=np.float32)
     # Background voxels skip the lookup: faster, and they are not "clamped" (they become
     # background by choice, not for want of a reachable density).
-    _layer_kernel(rgb, d, z, np.float32(ctx.halftoner.threshold), ctx.halftoner.bg_label,
-                  kernel_table(tables), tables.packed.shape[0],
-                  tables.brightness_rho_k.astype(np.float64),
-                  np.float32(tables.sigma_clear), _LOG2_KNOTS, *ctx.halftoner.kernel_args(), labels,
-                  counts, sums, stats)
+    layer_labels(rgb, d, z, np.float32(ctx.halftoner.threshold), ctx.halftoner.bg_label,
+                 kernel_table(tables), tables.packed.shape[0],
+                 tables.brightness_rho_k.astype(np.float64), np.float32(tables.sigma_clear),
+                 *ctx.halftoner.kernel_args(), labels, counts, sums, stats)
 
 
 def _clamp_report(stats: np.ndarray) -> dict[str, float]:

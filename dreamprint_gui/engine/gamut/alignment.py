@@ -12,9 +12,10 @@ Defines
   curves (sigma at Clear dilutions rho = 1 .. 1/32, log-log piecewise linear in rho; sigma with
   10 % grey, linear in the grey fraction). ``benchmarks/bench_gamut.py`` prints its speed and its
   sigma error against :func:`align_density`.
-- :func:`align_voxel`: that kernel's per-voxel body (numba, inlined), which the print job's
-  per-layer kernel calls directly; :func:`kernel_table`: the table it reads (the packed fields
-  padded to :data:`LANES` float32 per node, interpolated in float32 as whole vectors).
+- :func:`align_rows`: that kernel's alignment of a run of voxels (branch-free, vectorised),
+  which the print job's per-layer kernel calls directly; :func:`kernel_table`: the table the
+  lookup reads (the packed fields padded to :data:`LANES` float32 per node, interpolated in
+  float32 as whole vectors by :func:`interpolate_block`).
 - :func:`predicted_appearance`: what a voxel will look like after lookup + alignment (GUI).
 
 Lowering (eq. 12): ``C = rho C* + (1 - rho) Cl``. With an ideal Clear (K = S = 0) the mixture's
@@ -28,7 +29,6 @@ than C* (bright colours: X is mostly white, whose sigma is low), are reported as
 
 from __future__ import annotations
 
-import math
 import threading
 from dataclasses import dataclass
 
@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..colorimetry import observer_for
 from ..mixture import mixture_colour
 from ..profile import INKS, InkProfile
+from ..vector_math import exp2_f64, log2_f64
 from .forward import N_COLOUR_INKS
 from .grey import grey_concentrations, rho_k_for
 from .tables import (
@@ -53,7 +54,8 @@ from .tables import (
 )
 
 __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
-           "predicted_appearance", "align_voxel", "kernel_table", "LANES"]
+           "predicted_appearance", "interpolate_block", "align_rows", "grey_rho_k", "clean_rgb",
+           "kernel_table", "LANES", "ROW_BLOCK", "K_TARGET", "K_RHOK"]
 
 _I_K = INKS.index("K")
 _I_W = INKS.index("W")
@@ -206,6 +208,10 @@ LANES = 16  # fields per node in the kernel's table, padded so a node is one 64-
 K_CONC = 0           # 0..4: C, M, Y, K, W normalised to sum 1 (the tables' are, to rounding)
 K_SIG = 5            # 5..10: sigma (1/mm) at the Clear knots rho = 1 .. 1/32
 K_GREY = K_SIG + len(CLEAR_KNOTS)  # 11: sigma with 10 % grey (1/mm)
+# Padding lanes, free in the table, carry per-voxel inputs of align_rows once interpolated.
+K_TARGET = K_GREY + 1  # 12: the voxel's target sigma (1/mm)
+K_RHOK = K_GREY + 2    # 13: rho_K of the voxel's grey
+ROW_BLOCK = 1024       # voxels per call of align_rows (its output rows' stride)
 _PADDED: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 _PADDED_LOCK = threading.Lock()
 
@@ -237,51 +243,75 @@ def kernel_table(tables: ColourTables) -> np.ndarray:
         return flat
 
 
-@nb.njit(cache=True, nogil=True, inline="always")
-def _trilinear16(flat, n, r, g, b, f):
-    """Trilinear interpolation of a node's 16 float32 lanes at sRGB (r, g, b) in [0, 1].
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def interpolate_block(flat, n, rgb, m, W, off, A, G):
+    """Trilinear interpolation of the kernel table's node lanes for voxels ``0 .. m-1``.
 
-    Offsets are unsigned: with signed indices numba guards each access against negative
-    (wrap-around) indexing, which stops LLVM from loading a node's lanes as one vector.
+    ``rgb`` (3 * ROW_BLOCK,) float32 clean sRGB (:func:`clean_rgb`), one row per channel; ``W``
+    (8 * ROW_BLOCK,) float32, ``off`` (ROW_BLOCK,) int64 and ``A`` (ROW_BLOCK * LANES,) float32
+    are scratch; writes lanes ``0 .. K_GREY`` of ``G`` (LANES * ROW_BLOCK,), lane ``q`` of voxel
+    ``k`` at ``q * ROW_BLOCK + k`` (the layout of :func:`align_rows`).
+
+    Three passes, each in the form the CPU runs fastest: cell and weights of every voxel
+    (vectorised across voxels); the eight nodes' 16 lanes as whole 64-byte vectors per voxel
+    (a node is one cache line); the lanes turned into rows. Offsets are unsigned: with signed
+    indices numba guards each access against negative (wrap-around) indexing, which stops LLVM
+    from loading a node's lanes as one vector.
     """
-    m = n - 1
-    cx = r * np.float32(m)
-    cy = g * np.float32(m)
-    cz = b * np.float32(m)
-    i0 = min(int(cx), m - 1)
-    j0 = min(int(cy), m - 1)
-    k0 = min(int(cz), m - 1)
-    fx = cx - np.float32(i0)
-    fy = cy - np.float32(j0)
-    fz = cz - np.float32(k0)
+    RB = ROW_BLOCK
+    top = n - 1
     one = np.float32(1.0)
-    gx = one - fx
-    gy = one - fy
-    gz = one - fz
-    w0 = gx * gy * gz
-    w1 = gx * gy * fz
-    w2 = gx * fy * gz
-    w3 = gx * fy * fz
-    w4 = fx * gy * gz
-    w5 = fx * gy * fz
-    w6 = fx * fy * gz
-    w7 = fx * fy * fz
+    for k in range(m):
+        cx = rgb[k] * np.float32(top)
+        cy = rgb[RB + k] * np.float32(top)
+        cz = rgb[2 * RB + k] * np.float32(top)
+        i0 = min(np.int64(cx), top - 1)
+        j0 = min(np.int64(cy), top - 1)
+        k0 = min(np.int64(cz), top - 1)
+        fx = cx - np.float32(i0)
+        fy = cy - np.float32(j0)
+        fz = cz - np.float32(k0)
+        gx = one - fx
+        gy = one - fy
+        gz = one - fz
+        W[k] = gx * gy * gz
+        W[RB + k] = gx * gy * fz
+        W[2 * RB + k] = gx * fy * gz
+        W[3 * RB + k] = gx * fy * fz
+        W[4 * RB + k] = fx * gy * gz
+        W[5 * RB + k] = fx * gy * fz
+        W[6 * RB + k] = fx * fy * gz
+        W[7 * RB + k] = fx * fy * fz
+        off[k] = ((i0 * n + j0) * n + k0) * LANES
     sk = np.uint64(LANES)
     sj = np.uint64(n * LANES)
     si = np.uint64(n * n * LANES)
-    o0 = np.uint64(i0) * si + np.uint64(j0) * sj + np.uint64(k0) * sk
-    o1 = o0 + sk
-    o2 = o0 + sj
-    o3 = o2 + sk
-    o4 = o0 + si
-    o5 = o4 + sk
-    o6 = o4 + sj
-    o7 = o6 + sk
-    for qq in range(LANES):
-        q = np.uint64(qq)
-        f[qq] = (((((((w0 * flat[o0 + q] + w1 * flat[o1 + q]) + w2 * flat[o2 + q])
-                     + w3 * flat[o3 + q]) + w4 * flat[o4 + q]) + w5 * flat[o5 + q])
-                  + w6 * flat[o6 + q]) + w7 * flat[o7 + q])
+    for k in range(m):
+        o0 = np.uint64(off[k])
+        o1 = o0 + sk
+        o2 = o0 + sj
+        o3 = o2 + sk
+        o4 = o0 + si
+        o5 = o4 + sk
+        o6 = o4 + sj
+        o7 = o6 + sk
+        w0 = W[k]
+        w1 = W[RB + k]
+        w2 = W[2 * RB + k]
+        w3 = W[3 * RB + k]
+        w4 = W[4 * RB + k]
+        w5 = W[5 * RB + k]
+        w6 = W[6 * RB + k]
+        w7 = W[7 * RB + k]
+        d = np.uint64(k * LANES)
+        for qq in range(LANES):
+            q = np.uint64(qq)
+            A[d + q] = (((((((w0 * flat[o0 + q] + w1 * flat[o1 + q]) + w2 * flat[o2 + q])
+                           + w3 * flat[o3 + q]) + w4 * flat[o4 + q]) + w5 * flat[o5 + q])
+                         + w6 * flat[o6 + q]) + w7 * flat[o7 + q])
+    for k in range(m):
+        for q in range(K_GREY + 1):
+            G[q * RB + k] = A[k * LANES + q]
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -290,96 +320,140 @@ def clean_rgb(v):
     return min(max(v, np.float32(0.0)), np.float32(1.0)) if v == v else np.float32(0.0)
 
 
+_NK = len(CLEAR_KNOTS)
+_LK = np.asarray(_LOG2_KNOTS, dtype=np.float64)
+
+
 @nb.njit(cache=True, nogil=True, inline="always")
-def align_fields(f, r, g, b, t, rho_k_table, sigma_clear, log2_knots, out, stats):
-    """Density alignment of one voxel from its interpolated node fields ``f`` (kernel-table
-    lanes) into ``out`` (6,) float32, INKS order. ``r, g, b`` clean (see :func:`clean_rgb`),
-    ``t`` float32 target; ``stats`` (4,) accumulates (clamped low, clamped high, worst low
-    shortfall, worst high shortfall)."""
+def grey_rho_k(rho_k_table, r, g, b):
+    """rho_K of the K/W grey of the brightness of clean sRGB (r, g, b) (eq. 11), float32."""
+    nbt = rho_k_table.shape[0]
+    x = (r + g + b) / np.float32(3.0) * np.float32(nbt - 1)
+    j = min(int(x), nbt - 2)
+    v = x - np.float32(j)
+    return np.float32(rho_k_table[j] * (1.0 - v) + rho_k_table[j + 1] * v)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _bracket(go, t, s_next, sa, sb, la, lb, l_next):
+    """One step of the knot search: move to the next bracket while the target stays below."""
+    go = go & (t < sb)
+    return go, (sb if go else sa), (s_next if go else sb), (lb if go else la), \
+        (l_next if go else lb)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def align_rows(F, m, sigma_clear, out):
+    """Density alignment (eqs. 12-13) of voxels ``0 .. m-1`` of a block from their node fields.
+
+    ``F`` (LANES * ROW_BLOCK,) float32, lane ``q`` of voxel ``k`` at ``q * ROW_BLOCK + k``: the
+    kernel-table lanes (:func:`interpolate_block`), the target sigma (1/mm; NaN or negative -> 0) in
+    lane :data:`K_TARGET` and the rho_K of the voxel's grey (:func:`grey_rho_k`) in lane
+    :data:`K_RHOK`. Writes ``out`` (8 * ROW_BLOCK,) float32 the same way: rows 0-5 the
+    concentrations (INKS order), rows 6 and 7 the shortfall (1/mm) of a voxel clamped low /
+    high, else 0. ``m <= ROW_BLOCK``. Returns the numbers of voxels clamped low and high.
+
+    Written for LLVM's loop vectoriser, which then runs 8-16 voxels per instruction: one row
+    per lane with constant strides (so it can rule out overlaps with a single check), every
+    voxel through both branches with selects keeping one (no data-dependent jumps or loads),
+    the knot search unrolled by hand, log2 / exp2 from :mod:`..vector_math`. Each voxel's
+    result depends on its own inputs only.
+    """
     zero = np.float32(0.0)
     one = np.float32(1.0)
-    if not (t >= zero):  # NaN or negative density: treat as empty
-        t = zero
-    s1 = f[K_SIG]
-    if t <= s1:
-        # eq. 12: C = rho C* + (1 - rho) Cl
-        if t <= sigma_clear:
-            rho = zero
-            if t < sigma_clear:
-                stats[0] += 1.0
-                stats[2] = max(stats[2], sigma_clear - np.float64(t))
-        else:
-            nk = log2_knots.shape[0]
-            sl = f[K_SIG + nk - 1]
-            if t < sl:  # below the last knot: linear to pure Clear
-                rl = np.float32(2.0 ** log2_knots[nk - 1])
-                rho = rl * (t - sigma_clear) / max(sl - sigma_clear, np.float32(1e-30))
-            else:
-                # log-log linear between the bracketing knots a = k-1, b = k:
-                # rho = rho_b (rho_a / rho_b)^u, u = log(t / s_b) / log(s_a / s_b)
-                k = 1
-                while k < nk - 1 and t < f[K_SIG + k]:
-                    k += 1
-                sa = f[K_SIG + k - 1]
-                sb = f[K_SIG + k]
-                if sa > sb:
-                    u = np.float32(math.log2(t / sb)) / np.float32(math.log2(sa / sb))
-                    u = min(max(u, zero), one)
-                else:
-                    u = one
-                rho = np.float32(2.0) ** (np.float32(log2_knots[k])
-                                          + u * np.float32(log2_knots[k - 1] - log2_knots[k]))
-            rho = min(max(rho, zero), one)
-        for i in range(N_COLOUR_INKS):
-            out[i] = rho * f[K_CONC + i]
-        out[5] = one - rho
-    else:
-        # eq. 13: C = (1 - g) C* + g X, g <= 0.1, X of matching brightness (eq. 11)
-        sg = f[K_GREY]
-        gmax = np.float32(GREY_MAX)
-        if sg <= s1:
-            gfrac = zero
-            stats[1] += 1.0
-            stats[3] = max(stats[3], np.float64(t) - np.float64(s1))
-        else:
-            gfrac = gmax * (t - s1) / (sg - s1)
-            if gfrac > gmax:
-                gfrac = gmax
-                stats[1] += 1.0
-                stats[3] = max(stats[3], np.float64(t) - np.float64(sg))
-        nb_table = rho_k_table.shape[0]
-        x = (r + g + b) / np.float32(3.0) * np.float32(nb_table - 1)
-        j = min(int(x), nb_table - 2)
-        u = x - np.float32(j)
-        rk = np.float32(rho_k_table[j] * (1.0 - u) + rho_k_table[j + 1] * u)
-        for i in range(N_COLOUR_INKS):
-            out[i] = (one - gfrac) * f[K_CONC + i]
-        out[_I_K] += gfrac * rk
-        out[_I_W] += gfrac * (one - rk)
-        out[5] = zero
+    gmax = np.float32(GREY_MAX)
+    sc = np.float32(sigma_clear)
+    rl = np.float32(2.0 ** _LK[_NK - 1])
+    RB = ROW_BLOCK
+    n_low = 0
+    n_high = 0
+    for k in range(m):
+        t = F[K_TARGET * RB + k]
+        t = t if t >= zero else zero
+        s0 = F[(K_SIG + 0) * RB + k]
+        s1 = F[(K_SIG + 1) * RB + k]
+        s2 = F[(K_SIG + 2) * RB + k]
+        s3 = F[(K_SIG + 3) * RB + k]
+        s4 = F[(K_SIG + 4) * RB + k]
+        s5 = F[(K_SIG + 5) * RB + k]
+        # eq. 12: C = rho C* + (1 - rho) Cl. Below the last knot: linear to pure Clear.
+        span = s5 - sc
+        span = span if span > np.float32(1e-30) else np.float32(1e-30)
+        rho_lin = rl * (t - sc) / span
+        # Between knots a and b = a + 1, the first b whose sigma the target reaches: log-log
+        # linear, rho = rho_b (rho_a / rho_b)^u, u = log(t / s_b) / log(s_a / s_b).
+        go = True
+        sa, sb, la, lb = s0, s1, _LK[0], _LK[1]
+        go, sa, sb, la, lb = _bracket(go, t, s2, sa, sb, la, lb, _LK[2])
+        go, sa, sb, la, lb = _bracket(go, t, s3, sa, sb, la, lb, _LK[3])
+        go, sa, sb, la, lb = _bracket(go, t, s4, sa, sb, la, lb, _LK[4])
+        go, sa, sb, la, lb = _bracket(go, t, s5, sa, sb, la, lb, _LK[5])
+        u = log2_f64(np.float64(t) / np.float64(sb)) / log2_f64(np.float64(sa) / np.float64(sb))
+        u = u if sa > sb else 1.0
+        u = u if u > 0.0 else 0.0  # NaN -> 0
+        u = u if u < 1.0 else 1.0
+        rho_log = np.float32(exp2_f64(lb + u * (la - lb)))
+        rho = rho_lin if t < s5 else rho_log
+        rho = rho if t > sc else zero
+        rho = rho if rho > zero else zero
+        rho = rho if rho < one else one
+        # eq. 13: C = (1 - g) C* + g X, g <= 0.1 (the paper's "upper limit of rho+ 0.1" bounds
+        # the grey), X the K/W grey of the voxel's brightness (eq. 11).
+        sg = F[K_GREY * RB + k]
+        useless = sg <= s0  # the grey would not raise the density
+        graw = gmax * (t - s0) / (sg - s0)
+        over = graw > gmax
+        gfrac = gmax if over else graw
+        gfrac = zero if useless else gfrac
+        rk = F[K_RHOK * RB + k]
+        clear = t <= s0
+        a = rho if clear else one - gfrac  # weight of C*
+        gk = zero if clear else gfrac * rk
+        gw = zero if clear else gfrac * (one - rk)
+        out[0 * RB + k] = a * F[(K_CONC + 0) * RB + k]
+        out[1 * RB + k] = a * F[(K_CONC + 1) * RB + k]
+        out[2 * RB + k] = a * F[(K_CONC + 2) * RB + k]
+        out[_I_K * RB + k] = a * F[(K_CONC + _I_K) * RB + k] + gk
+        out[_I_W * RB + k] = a * F[(K_CONC + _I_W) * RB + k] + gw
+        out[_I_CL * RB + k] = one - rho if clear else zero
+        lo = clear & (t < sc)
+        hi = (not clear) & (useless | over)
+        n_low += 1 if lo else 0
+        n_high += 1 if hi else 0
+        out[6 * RB + k] = sc - t if lo else zero
+        out[7 * RB + k] = (t - (s0 if useless else sg)) if hi else zero
+    return n_low, n_high
 
 
-@nb.njit(cache=True, nogil=True, inline="always")
-def align_voxel(flat, n, r, g, b, t, rho_k_table, sigma_clear, log2_knots, f, out, stats):
-    """Lookup + alignment of one voxel into ``out`` (6,) float32, INKS order; a pure function
-    of (r, g, b, t) and the tables. ``f`` is a (LANES,) float32 scratch buffer; ``stats`` (4,)
-    accumulates (clamped low, clamped high, worst low shortfall, worst high shortfall)."""
-    r = clean_rgb(r)
-    g = clean_rgb(g)
-    b = clean_rgb(b)
-    _trilinear16(flat, n, r, g, b, f)
-    align_fields(f, r, g, b, np.float32(t), rho_k_table, sigma_clear, log2_knots, out, stats)
-
-
-@nb.njit(cache=True, nogil=True)
-def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, log_knots, out, stats):
-    f = np.empty(LANES, np.float32)
-    c = np.empty(6, np.float32)
-    for v in range(rgb.shape[0]):
-        align_voxel(flat, n, rgb[v, 0], rgb[v, 1], rgb[v, 2], target[v], rho_k_table,
-                    np.float32(sigma_clear), log_knots, f, c, stats)
-        for i in range(6):
-            out[v, i] = c[i]
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, out, stats):
+    RB = ROW_BLOCK
+    col = np.empty(3 * RB, np.float32)
+    W = np.empty(8 * RB, np.float32)
+    off = np.empty(RB, np.int64)
+    A = np.empty(RB * LANES, np.float32)
+    G = np.empty(LANES * RB, np.float32)
+    c = np.empty(8 * RB, np.float32)
+    for v0 in range(0, rgb.shape[0], RB):
+        m = min(RB, rgb.shape[0] - v0)
+        for k in range(m):
+            r = clean_rgb(rgb[v0 + k, 0])
+            g = clean_rgb(rgb[v0 + k, 1])
+            b = clean_rgb(rgb[v0 + k, 2])
+            col[k] = r
+            col[RB + k] = g
+            col[2 * RB + k] = b
+            G[K_TARGET * RB + k] = np.float32(target[v0 + k])
+            G[K_RHOK * RB + k] = grey_rho_k(rho_k_table, r, g, b)
+        interpolate_block(flat, n, col, m, W, off, A, G)
+        lo, hi = align_rows(G, m, sigma_clear, c)
+        stats[0] += lo
+        stats[1] += hi
+        for k in range(m):
+            stats[2] = max(stats[2], np.float64(c[6 * RB + k]))
+            stats[3] = max(stats[3], np.float64(c[7 * RB + k]))
+            for i in range(6):
+                out[v0 + k, i] = c[i * RB + k]
 
 
 def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDArray,
@@ -389,8 +463,8 @@ def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDAr
     ``rgb`` (N, 3) and ``sigma_target`` (N,) float32 (any float accepted), encoded sRGB in
     [0, 1] and 1/mm; writes C, M, Y, K, W, Cl into ``out_conc6`` (N, 6). Runs on the calling
     thread (call it from several threads on separate slabs to use several cores). Each voxel's
-    result is a pure function of its inputs (:func:`align_voxel`, also used by the print job's
-    fused per-layer kernel).
+    result is a pure function of its inputs (:func:`interpolate_block` then :func:`align_rows`,
+    as in the print job's fused per-layer kernel).
     """
     rgb = np.ascontiguousarray(rgb, dtype=np.float32)
     target = np.ascontiguousarray(sigma_target).reshape(-1)
@@ -401,7 +475,7 @@ def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDAr
     stats = np.zeros(4)
     _align_kernel(kernel_table(tables), tables.packed.shape[0], rgb, target,
                   tables.brightness_rho_k.astype(np.float64), float(tables.sigma_clear),
-                  _LOG2_KNOTS, out_conc6, stats)
+                  out_conc6, stats)
     return AlignCounts(int(stats[0]), int(stats[1]), float(stats[2]), float(stats[3]))
 
 
