@@ -348,10 +348,12 @@ def label_rows(C, tt, m, order, bg_label, lab):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def fg_threshold(method, mask, mzz, myy, xs, seed, i, x, y, z):
-    """Threshold of the voxel in column ``i`` (mask x index ``xs[i]``) at position (x, y, z)."""
+def fg_threshold(method, mrow, xs, seed, i, x, y, z):
+    """Threshold of the voxel in column ``i`` at position (x, y, z): the blue-noise mask's
+    (method 0; ``mrow`` the mask row of the voxel's row, ``xs[i]`` its column there) or the
+    position hash's (1)."""
     if method == 0:
-        return np.float64(mask[mzz, myy, xs[i]])
+        return np.float64(mrow[xs[i]])
     return _uniform(seed, x, y, z)
 
 
@@ -367,7 +369,7 @@ def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy,
     tt = np.empty(nx)
     lab = np.empty(nx, np.uint8)
     for j in range(ny):
-        myy = (y0 + j + oy) % my
+        mrow = mask[mzz, (y0 + j + oy) % my]
         m = 0
         for i in range(nx):
             idx[m] = i
@@ -376,7 +378,7 @@ def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy,
             i = idx[k]
             for q in range(6):
                 C[q, k] = conc[j * nx + i, q]
-            tt[k] = fg_threshold(method, mask, mzz, myy, xs, seed, i, x0 + i, y0 + j, z)
+            tt[k] = fg_threshold(method, mrow, xs, seed, i, x0 + i, y0 + j, z)
         label_rows(C, tt, m, order, bg_label, lab)
         row = out[j]
         for i in range(nx):
@@ -389,12 +391,42 @@ def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy,
 @njit(cache=True, nogil=True, inline="always")
 def scatter_labels(row, idx, k0, lab, C, m, counts, conc_sums):
     """Put labels ``lab[0 .. m-1]`` of foreground voxels ``idx[k0 ..]`` into ``row``; accumulate
-    their label counts and intended concentrations (``C`` (6+, >= m), one row per ink)."""
+    their label counts and intended concentrations (``C`` (6+, >= m), one row per ink).
+
+    The tallies run in local variables: kept in arrays, every voxel would wait for the previous
+    voxel's store to the same counter."""
     for k in range(m):
         row[idx[k0 + k]] = lab[k]
-        counts[lab[k]] += 1
-        for q in range(6):
-            conc_sums[q] += C[q, k]
+    n0 = n1 = n2 = n3 = n4 = n5 = n6 = 0
+    s0 = s1 = s2 = s3 = s4 = s5 = 0.0
+    for k in range(m):
+        v = lab[k]
+        n0 += 1 if v == 0 else 0
+        n1 += 1 if v == 1 else 0
+        n2 += 1 if v == 2 else 0
+        n3 += 1 if v == 3 else 0
+        n4 += 1 if v == 4 else 0
+        n5 += 1 if v == 5 else 0
+        n6 += 1 if v == 6 else 0
+        s0 += C[0, k]
+        s1 += C[1, k]
+        s2 += C[2, k]
+        s3 += C[3, k]
+        s4 += C[4, k]
+        s5 += C[5, k]
+    counts[0] += n0
+    counts[1] += n1
+    counts[2] += n2
+    counts[3] += n3
+    counts[4] += n4
+    counts[5] += n5
+    counts[6] += n6
+    conc_sums[0] += s0
+    conc_sums[1] += s1
+    conc_sums[2] += s2
+    conc_sums[3] += s3
+    conc_sums[4] += s4
+    conc_sums[5] += s5
 
 
 @dataclass(frozen=True)

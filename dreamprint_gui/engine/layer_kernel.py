@@ -60,7 +60,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     tt = np.empty(RB)
     lab = np.empty(RB, np.uint8)
     for j in range(ny):
-        myy = (j + oy) % my
+        mrow = mask[mzz, (j + oy) % my]
         base = j * nx
         m = 0
         for i in range(nx):
@@ -84,7 +84,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
                 col[2 * RB + k] = bb
                 G[K_TARGET * RB + k] = dens[p]
                 G[K_RHOK * RB + k] = grey_rho_k(rho_k, rr, gg, bb)
-                tt[k] = fg_threshold(method, mask, mzz, myy, xs, seed, i, i, j, z)
+                tt[k] = fg_threshold(method, mrow, xs, seed, i, i, j, z)
             interpolate_block(flat, n, col, mb, W, off, A, G)
             lo, hi = align_rows(G, mb, sigma_clear, C)
             stats[0] += lo
