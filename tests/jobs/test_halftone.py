@@ -143,3 +143,26 @@ def test_pick_label_is_the_first_crossing():
     want = [_first_crossing(conc[i], t[i], INK_ORDER) for i in range(n)]
     assert got.tolist() == want
     assert len(set(want)) == 7  # every ink and the fallback label are exercised
+
+
+def test_label_rows_gives_pick_labels_answers():
+    """The branch-free, vectorised form used by the print job equals the written-out rule on
+    the same awkward inputs (negative and NaN shares, all-zero voxels, t = 0, 1 and NaN)."""
+    from dreamprint_gui.engine.halftone import INK_ORDER, label_rows
+
+    rng = np.random.default_rng(9)
+    n = 3000
+    conc = (rng.random((n, 6)) * (rng.random((n, 6)) < 0.6)).astype(np.float32)
+    conc[:300] -= np.float32(0.3) * (rng.random((300, 6)) < 0.2)
+    conc[300:350] = 0.0
+    conc[350:400, 4] = np.nan
+    t = rng.random(n)
+    t[400:450] = 0.0
+    t[450:500] = 1.0
+    t[500:550] = np.nan
+    order = np.asarray(INK_ORDER, np.int64)
+    lab = np.empty(n, np.uint8)
+    label_rows(np.ascontiguousarray(conc.T), t, n, order, 6, lab)
+    want = [_first_crossing(conc[i], t[i], INK_ORDER) for i in range(n)]
+    assert lab.tolist() == want
+    assert len(set(want)) == 7
