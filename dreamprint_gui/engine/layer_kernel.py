@@ -22,16 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .gamut.alignment import (
-    K_RHOK,
-    K_TARGET,
-    LANES,
-    ROW_BLOCK,
-    align_rows,
-    clean_rgb,
-    grey_rho_k,
-    interpolate_block,
-)
+from .gamut.alignment import LANES, ROW_BLOCK, lookup_align_block, stage_voxel
 from .halftone import fg_threshold, label_rows, mask_columns, scatter_labels
 
 __all__ = ["layer_labels"]
@@ -76,21 +67,8 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
             for k in range(mb):
                 i = idx[k0 + k]
                 p = base + i
-                rr = clean_rgb(rgb[p, 0])
-                gg = clean_rgb(rgb[p, 1])
-                bb = clean_rgb(rgb[p, 2])
-                col[k] = rr
-                col[RB + k] = gg
-                col[2 * RB + k] = bb
-                G[K_TARGET * RB + k] = dens[p]
-                G[K_RHOK * RB + k] = grey_rho_k(rho_k, rr, gg, bb)
+                stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p], rho_k)
                 tt[k] = fg_threshold(method, mrow, xs, seed, i, i, j, z)
-            interpolate_block(flat, n, col, mb, W, off, A, G)
-            lo, hi = align_rows(G, mb, sigma_clear, C)
-            stats[0] += lo
-            stats[1] += hi
-            for k in range(mb):
-                stats[2] = max(stats[2], np.float64(C[6 * RB + k]))
-                stats[3] = max(stats[3], np.float64(C[7 * RB + k]))
+            lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tt, mb, order, bg_label, lab)
             scatter_labels(row, idx, k0, lab, C2, mb, counts, sums)

@@ -55,6 +55,7 @@ from .tables import (
 
 __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
            "predicted_appearance", "interpolate_block", "align_rows", "grey_rho_k", "clean_rgb",
+           "stage_voxel", "lookup_align_block",
            "kernel_table", "LANES", "ROW_BLOCK", "K_TARGET", "K_RHOK"]
 
 _I_K = INKS.index("K")
@@ -425,6 +426,35 @@ def align_rows(F, m, sigma_clear, out):
     return n_low, n_high
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def stage_voxel(col, G, k, r, g, b, t, rho_k_table):
+    """Voxel ``k`` of a block: its clean colour into ``col`` and its target (1/mm) and grey rho_K
+    into ``G``, where :func:`interpolate_block` and :func:`align_rows` read them."""
+    RB = ROW_BLOCK
+    r = clean_rgb(r)
+    g = clean_rgb(g)
+    b = clean_rgb(b)
+    col[k] = r
+    col[RB + k] = g
+    col[2 * RB + k] = b
+    G[K_TARGET * RB + k] = np.float32(t)
+    G[K_RHOK * RB + k] = grey_rho_k(rho_k_table, r, g, b)
+
+
+@nb.njit(cache=True, nogil=True)
+def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
+    """:func:`interpolate_block` then :func:`align_rows` for ``m`` staged voxels (concentrations
+    into ``C``); adds their clamp report to ``stats`` (clamped low, clamped high, worst low
+    shortfall, worst high shortfall)."""
+    interpolate_block(flat, n, col, m, W, off, A, G)
+    lo, hi = align_rows(G, m, sigma_clear, C)
+    stats[0] += lo
+    stats[1] += hi
+    for k in range(m):
+        stats[2] = max(stats[2], np.float64(C[6 * ROW_BLOCK + k]))
+        stats[3] = max(stats[3], np.float64(C[7 * ROW_BLOCK + k]))
+
+
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, out, stats):
     RB = ROW_BLOCK
@@ -437,21 +467,10 @@ def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, out, stats):
     for v0 in range(0, rgb.shape[0], RB):
         m = min(RB, rgb.shape[0] - v0)
         for k in range(m):
-            r = clean_rgb(rgb[v0 + k, 0])
-            g = clean_rgb(rgb[v0 + k, 1])
-            b = clean_rgb(rgb[v0 + k, 2])
-            col[k] = r
-            col[RB + k] = g
-            col[2 * RB + k] = b
-            G[K_TARGET * RB + k] = np.float32(target[v0 + k])
-            G[K_RHOK * RB + k] = grey_rho_k(rho_k_table, r, g, b)
-        interpolate_block(flat, n, col, m, W, off, A, G)
-        lo, hi = align_rows(G, m, sigma_clear, c)
-        stats[0] += lo
-        stats[1] += hi
+            stage_voxel(col, G, k, rgb[v0 + k, 0], rgb[v0 + k, 1], rgb[v0 + k, 2],
+                        target[v0 + k], rho_k_table)
+        lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, c, stats)
         for k in range(m):
-            stats[2] = max(stats[2], np.float64(c[6 * RB + k]))
-            stats[3] = max(stats[3], np.float64(c[7 * RB + k]))
             for i in range(6):
                 out[v0 + k, i] = c[i * RB + k]
 
