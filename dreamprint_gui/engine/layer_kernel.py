@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .gamut.alignment import LANES, ROW_BLOCK, lookup_align_block, stage_voxel
+from .gamut.alignment import ROW_BLOCK, block_buffers, lookup_align_block, stage_voxel
 from .halftone import fg_threshold, label_rows, mask_columns, scatter_labels
 
 __all__ = ["layer_labels"]
@@ -41,12 +41,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     xs = mask_columns(0, nx, ox, mx)
     RB = ROW_BLOCK
     idx = np.empty(nx, np.int64)
-    col = np.empty(3 * RB, np.float32)
-    W = np.empty(8 * RB, np.float32)
-    off = np.empty(RB, np.int64)
-    A = np.empty(RB * LANES, np.float32)
-    G = np.empty(LANES * RB, np.float32)
-    C = np.empty(8 * RB, np.float32)
+    col, W, off, A, G, C = block_buffers()
     C2 = C.reshape((8, RB))
     tt = np.empty(RB)
     lab = np.empty(RB, np.uint8)

@@ -55,7 +55,7 @@ from .tables import (
 
 __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
            "predicted_appearance", "interpolate_block", "align_rows", "grey_rho_k", "clean_rgb",
-           "stage_voxel", "lookup_align_block",
+           "stage_voxel", "lookup_align_block", "block_buffers",
            "kernel_table", "LANES", "ROW_BLOCK", "K_TARGET", "K_RHOK"]
 
 _I_K = INKS.index("K")
@@ -455,15 +455,20 @@ def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
         stats[3] = max(stats[3], np.float64(C[7 * ROW_BLOCK + k]))
 
 
+@nb.njit(cache=True, nogil=True)
+def block_buffers():
+    """Working arrays of one block for :func:`stage_voxel` and :func:`lookup_align_block`:
+    (col, W, off, A, G, C)."""
+    RB = ROW_BLOCK
+    return (np.empty(3 * RB, np.float32), np.empty(8 * RB, np.float32), np.empty(RB, np.int64),
+            np.empty(RB * LANES, np.float32), np.empty(LANES * RB, np.float32),
+            np.empty(8 * RB, np.float32))
+
+
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, out, stats):
     RB = ROW_BLOCK
-    col = np.empty(3 * RB, np.float32)
-    W = np.empty(8 * RB, np.float32)
-    off = np.empty(RB, np.int64)
-    A = np.empty(RB * LANES, np.float32)
-    G = np.empty(LANES * RB, np.float32)
-    c = np.empty(8 * RB, np.float32)
+    col, W, off, A, G, c = block_buffers()
     for v0 in range(0, rgb.shape[0], RB):
         m = min(RB, rgb.shape[0] - v0)
         for k in range(m):
