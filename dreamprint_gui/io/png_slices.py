@@ -9,13 +9,14 @@ Defines
 
 PNG (ISO/IEC 15948, W3C PNG 2nd ed.): the image data is a zlib stream (RFC 1950) of the
 scanlines, each preceded by its filter-type byte (section 9; type 0 = None is used here: with
-random halftone labels no filter predicts better, and it keeps the encoder one pass). The zlib
-stream is produced at level 1 by libdeflate (``imagecodecs.deflate_encode``), several times
-faster than Pillow's encoder (MEASURED.md), whose portable match finder gives the same bytes on
-every machine. zlib-ng was measured 5x faster on nearly uniform slices (0.6 vs 3.3 ns per voxel)
-but is not used: it picks SIMD code paths by CPU at run time and its output bytes then differ
-between machines (zlib-ng issue #795), which would break byte-identical jobs on a mixed Dask
-cluster. Chunks carry a CRC-32 over type + data (section 5.3), computed with :func:`zlib.crc32`.
+random halftone labels no filter predicts better). The stream is encoded straight from the
+label runs by :func:`.label_deflate.label_zlib` (~1.3-2 ns per voxel on print-job slices, vs
+~3.7 for libdeflate level 1 and ~13 for Pillow, whose general match finders look for what a
+run already states; files ~3x larger than libdeflate's, ~40 kB per 1145 x 382 slice). Its
+output is a function of the labels alone, so slices are byte-identical on every machine
+(zlib-ng, also fast, picks SIMD code paths by CPU and then writes different bytes, zlib-ng
+issue #795, which would break byte-identical jobs on a mixed Dask cluster). Chunks carry a
+CRC-32 over type + data (section 5.3), computed with :func:`zlib.crc32`.
 """
 
 from __future__ import annotations
@@ -25,9 +26,9 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
 from ..errors import DreamPrintError
+from .label_deflate import label_zlib
 
 __all__ = ["encode_labels_png", "png_bytes", "read_png_labels"]
 
@@ -37,33 +38,6 @@ _SIGNATURE = b"\x89PNG\r\n\x1a\n"
 def _chunk(kind: bytes, data: bytes) -> bytes:
     return (struct.pack(">I", len(data)) + kind + data
             + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)) & 0xFFFFFFFF))
-
-
-@njit(cache=True, nogil=True)
-def _rows_rgb(labels, palette, out):
-    h, w = labels.shape
-    stride = 1 + 3 * w
-    for r in range(h):
-        base = r * stride
-        out[base] = 0  # filter type None
-        p = base + 1
-        for c in range(w):
-            lab = labels[r, c]
-            out[p] = palette[lab, 0]
-            out[p + 1] = palette[lab, 1]
-            out[p + 2] = palette[lab, 2]
-            p += 3
-
-
-@njit(cache=True, nogil=True)
-def _rows_index(labels, out):
-    h, w = labels.shape
-    stride = 1 + w
-    for r in range(h):
-        base = r * stride
-        out[base] = 0
-        for c in range(w):
-            out[base + 1 + c] = labels[r, c]
 
 
 def png_bytes(width: int, height: int, colour_type: int, idat: bytes | bytearray,
@@ -79,15 +53,12 @@ def png_bytes(width: int, height: int, colour_type: int, idat: bytes | bytearray
     return b"".join(parts)
 
 
-def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb",
-                      level: int = 1) -> bytes:
+def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb") -> bytes:
     """PNG bytes of a label image: pixel = ``palette[label]``.
 
     ``labels`` (rows, cols) uint8 (any strides: a transposed or flipped view is fine);
     ``palette`` (n, 3) uint8 with every label < n; ``mode`` "rgb" or "palette".
     """
-    import imagecodecs
-
     if labels.ndim != 2 or labels.dtype != np.uint8:
         raise ValueError("labels must be a 2-D uint8 array")
     pal = np.ascontiguousarray(palette, dtype=np.uint8)
@@ -95,16 +66,12 @@ def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb"
     if h == 0 or w == 0:
         raise ValueError("a PNG needs at least one row and one column")
     if mode == "rgb":
-        raw = np.empty(h * (1 + 3 * w), dtype=np.uint8)
-        _rows_rgb(labels, pal, raw)
         ctype = 2
     elif mode == "palette":
-        raw = np.empty(h * (1 + w), dtype=np.uint8)
-        _rows_index(labels, raw)
         ctype = 3
     else:
         raise ValueError(f"unknown PNG mode {mode!r}")
-    idat = imagecodecs.deflate_encode(raw, level=level)  # zlib-wrapped (RFC 1950)
+    idat = label_zlib(labels, pal if ctype == 2 else None, n_labels=len(pal))
     return png_bytes(w, h, ctype, idat, pal if ctype == 3 else None)
 
 
