@@ -4,6 +4,8 @@ Defines
 -------
 - :func:`layer_labels`: one layer of sampled colour and density (1/mm) -> material labels, label
   counts, intended concentrations and the clamp report; compiled (numba), releases the GIL.
+- :func:`slab_labels`: the same for every layer of a slab in one call (a call from Python costs
+  ~70 us of argument checks, as much as a small job's layer of 20 000 voxels).
 
 Row by row, in passes over the row's foreground voxels, so that the arithmetic of 8-16 voxels
 runs in one vector instruction (AVX2 / AVX-512) instead of one voxel's latency chain at a time:
@@ -25,7 +27,7 @@ from numba import njit
 from .gamut.alignment import ROW_BLOCK, block_buffers, lookup_align_block, stage_voxel
 from .halftone import fg_threshold, label_rows, mask_columns, scatter_labels
 
-__all__ = ["layer_labels"]
+__all__ = ["layer_labels", "slab_labels"]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -67,3 +69,13 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
             lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tt, mb, order, bg_label, lab)
             scatter_labels(row, idx, k0, lab, C2, mb, counts, sums)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def slab_labels(rgb, dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear,
+                method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
+    """:func:`layer_labels` for layers ``z0 .. z0 + L - 1``: ``rgb`` (L, ny*nx, 3), ``dens``
+    (L, ny*nx), ``labels`` (L, ny, nx)."""
+    for k in range(labels.shape[0]):
+        layer_labels(rgb[k], dens[k], z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums, stats)

@@ -12,11 +12,12 @@ Defines
   (byte-identical to the layer in an exported job).
 
 Per slab of layers ``[z0, z1)``: sample the source on the printer grid (density in 1/mm, the
-volume source's rule); then per layer one compiled kernel (:func:`.layer_kernel.layer_labels`,
-nogil) does the background threshold (``--background clear|empty``) -> trilinear table lookup
-of C, M, Y, K, W -> density alignment (Clear, K/W grey; the code of ``lookup_and_align_into``)
--> halftone (the rule of ``halftone.pick_label``) -> label, row by row -> PNG
-(:mod:`..io.png_slices`). Only a slab is ever in memory
+volume source's rule) into the worker thread's reused buffers; then one compiled call
+(:func:`.layer_kernel.slab_labels`, nogil) does, layer by layer, the background threshold
+(``--background clear|empty``) -> trilinear table lookup of C, M, Y, K, W -> density alignment
+(Clear, K/W grey; the code of ``lookup_and_align_into``) -> halftone (the rule of
+``halftone.pick_label``) -> label; then each layer goes to PNG (:mod:`..io.png_slices`). Only a
+slab is ever in memory
 per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
 multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed`` cluster
 (``scheduler="tcp://host:8786"``) whose workers write the slices into the job's temporary folder
@@ -41,7 +42,7 @@ import numpy as np
 
 from ..errors import DreamPrintError
 from .halftone import HALFTONE_METHODS, Halftoner
-from .layer_kernel import layer_labels
+from .layer_kernel import slab_labels
 from .printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from .profile import INKS
 
@@ -132,7 +133,22 @@ class JobContext:
         d = dict(self.__dict__)
         d["source"] = None
         d["tables"] = None
+        d.pop("_kernel_args", None)
         return d
+
+    def kernel_args(self) -> tuple:
+        """The per-job arguments of :func:`.layer_kernel.slab_labels` (built once per process)."""
+        args = self.__dict__.get("_kernel_args")
+        if args is None:
+            from .gamut.alignment import kernel_table
+
+            _, tables = self.resources()
+            ht = self.halftoner
+            args = (np.float32(ht.threshold), ht.bg_label, kernel_table(tables),
+                    tables.packed.shape[0], tables.brightness_rho_k.astype(np.float64),
+                    np.float32(tables.sigma_clear), *ht.kernel_args())
+            self.__dict__["_kernel_args"] = args
+        return args
 
     def resources(self):
         if self.source is not None and self.tables is not None:
@@ -204,10 +220,10 @@ def _load_kernels(ctx: JobContext) -> None:
     conversion's progress and speed are those of the conversion."""
     from ..io.png_slices import encode_labels_png
 
-    labels = np.empty((1, 2), np.uint8)
-    _labels_of_layer(ctx, np.zeros((1, 2, 3), np.float32), np.array([[0.0, 1.0]], np.float32),
-                     0, labels, np.zeros(7, np.int64), np.zeros(7), np.zeros(4))
-    encode_labels_png(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+    labels = np.empty((1, 1, 2), np.uint8)
+    _labels_of_slab(ctx, np.zeros((1, 1, 2, 3), np.float32), np.array([[[0.0, 1.0]]], np.float32),
+                    0, labels, np.zeros(7, np.int64), np.zeros(7), np.zeros(4))
+    encode_labels_png(_oriented(ctx, labels[0]), ctx.palette, ctx.printer.png_mode)
     if _scheduler_kind(ctx.settings) != "distributed":
         import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s
 
@@ -221,20 +237,17 @@ def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
             acc[k] = acc.get(k, 0.0) + v
 
 
-def _labels_of_layer(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z: int,
-                     labels: np.ndarray, counts: np.ndarray, sums: np.ndarray,
-                     stats: np.ndarray) -> None:
-    from .gamut.alignment import kernel_table
-
-    _, tables = ctx.resources()
-    rgb = np.ascontiguousarray(rgb.reshape(-1, 3), dtype=np.float32)
-    d = np.ascontiguousarray(dens.reshape(-1), dtype=np.float32)
+def _labels_of_slab(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z0: int,
+                    labels: np.ndarray, counts: np.ndarray, sums: np.ndarray,
+                    stats: np.ndarray) -> None:
+    """Labels (L, ny, nx) of the sampled layers ``z0 .. z0 + L - 1`` (rgb (L, ny, nx, 3), dens
+    (L, ny, nx)); accumulates counts, intended concentration sums and the clamp report."""
+    n_layers = labels.shape[0]
+    rgb = np.ascontiguousarray(rgb.reshape(n_layers, -1, 3), dtype=np.float32)
+    d = np.ascontiguousarray(dens.reshape(n_layers, -1), dtype=np.float32)
     # Background voxels skip the lookup: faster, and they are not "clamped" (they become
     # background by choice, not for want of a reachable density).
-    layer_labels(rgb, d, z, np.float32(ctx.halftoner.threshold), ctx.halftoner.bg_label,
-                 kernel_table(tables), tables.packed.shape[0],
-                 tables.brightness_rho_k.astype(np.float64), np.float32(tables.sigma_clear),
-                 *ctx.halftoner.kernel_args(), labels, counts, sums, stats)
+    slab_labels(rgb, d, z0, *ctx.kernel_args(), labels, counts, sums, stats)
 
 
 def _clamp_report(stats: np.ndarray) -> dict[str, float]:
@@ -253,6 +266,24 @@ def _cancelled(slices_dir: str, event: threading.Event | None) -> bool:
     return os.path.exists(os.path.join(os.path.dirname(slices_dir), ".cancelled"))
 
 
+class _Workspace(threading.local):
+    """A worker thread's slab buffers, reused from slab to slab (see ``SlabBuffers``)."""
+
+    def __init__(self) -> None:
+        from ..io.volumes.base import SlabBuffers
+
+        self.samples = SlabBuffers()
+        self.labels = np.empty((0, 0, 0), np.uint8)
+
+    def labels_for(self, n: int, ny: int, nx: int) -> np.ndarray:
+        if self.labels.shape[1:] != (ny, nx) or self.labels.shape[0] < n:
+            self.labels = np.empty((n, ny, nx), np.uint8)
+        return self.labels[:n]
+
+
+_WORKSPACE = _Workspace()
+
+
 def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
              cancel: threading.Event | None = None) -> dict[str, Any]:
     """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings."""
@@ -261,28 +292,30 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
 
     source, _ = ctx.resources()
     nx, ny, nz = ctx.shape_xyz
+    if _cancelled(slices_dir, cancel):
+        raise JobCancelled()
     t0 = time.perf_counter()
-    rgb, dens = source.sample_slab(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale)
+    rgb, dens = source.sample_slab(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale,
+                                   out=_WORKSPACE.samples)
     t1 = time.perf_counter()
-    labels = np.empty((ny, nx), dtype=np.uint8)
+    labels = _WORKSPACE.labels_for(z1 - z0, ny, nx)
     counts = np.zeros(7, dtype=np.int64)
     sums = np.zeros(7, dtype=np.float64)
     stats = np.zeros(4)
-    t_lab = t_png = t_io = 0.0
+    _labels_of_slab(ctx, rgb, dens, z0, labels, counts, sums, stats)
+    t_lab = time.perf_counter() - t1
+    t_png = t_io = 0.0
     for k in range(z1 - z0):
         if _cancelled(slices_dir, cancel):
             raise JobCancelled()
-        ta = time.perf_counter()
-        _labels_of_layer(ctx, rgb[k], dens[k], z0 + k, labels, counts, sums, stats)
         tb = time.perf_counter()
-        png = encode_labels_png(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+        png = encode_labels_png(_oriented(ctx, labels[k]), ctx.palette, ctx.printer.png_mode)
         tc = time.perf_counter()
         # Never create folders here: after a cancel the job's temporary folder is removed and
         # a straggling task must fail rather than recreate it.
         with open(os.path.join(slices_dir, slice_name(z0 + k, nz)), "xb") as f:
             f.write(png)
         td = time.perf_counter()
-        t_lab += tb - ta
         t_png += tc - tb
         t_io += td - tc
     return {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
@@ -303,10 +336,10 @@ def halftone_layer(settings: ConvertSettings, layer: int,
         raise DreamPrintError(f"layer {layer} is outside the job's 0..{nz - 1}")
     rgb, dens = source.sample_slab(ctx.grid, layer, layer + 1,
                                    density_scale=ctx.settings.density_scale)
-    labels = np.empty((ny, nx), dtype=np.uint8)
-    _labels_of_layer(ctx, rgb[0], dens[0], layer, labels, np.zeros(7, np.int64), np.zeros(7),
-                     np.zeros(4))
-    return labels
+    labels = np.empty((1, ny, nx), dtype=np.uint8)
+    _labels_of_slab(ctx, rgb, dens, layer, labels, np.zeros(7, np.int64), np.zeros(7),
+                    np.zeros(4))
+    return labels[0]
 
 
 # ----------------------------------------------------------------------------- scheduling

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.engine.gamut import lookup_and_align_into
-from dreamprint_gui.engine.pipeline import ConvertSettings, _labels_of_layer, prepare_job
+from dreamprint_gui.engine.pipeline import ConvertSettings, _labels_of_slab, prepare_job
 
 
 @pytest.mark.parametrize("halftone", ["blue-noise", "random"])
@@ -15,35 +15,42 @@ def test_fused_layer_equals_lookup_then_halftone(tmp_path, halftone):
     _, tables = ctx.resources()
     ny, nx = 37, 53
     rng = np.random.default_rng(4)
-    rgb = rng.random((ny * nx, 3), dtype=np.float32)
-    rgb[100:140] = rgb[99]                      # runs of identical voxels (reuse path)
-    dens = rng.uniform(0.0, 40.0, ny * nx).astype(np.float32)
-    dens[100:140] = dens[99]
-    dens[::7] = 0.5 * ctx.halftoner.threshold   # background voxels
-    dens[5] = np.nan
-    rgb[6] = np.nan
-    z = 9
-    labels = np.empty((ny, nx), np.uint8)
+    rgb = rng.random((2, ny * nx, 3), dtype=np.float32)
+    rgb[:, 100:140] = rgb[:, 99:100]                # runs of identical voxels
+    dens = rng.uniform(0.0, 40.0, (2, ny * nx)).astype(np.float32)
+    dens[:, 100:140] = dens[:, 99:100]
+    dens[:, ::7] = 0.5 * ctx.halftoner.threshold    # background voxels
+    dens[0, 5] = np.nan
+    rgb[1, 6] = np.nan
+    z0 = 9
+    labels = np.empty((2, ny, nx), np.uint8)
     counts = np.zeros(7, np.int64)
     sums = np.zeros(7)
     stats = np.zeros(4)
-    _labels_of_layer(ctx, rgb.reshape(ny, nx, 3), dens.reshape(ny, nx), z, labels, counts,
-                     sums, stats)
+    _labels_of_slab(ctx, rgb.reshape(2, ny, nx, 3), dens.reshape(2, ny, nx), z0, labels, counts,
+                    sums, stats)
 
-    fg = dens >= ctx.halftoner.threshold
-    conc = np.zeros((ny * nx, 6), np.float32)
-    sub = np.empty((int(fg.sum()), 6), np.float32)
-    ref_counts = lookup_and_align_into(tables, rgb[fg], dens[fg], sub)
-    conc[fg] = sub
-    d = np.where(fg, dens, 0.0).astype(np.float32)  # NaN density is background in both
-    ref = np.empty((ny, nx), np.uint8)
     rc = np.zeros(7, np.int64)
     rs = np.zeros(7)
-    ctx.halftoner.layer_into(conc, d, z, ref, rc, rs)
-    np.testing.assert_array_equal(labels, ref)
+    low = high = 0
+    short_low = short_high = 0.0
+    for k in range(2):  # each layer of the slab, through the library's two steps
+        fg = dens[k] >= ctx.halftoner.threshold
+        conc = np.zeros((ny * nx, 6), np.float32)
+        sub = np.empty((int(fg.sum()), 6), np.float32)
+        ref_counts = lookup_and_align_into(tables, rgb[k][fg], dens[k][fg], sub)
+        conc[fg] = sub
+        d = np.where(fg, dens[k], 0.0).astype(np.float32)  # NaN density is background in both
+        ref = np.empty((ny, nx), np.uint8)
+        ctx.halftoner.layer_into(conc, d, z0 + k, ref, rc, rs)
+        np.testing.assert_array_equal(labels[k], ref)
+        low += ref_counts.n_clamped_low
+        high += ref_counts.n_clamped_high
+        short_low = max(short_low, ref_counts.max_shortfall_low)
+        short_high = max(short_high, ref_counts.max_shortfall_high)
     np.testing.assert_array_equal(counts, rc)
     np.testing.assert_allclose(sums, rs, rtol=1e-12)
-    assert (stats[0], stats[1]) == (ref_counts.n_clamped_low, ref_counts.n_clamped_high)
-    assert stats[2] == pytest.approx(ref_counts.max_shortfall_low)
-    assert stats[3] == pytest.approx(ref_counts.max_shortfall_high)
+    assert (stats[0], stats[1]) == (low, high)
+    assert stats[2] == pytest.approx(short_low)
+    assert stats[3] == pytest.approx(short_high)
     assert stats[0] + stats[1] > 0  # the test exercises the clamp report

@@ -32,7 +32,7 @@ import numpy as np
 from ...errors import DreamPrintError
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
-           "uniform_rgb",
+           "uniform_rgb", "SlabBuffers",
            "sniff_format", "open_source", "inspect_file", "FORMATS"]
 
 
@@ -113,13 +113,36 @@ def linear_to_srgb(c: np.ndarray) -> np.ndarray:
     return out.astype(np.float32, copy=False)
 
 
-def uniform_rgb(shape: tuple[int, ...], colour) -> np.ndarray:
+def uniform_rgb(shape: tuple[int, ...], colour, out: np.ndarray | None = None) -> np.ndarray:
     """float32 ``shape + (3,)`` filled with one colour (per-channel fill: numpy's broadcast
-    copy of a length-3 vector is several times slower)."""
-    out = np.empty(tuple(shape) + (3,), np.float32)
+    copy of a length-3 vector is several times slower), into ``out`` if given."""
+    if out is None:
+        out = np.empty(tuple(shape) + (3,), np.float32)
     for k in range(3):
         out[..., k] = colour[k]
     return out
+
+
+class SlabBuffers:
+    """Reusable float32 colour (L, ny, nx, 3) and density (L, ny, nx) arrays for
+    ``sample_slab(..., out=buffers)``.
+
+    A print-job worker samples slab after slab of the same size: writing into memory it has
+    already touched avoids a fresh array's page faults (~2.8 ns per voxel on this project's
+    2-core VM, as much as the interpolation itself). Not thread-safe: one per worker thread.
+    """
+
+    def __init__(self) -> None:
+        self.rgb: np.ndarray | None = None
+        self.sigma: np.ndarray | None = None
+
+    def take(self, shape: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """C-contiguous (rgb, sigma) views of ``shape`` (uninitialised), grown when needed."""
+        n, ny, nx = (int(v) for v in shape)
+        if self.sigma is None or self.sigma.shape[1:] != (ny, nx) or self.sigma.shape[0] < n:
+            self.sigma = np.empty((n, ny, nx), np.float32)
+            self.rgb = np.empty((n, ny, nx, 3), np.float32)
+        return self.rgb[:n], self.sigma[:n]
 
 
 def check_slab(grid: PrintGrid, z0: int, z1: int) -> None:
@@ -137,9 +160,12 @@ class VolumeSource(Protocol):
     bounds: tuple[tuple[float, float, float], tuple[float, float, float]]
     colour_encoding: str
 
-    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
-                    ) -> tuple[np.ndarray, np.ndarray]:
-        """rgb float32 (z1-z0, ny, nx, 3) sRGB-encoded; density float32 (z1-z0, ny, nx) 1/mm."""
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
+                    out: SlabBuffers | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """rgb float32 (z1-z0, ny, nx, 3) sRGB-encoded; density float32 (z1-z0, ny, nx) 1/mm.
+
+        ``out``: buffers the source may write into and return (the caller must not keep the
+        arrays past its next call with the same buffers); a source may ignore it."""
         ...
 
     def info(self) -> dict:

@@ -12,7 +12,7 @@ import numpy as np
 from numba import njit
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
+from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
 from .sampling import sample_dense, sample_dense_density
 
 __all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_window",
@@ -62,12 +62,12 @@ class DenseVolume:
         u = self._indices(grid, z0, z1)
         return sample_dense(self.data, u[2], u[1], u[0], self.pad)
 
-    def sample_density(self, grid: PrintGrid, z0: int, z1: int, scale: float):
+    def sample_density(self, grid: PrintGrid, z0: int, z1: int, scale: float, out=None):
         """(colour (Z, Y, X, 3) or None, density x ``scale`` (Z, Y, X)) of a density grid
         (channel 0 density, channels 1-3 colour premultiplied by it): see
         :func:`.sampling.sample_dense_density`."""
         u = self._indices(grid, z0, z1)
-        return sample_dense_density(self.data, u[2], u[1], u[0], self.pad, scale)
+        return sample_dense_density(self.data, u[2], u[1], u[0], self.pad, scale, out)
 
 
 def colormap_lut(name: str | None, colour=None, n: int = 256) -> np.ndarray:
@@ -141,11 +141,14 @@ class DenseSource:
             d = volume.data
             d[..., 1:4] *= d[..., :1]       # premultiply once, in the source's own storage
 
-    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
+                    out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
-        rgb, sigma = self.volume.sample_density(grid, z0, z1, density_scale / grid.mm_per_unit)
+        rgb, sigma = self.volume.sample_density(grid, z0, z1, density_scale / grid.mm_per_unit,
+                                                out)
         if rgb is None:
-            rgb = uniform_rgb(sigma.shape, self.uniform_colour)
+            rgb = uniform_rgb(sigma.shape, self.uniform_colour,
+                              None if out is None else out.take(sigma.shape)[0])
         elif self.colour_encoding == "linear":
             rgb = linear_to_srgb(rgb)
         return rgb, sigma

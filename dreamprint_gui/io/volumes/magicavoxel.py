@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, check_slab, voxel_centres
+from .base import PrintGrid, SlabBuffers, check_slab, voxel_centres
 
 __all__ = ["read_vox", "VoxSource", "open_path", "DEFAULT_PALETTE"]
 
@@ -230,7 +230,8 @@ class VoxSource:
         self.rgb_lut = (palette[:, :3].astype(np.float32) / 255.0)
         self.solid_density = float(solid_density)
 
-    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
+                    out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
         idx = []
         for a, rng in ((2, (z0, z1)), (1, (0, None)), (0, (0, None))):
@@ -242,8 +243,11 @@ class VoxSource:
                            np.float32)
         dens_lut[0] = 0.0
         shape = (len(idx[0]), len(idx[1]), len(idx[2]))
-        rgb = np.empty(shape + (3,), np.float32)
-        sigma = np.empty(shape, np.float32)
+        if out is not None:
+            rgb, sigma = out.take(shape)
+        else:
+            rgb = np.empty(shape + (3,), np.float32)
+            sigma = np.empty(shape, np.float32)
         _nearest_kernel(self.index, idx[0], idx[1], idx[2], self.rgb_lut, dens_lut, rgb, sigma)
         return rgb, sigma
 

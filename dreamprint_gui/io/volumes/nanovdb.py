@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, check_slab, uniform_rgb, voxel_centres
+from .base import PrintGrid, SlabBuffers, check_slab, uniform_rgb, voxel_centres
 from .dense import MAX_EXPANSION
 from .sampling import SparseBlocks, sample_sparse
 
@@ -250,7 +250,8 @@ class NanoVdbSource:
         self.bounds = (tuple(float(v) for v in self.origin + (lo - 0.5) * self.scale),
                        tuple(float(v) for v in self.origin + (hi + 0.5) * self.scale))
 
-    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
+                    out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
         u = [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None))) - self.origin[a])
              / self.scale[a] for a in range(3)]
@@ -259,7 +260,8 @@ class NanoVdbSource:
             d = self.solid_density * np.clip(0.5 - d / float(self.scale.min()), 0.0, 1.0)
         sigma = np.maximum(d, 0.0).astype(np.float32)
         sigma *= np.float32(density_scale / grid.mm_per_unit)
-        return uniform_rgb(d.shape, self.uniform_colour), sigma
+        return uniform_rgb(d.shape, self.uniform_colour,
+                           None if out is None else out.take(d.shape)[0]), sigma
 
     def info(self) -> dict:
         return self._info

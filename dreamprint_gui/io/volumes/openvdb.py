@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
+from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
 from .sampling import SparseBlocks, sample_sparse
 
 __all__ = ["VdbSource", "open_path", "inspect_path", "helper_command"]
@@ -192,7 +192,8 @@ class VdbSource:
         """Delete the extracted blocks now (otherwise when the source is collected)."""
         self._cleanup()
 
-    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
+                    out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
         d = self.density.sample(grid, z0, z1)[..., 0]
         if self.is_level_set:

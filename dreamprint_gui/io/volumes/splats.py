@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, check_slab, voxel_centres
+from .base import PrintGrid, SlabBuffers, check_slab, voxel_centres
 from .dense import bounds_list
 from .splat_raster import rasterise_splats
 
@@ -101,7 +101,8 @@ class GaussianCloud:
             bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
         self.bounds = bounds
 
-    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
+                    out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
         xs = voxel_centres(grid, 0)
         ys = voxel_centres(grid, 1)

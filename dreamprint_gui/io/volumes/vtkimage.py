@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, check_slab
+from .base import PrintGrid, SlabBuffers, check_slab
 from .dense import (
     DenseSource,
     DenseVolume,
@@ -187,7 +187,8 @@ class ImageSource:
         self.lut = lut
         self._grids_info = grids_info
 
-    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0):
+    def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
+                    out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
         v = self.volume.sample(grid, z0, z1)[..., 0]
         lo, hi = self.window
