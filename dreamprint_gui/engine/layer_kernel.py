@@ -7,16 +7,17 @@ Defines
 - :func:`slab_labels`: the same for every layer of a slab in one call (a call from Python costs
   ~70 us of argument checks, as much as a small job's layer of 20 000 voxels).
 
-Row by row, in passes over the row's foreground voxels, so that the arithmetic of 8-16 voxels
-runs in one vector instruction (AVX2 / AVX-512) instead of one voxel's latency chain at a time:
-(1) gather the voxels whose density reaches the background threshold (branch-free compaction),
-their clean colour, target, grey and halftone threshold; (2) trilinear lookup of the table
-node fields (:func:`gamut.alignment.interpolate_block`); (3) density alignment
-(:func:`gamut.alignment.align_rows`); (4) halftone (:func:`halftone.label_rows`), then the
-labels are scattered into the row (:func:`halftone.scatter_labels`). The foreground of a row
-goes through passes 2-4 in blocks of ``ROW_BLOCK`` voxels, whose working arrays stay in the L2
-cache. A voxel's label depends on its position, the seed and its own inputs only, so the passes
-do not change what a slab, a worker count or a scheduler produces.
+In passes over blocks of foreground voxels, so that the arithmetic of 8-16 voxels runs in one
+vector instruction (AVX2 / AVX-512) instead of one voxel's latency chain at a time: (1) gather
+the voxels whose density reaches the background threshold (branch-free compaction), across rows
+until a block of ``ROW_BLOCK`` voxels is full (a narrow row alone would feed the vector passes a
+few voxels at a time), with their clean colour, target, grey and halftone threshold; (2)
+trilinear lookup of the table node fields (:func:`gamut.alignment.interpolate_block`); (3)
+density alignment (:func:`gamut.alignment.align_rows`); (4) halftone
+(:func:`halftone.label_rows`), then the labels are scattered into the layer
+(:func:`halftone.scatter_labels`). A block's working arrays stay in the L2 cache. A voxel's label
+depends on its position, the seed and its own inputs only, so the passes do not change what a
+slab, a worker count or a scheduler produces.
 """
 
 from __future__ import annotations
@@ -41,34 +42,51 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     mz, my, mx = mask.shape
     mzz = (z + oz) % mz
     xs = mask_columns(0, nx, ox, mx)
+    mrows = np.empty(ny, np.int64)
+    for j in range(ny):
+        mrows[j] = (j + oy) % my
     RB = ROW_BLOCK
-    idx = np.empty(nx, np.int64)
+    # Foreground voxels of consecutive rows (flat position, row) wait here until a block is
+    # full: narrow rows would otherwise give the vector passes a few voxels at a time.
+    idx = np.empty(RB + nx, np.int64)
+    jdx = np.empty(RB + nx, np.int64)
     col, W, off, A, G, C = block_buffers()
     C2 = C.reshape((8, RB))
     tt = np.empty(RB)
     lab = np.empty(RB, np.uint8)
+    out = labels.reshape(-1)
+    n_bg = 0
+    m = 0
     for j in range(ny):
-        mrow = mask[mzz, (j + oy) % my]
         base = j * nx
-        m = 0
+        m_row = m
         for i in range(nx):
-            idx[m] = i
+            idx[m] = base + i
+            jdx[m] = j
             m += 1 if dens[base + i] >= threshold else 0  # NaN is background
-        row = labels[j]
-        for i in range(nx):
-            row[i] = bg_label
-        counts[bg_label] += nx - m
-        sums[bg_label] += nx - m
-        for k0 in range(0, m, RB):
+            out[base + i] = bg_label
+        n_bg += nx - (m - m_row)
+        if m < RB and j < ny - 1:
+            continue
+        k0 = 0
+        while k0 < m and (m - k0 >= RB or j == ny - 1):
             mb = min(RB, m - k0)
             for k in range(mb):
-                i = idx[k0 + k]
-                p = base + i
+                p = idx[k0 + k]
+                jj = jdx[k0 + k]
+                i = p - jj * nx
                 stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p], rho_k)
-                tt[k] = fg_threshold(method, mrow, xs, seed, i, i, j, z)
+                tt[k] = fg_threshold(method, mask[mzz, mrows[jj]], xs, seed, i, i, jj, z)
             lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tt, mb, order, bg_label, lab)
-            scatter_labels(row, idx, k0, lab, C2, mb, counts, sums)
+            scatter_labels(out, idx, k0, lab, C2, mb, counts, sums)
+            k0 += mb
+        for k in range(m - k0):  # the unfinished block's voxels move to the front
+            idx[k] = idx[k0 + k]
+            jdx[k] = jdx[k0 + k]
+        m -= k0
+    counts[bg_label] += n_bg
+    sums[bg_label] += n_bg
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
