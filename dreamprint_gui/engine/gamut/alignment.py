@@ -450,9 +450,14 @@ def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
     lo, hi = align_rows(G, m, sigma_clear, C)
     stats[0] += lo
     stats[1] += hi
+    # the running maxima in locals: through the array, each voxel waits for the last one's store
+    w_lo = stats[2]
+    w_hi = stats[3]
     for k in range(m):
-        stats[2] = max(stats[2], np.float64(C[6 * ROW_BLOCK + k]))
-        stats[3] = max(stats[3], np.float64(C[7 * ROW_BLOCK + k]))
+        w_lo = max(w_lo, np.float64(C[6 * ROW_BLOCK + k]))
+        w_hi = max(w_hi, np.float64(C[7 * ROW_BLOCK + k]))
+    stats[2] = w_lo
+    stats[3] = w_hi
 
 
 @nb.njit(cache=True, nogil=True)

@@ -86,6 +86,9 @@ def _dense_rows(vol, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, out, 
                 lo = ix0[i]
             hi = max(hi, ix1[i])
     if lo < 0:
+        if mode != 0:
+            for k in range(iz0.shape[0]):
+                _zero_layer(sigma, rgb, k, mode)
         return
     w = (hi - lo + 1) * nc
     zr0 = np.empty(w, np.float32)

@@ -107,3 +107,38 @@ def test_unknown_reader_option_is_named(shared_data):
     s = open_source(shared_data / "volumes" / "blender_mantaflow_fluid_data_0190.vdb",
                     grid="shadow")
     assert s.density.name == "shadow"
+
+
+def test_reused_slab_buffers_give_what_fresh_arrays_give(shared_data):
+    """A worker's buffers hold the previous slab (here: NaN); every element is rewritten."""
+    from dreamprint_gui.io.volumes.base import SlabBuffers
+
+    for f in ("demo", shared_data / "volumes" / "ironProt.vtk",
+              shared_data / "voxels" / "magicavoxel_chr_knight.vox"):
+        s = open_source(f)
+        g = grid_for_source(s, (0.2, 0.2, 0.1), height_mm=6)
+        nx, ny, nz = g.shape_xyz
+        buf = SlabBuffers()
+        buf.take((nz, ny, nx))
+        buf.rgb[...] = np.nan
+        buf.sigma[...] = np.nan
+        for z0, z1 in ((0, nz // 2), (nz // 2, nz), (0, 3)):
+            rgb, d = s.sample_slab(g, z0, z1, out=buf)
+            ref_rgb, ref_d = s.sample_slab(g, z0, z1)
+            np.testing.assert_array_equal(d, ref_d)
+            np.testing.assert_array_equal(rgb, ref_rgb)
+
+
+def test_dense_sampler_outside_the_source_writes_zeros():
+    from dreamprint_gui.io.volumes.base import SlabBuffers
+    from dreamprint_gui.io.volumes.sampling import sample_dense_density
+
+    vol = np.ones((4, 4, 4, 4), np.float32)
+    buf = SlabBuffers()
+    buf.take((2, 3, 5))
+    buf.rgb[...] = np.nan
+    buf.sigma[...] = np.nan
+    inside = np.array([0.5, 1.5])
+    for ux, uy in ((np.full(5, -9.0), np.arange(3.0)), (np.arange(5.0), np.full(3, 9.0))):
+        rgb, d = sample_dense_density(vol, inside, uy, ux, 0.5, 1.0, buf)
+        assert not d.any() and not rgb.any()
