@@ -12,7 +12,7 @@ scanlines, each preceded by its filter-type byte (section 9; type 0 = None is us
 random halftone labels no filter predicts better). The stream is encoded straight from the
 label runs by :func:`.label_deflate.label_zlib` (~1.3-2 ns per voxel on print-job slices, vs
 ~3.7 for libdeflate level 1 and ~13 for Pillow, whose general match finders look for what a
-run already states; files ~3x larger than libdeflate's, ~40 kB per 1145 x 382 slice). Its
+run already states; files 1.3-1.7x libdeflate's, ~18 kB per 1145 x 382 slice). Its
 output is a function of the labels alone, so slices are byte-identical on every machine
 (zlib-ng, also fast, picks SIMD code paths by CPU and then writes different bytes, zlib-ng
 issue #795, which would break byte-identical jobs on a mixed Dask cluster). Chunks carry a

@@ -92,3 +92,27 @@ def test_label_outside_the_palette_is_refused():
         encode_labels_png(lab, pal)
     with pytest.raises(ValueError, match="palette"):
         encode_labels_png(lab, pal, "palette")
+
+
+def test_any_palette_and_label_count_encodes():
+    rng = np.random.default_rng(8)
+    for n_lab in (1, 2, 7, 40):
+        pal = rng.integers(0, 256, (n_lab, 3)).astype(np.uint8)
+        pal[0] = pal[-1][::-1]                           # shared byte values
+        lab = rng.integers(0, n_lab, (17, 61)).astype(np.uint8)
+        for p in (pal, None):
+            z = label_zlib(lab, p, n_labels=n_lab)
+            assert zlib.decompress(z) == _scanlines(lab, p)
+    lab = rng.integers(0, 256, (9, 300)).astype(np.uint8)  # every byte value, indexed
+    assert zlib.decompress(label_zlib(lab, None)) == _scanlines(lab, None)
+
+
+def test_block_code_is_a_complete_prefix_code_within_15_bits():
+    from dreamprint_gui.io.label_deflate import _huffman_lengths
+
+    rng = np.random.default_rng(9)
+    for weights in ([1], [5, 1], list(rng.integers(1, 10**6, 286)), [2**k for k in range(40)]):
+        lengths = _huffman_lengths(weights, 15)
+        assert max(lengths) <= 15
+        kraft = sum(2.0 ** -n for n in lengths)
+        assert kraft == 1.0 or len(weights) == 1
