@@ -398,8 +398,7 @@ def scatter_labels(row, idx, k0, lab, C, m, counts, conc_sums):
     for k in range(m):
         row[idx[k0 + k]] = lab[k]
     n0 = n1 = n2 = n3 = n4 = n5 = n6 = 0
-    s0 = s1 = s2 = s3 = s4 = s5 = 0.0
-    for k in range(m):
+    for k in range(m):  # integer tallies apart from the float sums: this loop vectorises
         v = lab[k]
         n0 += 1 if v == 0 else 0
         n1 += 1 if v == 1 else 0
@@ -408,6 +407,8 @@ def scatter_labels(row, idx, k0, lab, C, m, counts, conc_sums):
         n4 += 1 if v == 4 else 0
         n5 += 1 if v == 5 else 0
         n6 += 1 if v == 6 else 0
+    s0 = s1 = s2 = s3 = s4 = s5 = 0.0
+    for k in range(m):
         s0 += C[0, k]
         s1 += C[1, k]
         s2 += C[2, k]
