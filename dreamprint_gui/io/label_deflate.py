@@ -5,6 +5,8 @@ Defines
 - :func:`label_zlib`: labels (rows, cols) uint8 -> the zlib-compressed PNG image data (IDAT) of
   the image whose pixel is ``palette[label]`` (24-bit RGB) or ``label`` (8-bit indexed), every
   scanline with filter type 0 (None).
+- :func:`label_zlib_stack`: the same for a stack of images (a slab's layers) in one compiled
+  call.
 
 A slice of a print job holds at most seven distinct pixels, in runs: long runs of background
 and single voxels of ink among Clear where the halftone placed them. A general deflate encoder
@@ -33,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["label_zlib", "max_zlib_size"]
+__all__ = ["label_zlib", "label_zlib_stack", "max_zlib_size"]
 
 _ADLER = 65521
 
@@ -301,13 +303,22 @@ def _zlib_runs(labels, pix, bpp, hdr, hdr_n, lit, lit_n, ln, ln_n, ds, ds_n, out
     return n + 4
 
 
-def label_zlib(labels: np.ndarray, palette: np.ndarray | None, n_labels: int = 256) -> bytes:
-    """zlib stream of the PNG scanlines (filter 0) of ``labels`` (rows, cols) uint8, any strides.
+@njit(cache=True, nogil=True)
+def _zlib_stack(stack, pix, bpp, hdr, hdr_n, lit, lit_n, ln, ln_n, ds, ds_n, out, ends):
+    n = 0
+    for k in range(stack.shape[0]):
+        m = _zlib_runs(stack[k], pix, bpp, hdr, hdr_n, lit, lit_n, ln, ln_n, ds, ds_n, out[n:])
+        if m < 0:
+            return -1
+        n += m
+        ends[k] = n
+    return n
 
-    ``palette`` (n, 3) uint8: 24-bit RGB pixels ``palette[label]``; None: 8-bit indexed pixels
-    equal to the label, which must be below ``n_labels`` (the PLTE's length).
-    """
-    h, w = labels.shape
+
+def label_zlib_stack(stack: np.ndarray, palette: np.ndarray | None,
+                     n_labels: int = 256) -> list[bytes]:
+    """:func:`label_zlib` of each image of ``stack`` (n, rows, cols) uint8, any strides."""
+    n, h, w = stack.shape
     if palette is None:
         pix = np.zeros((n_labels, 3), np.int64)
         pix[:, 0] = np.arange(n_labels)
@@ -316,8 +327,19 @@ def label_zlib(labels: np.ndarray, palette: np.ndarray | None, n_labels: int = 2
         pix = np.ascontiguousarray(palette, dtype=np.int64).reshape(-1, 3)
         bpp = 3
     tables = _tables_for(tuple(sorted({int(b) for b in pix[:, :bpp].ravel()})))
-    out = np.empty(max_zlib_size(h, w), np.uint8)
-    n = _zlib_runs(labels, pix, bpp, *tables, out)
-    if n < 0:
+    out = np.empty(n * max_zlib_size(h, w), np.uint8)
+    ends = np.zeros(n, np.int64)
+    if _zlib_stack(stack, pix, bpp, *tables, out, ends) < 0:
         raise ValueError(f"a label is not below the palette's {len(pix)} entries")
-    return out[:n].tobytes()
+    buf = out.tobytes()
+    starts = [0, *ends[:-1].tolist()]
+    return [buf[a:b] for a, b in zip(starts, ends.tolist(), strict=True)]
+
+
+def label_zlib(labels: np.ndarray, palette: np.ndarray | None, n_labels: int = 256) -> bytes:
+    """zlib stream of the PNG scanlines (filter 0) of ``labels`` (rows, cols) uint8, any strides.
+
+    ``palette`` (n, 3) uint8: 24-bit RGB pixels ``palette[label]``; None: 8-bit indexed pixels
+    equal to the label, which must be below ``n_labels`` (the PLTE's length).
+    """
+    return label_zlib_stack(labels[None], palette, n_labels)[0]

@@ -3,7 +3,8 @@
 Defines
 -------
 - :func:`encode_labels_png`: labels (rows, cols) uint8 + palette (n, 3) -> PNG bytes, either
-  24-bit RGB (colour type 2) or 8-bit indexed (colour type 3 with a PLTE chunk).
+  24-bit RGB (colour type 2) or 8-bit indexed (colour type 3 with a PLTE chunk);
+  :func:`encode_labels_pngs` the same for a slab's stack of layers in one compiled call.
 - :func:`png_bytes`: wrap raw filtered scanlines into a PNG file (signature, IHDR, IDAT, IEND).
 - :func:`read_png_labels`: decode a slice back to labels through Pillow (for checks).
 
@@ -28,9 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DreamPrintError
-from .label_deflate import label_zlib
+from .label_deflate import label_zlib_stack
 
-__all__ = ["encode_labels_png", "png_bytes", "read_png_labels"]
+__all__ = ["encode_labels_png", "encode_labels_pngs", "png_bytes", "read_png_labels"]
 
 _SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -53,16 +54,15 @@ def png_bytes(width: int, height: int, colour_type: int, idat: bytes | bytearray
     return b"".join(parts)
 
 
-def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb") -> bytes:
-    """PNG bytes of a label image: pixel = ``palette[label]``.
-
-    ``labels`` (rows, cols) uint8 (any strides: a transposed or flipped view is fine);
-    ``palette`` (n, 3) uint8 with every label < n; ``mode`` "rgb" or "palette".
-    """
-    if labels.ndim != 2 or labels.dtype != np.uint8:
-        raise ValueError("labels must be a 2-D uint8 array")
+def encode_labels_pngs(stack: np.ndarray, palette: np.ndarray, mode: str = "rgb"
+                       ) -> list[bytes]:
+    """PNG bytes of each label image of ``stack`` (n, rows, cols) uint8 (any strides: a
+    transposed or flipped view is fine): pixel = ``palette[label]``, ``palette`` (k, 3) uint8
+    with every label < k; ``mode`` "rgb" (24-bit) or "palette" (8-bit indexed)."""
+    if stack.ndim != 3 or stack.dtype != np.uint8:
+        raise ValueError("labels must be a stack of 2-D uint8 images")
     pal = np.ascontiguousarray(palette, dtype=np.uint8)
-    h, w = labels.shape
+    _, h, w = stack.shape
     if h == 0 or w == 0:
         raise ValueError("a PNG needs at least one row and one column")
     if mode == "rgb":
@@ -71,8 +71,15 @@ def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb"
         ctype = 3
     else:
         raise ValueError(f"unknown PNG mode {mode!r}")
-    idat = label_zlib(labels, pal if ctype == 2 else None, n_labels=len(pal))
-    return png_bytes(w, h, ctype, idat, pal if ctype == 3 else None)
+    idats = label_zlib_stack(stack, pal if ctype == 2 else None, n_labels=len(pal))
+    return [png_bytes(w, h, ctype, idat, pal if ctype == 3 else None) for idat in idats]
+
+
+def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb") -> bytes:
+    """PNG bytes of one label image (rows, cols): see :func:`encode_labels_pngs`."""
+    if labels.ndim != 2:
+        raise ValueError("labels must be a 2-D uint8 array")
+    return encode_labels_pngs(labels[None], palette, mode)[0]
 
 
 def read_png_labels(path: str | Path, palette: np.ndarray) -> np.ndarray:
