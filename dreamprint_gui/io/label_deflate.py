@@ -186,7 +186,8 @@ def _tables(palette_bytes: tuple[int, ...]):
         ds[d] = dist_code[c] | ((d - _DIST_BASE[c]) << dist_len[c])
         ds_n[d] = dist_len[c] + _DIST_EXTRA[c]
     # the kernel writes a length-3 match and a run's match (distance 1 or 3) as one 32-bit put
-    assert ln_n[3] + ds_n.max() <= 32 and ln_n.max() + max(ds_n[1], ds_n[3]) <= 32
+    if ln_n[3] + ds_n.max() > 32 or ln_n.max() + max(ds_n[1], ds_n[3]) > 32:
+        raise RuntimeError("slice deflate: a match code longer than 32 bits")
     return (np.array([b[0] for b in hdr], np.int64), np.array([b[1] for b in hdr], np.int64),
             lit, lit_n, ln, ln_n, ds, ds_n)
 
@@ -318,7 +319,13 @@ def _zlib_stack(stack, pix, bpp, hdr, hdr_n, lit, lit_n, ln, ln_n, ds, ds_n, out
 def label_zlib_stack(stack: np.ndarray, palette: np.ndarray | None,
                      n_labels: int = 256) -> list[bytes]:
     """:func:`label_zlib` of each image of ``stack`` (n, rows, cols) uint8, any strides."""
+    if stack.ndim != 3 or stack.dtype != np.uint8:
+        raise ValueError("labels must be uint8 images")
+    if not 1 <= n_labels <= 256:
+        raise ValueError(f"an 8-bit image has 1 to 256 labels, not {n_labels}")
     n, h, w = stack.shape
+    if n == 0:
+        return []
     if palette is None:
         pix = np.zeros((n_labels, 3), np.int64)
         pix[:, 0] = np.arange(n_labels)

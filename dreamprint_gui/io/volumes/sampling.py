@@ -50,15 +50,15 @@ def axis_map(u: np.ndarray, n: int, pad: float):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _x_rows(vol, a_lo, a_hi, b, ix0, ix1, wx, vx, xr, nz):
-    """Source row ``b`` of layers a_lo..a_hi interpolated in x at the output columns into
-    ``xr[a - a_lo]`` (nxo * C, 0 at invalid columns); ``nz[a - a_lo]``: any value non-zero."""
+def _x_rows(vol, layers, b, ix0, ix1, wx, vx, xr, nz):
+    """Source row ``b`` of source layers ``layers`` interpolated in x at the output columns into
+    ``xr[s]`` for ``layers[s]`` (nxo * C, 0 at invalid columns); ``nz[s]``: any value non-zero."""
     nc = vol.shape[3]
     zero = np.float32(0.0)
     one = np.float32(1.0)
-    for a in range(a_lo, a_hi + 1):
-        v = vol[a, b]
-        x = xr[a - a_lo]
+    for s in range(layers.shape[0]):
+        v = vol[layers[s], b]
+        x = xr[s]
         hit = 0
         for i in range(ix0.shape[0]):
             fx = wx[i]
@@ -68,7 +68,7 @@ def _x_rows(vol, a_lo, a_hi, b, ix0, ix1, wx, vx, xr, nz):
                 t = t if vx[i] else zero
                 x[i * nc + c] = t
                 hit |= t != zero
-        nz[a - a_lo] = hit != 0
+        nz[s] = hit != 0
 
 
 @njit(cache=True, nogil=True)
@@ -109,9 +109,22 @@ def _dense_rows(vol, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, out, 
     if a_hi < 0:
         return
     # x first: the source rows a slab uses, interpolated at the output columns once per slab
-    # (two source rows, for every source layer of the slab, are all that is kept), then per
-    # output row the z and y interpolation is one contiguous pass over its output columns.
-    na = a_hi - a_lo + 1
+    # (two source rows, for every source layer the slab's layers read, are all that is kept),
+    # then per output row the z and y interpolation is one contiguous pass over its columns.
+    slot = np.full(a_hi - a_lo + 1, -1, np.int64)
+    for k in range(nzo):
+        if vz[k]:
+            slot[iz0[k] - a_lo] = 0
+            slot[iz1[k] - a_lo] = 0
+    na = 0
+    for a in range(slot.shape[0]):  # only the layers read: a source finer in z skips the rest
+        if slot[a] == 0:
+            slot[a] = na
+            na += 1
+    layers = np.empty(na, np.int64)
+    for a in range(slot.shape[0]):
+        if slot[a] >= 0:
+            layers[slot[a]] = a_lo + a
     xr0 = np.empty((na, w), np.float32)
     xr1 = np.empty((na, w), np.float32)
     nz0 = np.zeros(na, np.bool_)
@@ -133,18 +146,18 @@ def _dense_rows(vol, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, out, 
                 nz0, nz1 = nz1, nz0
                 cb1 = -1
             else:
-                _x_rows(vol, a_lo, a_hi, b0, ix0, ix1, wx, vx, xr0, nz0)
+                _x_rows(vol, layers, b0, ix0, ix1, wx, vx, xr0, nz0)
             cb0 = b0
         if b1 != cb1:
-            _x_rows(vol, a_lo, a_hi, b1, ix0, ix1, wx, vx, xr1, nz1)
+            _x_rows(vol, layers, b1, ix0, ix1, wx, vx, xr1, nz1)
             cb1 = b1
         fy = wy[j]
         gy = one - fy
         for k in range(nzo):
             if not vz[k]:
                 continue
-            p = iz0[k] - a_lo
-            q = iz1[k] - a_lo
+            p = slot[iz0[k] - a_lo]
+            q = slot[iz1[k] - a_lo]
             if mode != 0 and not (nz0[p] or nz0[q] or nz1[p] or nz1[q]):
                 _zero_row(sigma, rgb, k, j, mode)  # no density anywhere along this row
                 continue

@@ -60,3 +60,18 @@ def test_density_and_premultiplied_colour():
     rgb1, sigma1 = sample_dense_density(vol[..., :1].copy(), uz, uy, ux, pad=0.0, scale=3.0)
     assert rgb1 is None
     np.testing.assert_array_equal(sigma1, sigma)
+
+
+def test_print_coarser_than_the_source_in_z_reads_only_the_layers_it_needs():
+    z, y, x = _grid(nz=60, ny=5, nx=6)
+
+    def fn(zz, yy, xx):
+        return 3.0 + 0.02 * zz * yy - 0.1 * xx + 0.001 * zz * yy * xx
+
+    vol = fn(z, y, x)[..., None].astype(np.float32)
+    uz = np.array([0.5, 13.25, 31.0, 58.9])            # four layers of 60, far apart
+    uy = np.linspace(0, 4, 7)
+    ux = np.linspace(0, 5, 9)
+    rgb, sigma = sample_dense_density(vol, uz, uy, ux, pad=0.0, scale=1.0)
+    Z, Y, X = np.meshgrid(uz, uy, ux, indexing="ij")
+    np.testing.assert_allclose(sigma, fn(Z, Y, X), rtol=2e-6)
