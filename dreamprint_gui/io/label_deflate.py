@@ -212,18 +212,19 @@ def max_zlib_size(rows: int, cols: int) -> int:
 
 @njit(cache=True, nogil=True)
 def _put(out, n, acc, nb, code, length):
-    # ``length`` <= 32 and fewer than 32 bits pending: the 64-bit accumulator cannot overflow,
-    # and whole 32-bit words are stored at once.
+    # ``length`` <= 32 and fewer than 32 bits pending: the 64-bit accumulator cannot overflow.
+    # The low word is stored every time and kept only once it is full: no branch to mispredict
+    # (the buffer has slack for the extra stores).
     acc |= code << nb
     nb += length
-    if nb >= 32:
-        out[n] = acc & 0xFF
-        out[n + 1] = (acc >> 8) & 0xFF
-        out[n + 2] = (acc >> 16) & 0xFF
-        out[n + 3] = (acc >> 24) & 0xFF
-        acc >>= 32
-        nb -= 32
-        n += 4
+    out[n] = acc & 0xFF
+    out[n + 1] = (acc >> 8) & 0xFF
+    out[n + 2] = (acc >> 16) & 0xFF
+    out[n + 3] = (acc >> 24) & 0xFF
+    full = nb >= 32
+    n += 4 if full else 0
+    acc = (acc >> 32) if full else acc
+    nb = (nb - 32) if full else nb
     return n, acc, nb
 
 
@@ -245,6 +246,7 @@ def _zlib_runs(labels, pix, bpp, hdr, hdr_n, lit, lit_n, ln, ln_n, ds, ds_n, out
             s_sum[q] += b
             s_wt[q] += (bpp - k) * b
     last = np.full(nlab, -(1 << 40), np.int64)  # stream offset of the last pixel of each label
+    starts = np.empty(w + 1, np.int64)
     n = 0
     out[0] = 0x78  # CMF: deflate, 32 KiB window
     out[1] = 0x01  # FLG: fastest, no dictionary; (0x78 << 8 | 0x01) % 31 == 0
@@ -258,17 +260,25 @@ def _zlib_runs(labels, pix, bpp, hdr, hdr_n, lit, lit_n, ln, ln_n, ds, ds_n, out
     pos = np.int64(0)
     for y in range(h):
         n, acc, nb = _put(out, n, acc, nb, lit[0], lit_n[0])  # filter type 0
+        # reduced once per row: within a row of W bytes s1 < 65521 + 255 W and s2 < 65521 +
+        # W (65521 + 255 W), far inside int64 for any printable width
+        s1 %= _ADLER
         s2 = (s2 + s1) % _ADLER
         pos += 1
-        x = 0
-        while x < w:
+        # the row's runs: starts found without a data-dependent branch (the end of a run of
+        # random length is a mispredicted jump per run otherwise)
+        starts[0] = 0
+        m = 1
+        for x in range(1, w):
+            starts[m] = x
+            m += 1 if labels[y, x] != labels[y, x - 1] else 0
+        starts[m] = w
+        for t in range(m):
+            x = starts[t]
+            r = starts[t + 1] - x
             q = labels[y, x]
             if q >= nlab:
                 return -1
-            e = x + 1
-            while e < w and labels[y, e] == q:
-                e += 1
-            r = e - x
             d = pos - last[q]
             if bpp >= 3 and d <= 32768 and ln_n[3] + ds_n[d] < pat_n[q]:
                 n, acc, nb = _put(out, n, acc, nb, ln[3] | (ds[d] << ln_n[3]),
@@ -277,28 +287,31 @@ def _zlib_runs(labels, pix, bpp, hdr, hdr_n, lit, lit_n, ln, ln_n, ds, ds_n, out
                 for k in range(bpp):
                     n, acc, nb = _put(out, n, acc, nb, lit[pix[q, k]], lit_n[pix[q, k]])
             rem = (r - 1) * bpp
-            if rem >= 3:
-                while rem > 0:
-                    take = rem
-                    if take > 258:
-                        take = 258 if rem - 258 >= 3 else rem - 3
-                    n, acc, nb = _put(out, n, acc, nb, ln[take] | (ds[bpp] << ln_n[take]),
-                                      ln_n[take] + ds_n[bpp])
-                    rem -= take
+            while rem > 258:
+                take = 258 if rem - 258 >= 3 else rem - 3
+                n, acc, nb = _put(out, n, acc, nb, ln[take] | (ds[bpp] << ln_n[take]),
+                                  ln_n[take] + ds_n[bpp])
+                rem -= take
+            if rem >= 3 or rem == 0:  # one match for the rest of the run, or nothing
+                some = rem > 0
+                n, acc, nb = _put(out, n, acc, nb,
+                                  (ln[rem] | (ds[bpp] << ln_n[rem])) if some else 0,
+                                  (ln_n[rem] + ds_n[bpp]) if some else 0)
             else:  # one byte per pixel, a run of 2 or 3
-                for _ in range(r - 1):
+                for _ in range(rem):
                     n, acc, nb = _put(out, n, acc, nb, lit[pix[q, 0]], lit_n[pix[q, 0]])
-            s2 = (s2 + bpp * r * s1 + s_sum[q] * (bpp * r * (r - 1) // 2) + r * s_wt[q]) % _ADLER
-            s1 = (s1 + r * s_sum[q]) % _ADLER
+            s2 += bpp * r * s1 + s_sum[q] * (bpp * r * (r - 1) // 2) + r * s_wt[q]
+            s1 += r * s_sum[q]
             pos += r * bpp
             last[q] = pos - bpp
-            x = e
     n, acc, nb = _put(out, n, acc, nb, lit[256], lit_n[256])  # end of block
     while nb > 0:
         out[n] = acc & 0xFF
         acc >>= 8
         nb -= 8
         n += 1
+    s1 %= _ADLER
+    s2 %= _ADLER
     for k in range(4):
         out[n + k] = ((s2 << 16 | s1) >> (24 - 8 * k)) & 0xFF
     return n + 4
