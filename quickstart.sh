@@ -44,8 +44,9 @@ case "$what" in
       # has rendered, and exit, so the command finishes and shows that it worked.
       shot="${DREAMPRINT_SCREENSHOT:-$PWD/dreamprint-screenshot.png}"
       echo "quickstart: no screen; running DreamPrint under Xvfb, screenshot -> $shot"
+      # --tab preview: the screenshot shows the preview even if a saved session left another tab
       exec xvfb-run -a -s "-screen 0 1600x1000x24" \
-        .venv/bin/dreamprint-gui --screenshot "$shot" --quit-after 1 "$@"
+        .venv/bin/dreamprint-gui --tab preview --screenshot "$shot" --quit-after 1 "$@"
     fi
     exec .venv/bin/dreamprint-gui "$@"
     ;;
