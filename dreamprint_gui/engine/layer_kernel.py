@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .gamut.alignment import ROW_BLOCK, block_buffers, lookup_align_block, stage_voxel
+from .gamut.alignment import ROW_BLOCK, ROW_STRIDE, block_buffers, lookup_align_block, stage_voxel
 from .halftone import fg_threshold, label_rows, mask_columns, scatter_labels
 
 __all__ = ["layer_labels", "slab_labels"]
@@ -51,7 +51,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     idx = np.empty(RB + nx, np.int64)
     jdx = np.empty(RB + nx, np.int64)
     col, W, off, A, G, C = block_buffers()
-    C2 = C.reshape((8, RB))
+    C2 = C.reshape((8, ROW_STRIDE))
     tt = np.empty(RB)
     lab = np.empty(RB, np.uint8)
     out = labels.reshape(-1)

@@ -1,0 +1,98 @@
+"""The explicit-vector kernel steps against numpy written from their definitions."""
+
+import numpy as np
+import pytest
+from numba import njit
+from numba.core.errors import TypingError
+
+from dreamprint_gui.engine.gamut.alignment import (
+    K_GREY,
+    LANES,
+    ROW_BLOCK,
+    ROW_STRIDE,
+    block_buffers,
+    interpolate_block,
+)
+from dreamprint_gui.engine.vec16 import transpose16x12, weighted_sum16
+
+
+@njit
+def _transpose(src, s0, dst, d0, stride):
+    transpose16x12(src, s0, dst, d0, stride)
+
+
+@njit
+def _wsum(src, o, w, out, d):
+    weighted_sum16(src, (o[0], o[1], o[2], o[3], o[4], o[5], o[6], o[7]),
+                   (w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]), out, d)
+
+
+def test_transpose_writes_the_first_twelve_columns_as_rows_and_nothing_else():
+    rng = np.random.default_rng(1)
+    src = rng.standard_normal(16 * 16 + 37).astype(np.float32)
+    s0, d0, stride = 5, 3, 21
+    dst = np.full(3 + 11 * 21 + 16 + 8, -7.0, np.float32)
+    _transpose(src, np.int64(s0), dst, np.int64(d0), np.int64(stride))
+    block = src[s0:s0 + 256].reshape(16, 16)  # row r = voxel, column q = lane
+    expect = np.full_like(dst, -7.0)
+    for q in range(12):
+        expect[d0 + q * stride:d0 + q * stride + 16] = block[:, q]
+    np.testing.assert_array_equal(dst, expect)
+
+
+def test_weighted_sum_is_the_float32_expression_in_order():
+    rng = np.random.default_rng(2)
+    src = (rng.standard_normal(4096) * 10.0 ** rng.integers(-6, 6, 4096)).astype(np.float32)
+    for _ in range(50):
+        o = rng.integers(0, 4096 - 16, 8).astype(np.uint64)
+        w = rng.random(8).astype(np.float32)
+        d = int(rng.integers(0, 48))
+        out = np.full(64, np.float32(3.5))
+        _wsum(src, o, w, out, np.uint64(d))
+        acc = w[0] * src[int(o[0]):int(o[0]) + 16]
+        for n in range(1, 8):
+            acc = acc + w[n] * src[int(o[n]):int(o[n]) + 16]  # float32 rounding per operation
+        assert acc.dtype == np.float32
+        np.testing.assert_array_equal(out[d:d + 16], acc)
+        assert np.all(np.delete(out, np.arange(d, d + 16)) == np.float32(3.5))
+
+
+def test_intrinsics_refuse_other_types():
+    with pytest.raises(TypingError):
+        _transpose(np.zeros(300), np.int64(0), np.zeros(300), np.int64(0), np.int64(16))
+    with pytest.raises(TypingError):
+        _wsum(np.zeros(64, np.float32), np.zeros(8, np.int32), np.zeros(8, np.float32),
+              np.zeros(16, np.float32), np.uint64(0))
+
+
+@pytest.mark.parametrize("m", [1, 15, 16, 17, 333, ROW_BLOCK])
+def test_interpolate_block_is_trilinear_interpolation_of_the_node_lanes(m):
+    n = 9
+    rng = np.random.default_rng(m)
+    table = rng.random((n, n, n, LANES)).astype(np.float32)
+    rgb = rng.random((m, 3)).astype(np.float32)
+    rgb[:4] = [[0, 0, 0], [1, 1, 1], [1, 0, 0.5], [0.125, 1, 0]][:m]
+    col, W, off, A, G, _ = block_buffers()
+    for c in range(3):
+        col[c * ROW_STRIDE:c * ROW_STRIDE + m] = rgb[:, c]
+    G[:] = np.nan
+    interpolate_block(table.reshape(-1), n, col, m, W, off, A, G)
+    top = np.float32(n - 1)
+    c = rgb * top
+    i = np.minimum(c.astype(np.int64), n - 2)
+    f = c - i.astype(np.float32)
+    g = np.float32(1.0) - f
+    acc = None
+    for a in (0, 1):  # node order x, then y, then z; weights (wx * wy) * wz as the kernel forms
+        for b in (0, 1):
+            for e in (0, 1):
+                w = ((f[:, 0] if a else g[:, 0]) * (f[:, 1] if b else g[:, 1])) * \
+                    (f[:, 2] if e else g[:, 2])
+                term = w[:, None] * table[i[:, 0] + a, i[:, 1] + b, i[:, 2] + e]
+                acc = term if acc is None else acc + term
+    for q in range(K_GREY + 1):
+        np.testing.assert_array_equal(G[q * ROW_STRIDE:q * ROW_STRIDE + m], acc[:, q])
+    # at the nodes themselves the interpolation returns the node (round trip of the table)
+    if m > 1:
+        np.testing.assert_array_equal(G[np.arange(K_GREY + 1) * ROW_STRIDE + 1],
+                                      table[-1, -1, -1, :K_GREY + 1])
