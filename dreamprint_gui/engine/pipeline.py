@@ -307,6 +307,9 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
     nx, ny, nz = ctx.shape_xyz
     if _cancelled(slices_dir, cancel):
         raise JobCancelled()
+    # The kernel reads colour only where the density reaches a positive threshold: the
+    # sampler may then leave the colour of empty rows stale instead of zeroing it.
+    _WORKSPACE.samples.colour_where_dense = bool(ctx.kernel_args()[0] > 0)
     t0 = time.perf_counter()
     rgb, dens = source.sample_slab(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale,
                                    out=_WORKSPACE.samples)

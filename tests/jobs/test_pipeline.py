@@ -112,6 +112,30 @@ def test_byte_identical_across_workers_and_slab_sizes(reference_job, tmp_path):
     assert _digests(out) == ref
 
 
+@pytest.mark.parametrize("threshold", [None, 0.0])
+def test_stale_slab_buffers_never_reach_the_slices(tmp_path, monkeypatch, threshold):
+    """Worker buffers that held mid-grey colour and a high density everywhere give the same
+    slices: the sampler rewrites every density, and the colour it may leave stale (empty rows,
+    positive threshold) is never read. With threshold 0 the job asks for every colour; a
+    zero-density voxel is pure Clear whatever its colour (eq. 12, rho = 0) in any case."""
+    from dreamprint_gui.io.volumes.base import SlabBuffers
+
+    ref = tmp_path / "ref"
+    _run(_settings(ref, workers=2, slab_layers=4, density_threshold=threshold))
+    take = SlabBuffers.take
+
+    def grey_take(self, shape):
+        rgb, sigma = take(self, shape)
+        rgb[...] = 0.5
+        sigma[...] = 7.0
+        return rgb, sigma
+
+    monkeypatch.setattr(SlabBuffers, "take", grey_take)
+    out = tmp_path / "stale"
+    _run(_settings(out, workers=2, slab_layers=4, density_threshold=threshold))
+    assert _digests(out) == _digests(ref)
+
+
 def test_local_cluster_gives_the_same_slices(reference_job, tmp_path):
     from distributed import LocalCluster
 

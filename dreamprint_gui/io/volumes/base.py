@@ -130,11 +130,17 @@ class SlabBuffers:
     A print-job worker samples slab after slab of the same size: writing into memory it has
     already touched avoids a fresh array's page faults (~2.8 ns per voxel on this project's
     2-core VM, as much as the interpolation itself). Not thread-safe: one per worker thread.
+
+    Sources write every element, except that with ``colour_where_dense`` a source may leave
+    the colour of voxels whose density is 0 as it was (the previous slab's): a consumer that
+    reads colour only where the density is positive sets it, and the dense sampler then skips
+    zeroing the colour of empty rows (~0.7 ns per voxel, a sixth of its time on a small job).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, colour_where_dense: bool = False) -> None:
         self.rgb: np.ndarray | None = None
         self.sigma: np.ndarray | None = None
+        self.colour_where_dense = bool(colour_where_dense)
 
     def take(self, shape: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
         """C-contiguous (rgb, sigma) views of ``shape`` (uninitialised), grown when needed."""

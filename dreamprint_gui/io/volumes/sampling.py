@@ -74,7 +74,7 @@ def _x_rows(vol, layers, b, ix0, ix1, wx, vx, xr, nz):
 @njit(cache=True, nogil=True)
 def _zero_row(sigma, rgb, k, j, mode):
     sigma[k, j, :] = 0.0
-    if mode == 2:
+    if mode == 2:  # mode 3 leaves the colour of rows without density as it was
         rgb[k, j, :, :] = 0.0
 
 
@@ -88,8 +88,9 @@ def _zero_layer(sigma, rgb, k, mode):
 def _dense_rows(vol, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, out, rgb, sigma,
                 mode, scale):
     """Trilinear samples of a slab: mode 0 all channels into ``out``; mode 1 density into
-    ``sigma``; mode 2 also colour (channels 1-3 / channel 0) into ``rgb``. Modes 1 and 2
-    write every element."""
+    ``sigma``; mode 2 also colour (channels 1-3 / channel 0) into ``rgb``; mode 3 as 2 but
+    without zeroing the colour of rows (and layers) that hold no density. Modes 1 and 2 write
+    every element, mode 3 every density and the colour of every row with density."""
     nc = vol.shape[3]
     nzo = iz0.shape[0]
     nxo = ix0.shape[0]
@@ -177,7 +178,7 @@ def _dense_rows(vol, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, out, 
             srow = sigma[k, j]
             for i in range(nxo):
                 srow[i] = max(row[i * nc] * scale, zero)
-            if mode == 2:
+            if mode >= 2:
                 crow = rgb[k, j]
                 for i in range(nxo):
                     d = row[i * nc]
@@ -213,7 +214,8 @@ def sample_dense_density(vol: np.ndarray, uz: np.ndarray, uy: np.ndarray, ux: np
     Returns (colour (Z, Y, X, 3) = interpolated premultiplied colour / density clipped to [0, 1],
     0 where the density is not positive; None unless the grid has 4 channels) and ``max(density *
     scale, 0)`` (Z, Y, X), both float32. ``out``: a :class:`.base.SlabBuffers` to write into
-    (every element is written) instead of new arrays.
+    (every element is written, except colour where ``out.colour_where_dense`` allows it:
+    see :class:`.base.SlabBuffers`) instead of new arrays.
     """
     shape = (len(uz), len(uy), len(ux))
     if out is not None:
@@ -222,7 +224,7 @@ def sample_dense_density(vol: np.ndarray, uz: np.ndarray, uy: np.ndarray, ux: np
         rgb_buf, sigma = None, np.empty(shape, np.float32)
     if vol.shape[3] == 4:
         rgb = rgb_buf if rgb_buf is not None else np.empty(shape + (3,), np.float32)
-        mode = 2
+        mode = 3 if out is not None and out.colour_where_dense else 2
     else:
         rgb = None
         mode = 1

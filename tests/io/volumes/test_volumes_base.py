@@ -129,6 +129,26 @@ def test_reused_slab_buffers_give_what_fresh_arrays_give(shared_data):
             np.testing.assert_array_equal(rgb, ref_rgb)
 
 
+def test_colour_where_dense_leaves_only_empty_rows_colour_unwritten():
+    from dreamprint_gui.io.volumes.base import SlabBuffers
+
+    s = open_source("demo")
+    g = grid_for_source(s, (0.2, 0.2, 0.1), height_mm=6)
+    nx, ny, nz = g.shape_xyz
+    buf = SlabBuffers(colour_where_dense=True)
+    buf.take((nz, ny, nx))
+    buf.rgb[...] = np.nan
+    buf.sigma[...] = np.nan
+    rgb, d = s.sample_slab(g, 0, nz, out=buf)
+    ref_rgb, ref_d = s.sample_slab(g, 0, nz)
+    np.testing.assert_array_equal(d, ref_d)
+    dense = d > 0
+    np.testing.assert_array_equal(rgb[dense], ref_rgb[dense])
+    rows = d.max(axis=2) > 0  # rows with density are written whole, as fresh arrays would be
+    np.testing.assert_array_equal(rgb[rows], ref_rgb[rows])
+    assert np.isnan(rgb[~rows]).all() and (~rows).any()  # the others were left alone
+
+
 def test_dense_sampler_outside_the_source_writes_zeros():
     from dreamprint_gui.io.volumes.base import SlabBuffers
     from dreamprint_gui.io.volumes.sampling import sample_dense_density
