@@ -75,9 +75,9 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
                 p = idx[k0 + k]
                 jj = jdx[k0 + k]
                 i = p - jj * nx
-                stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p], rho_k)
+                stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
                 tt[k] = fg_threshold(method, mask[mzz, mrows[jj]], xs, seed, i, i, jj, z)
-            lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
+            lookup_align_block(flat, n, rho_k, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tt, mb, order, bg_label, lab)
             scatter_labels(out, idx, k0, lab, C2, mb, counts, sums)
             k0 += mb

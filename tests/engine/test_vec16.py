@@ -7,13 +7,16 @@ from numba.core.errors import TypingError
 
 from dreamprint_gui.engine.gamut.alignment import (
     K_GREY,
+    K_RHOK,
     LANES,
     ROW_BLOCK,
     ROW_STRIDE,
     block_buffers,
+    finish_staging,
+    grey_rho_k,
     interpolate_block,
 )
-from dreamprint_gui.engine.vec16 import transpose16x12, weighted_sum16
+from dreamprint_gui.engine.vec16 import grey_rho_k16, transpose16x12, weighted_sum16
 
 
 @njit
@@ -96,3 +99,51 @@ def test_interpolate_block_is_trilinear_interpolation_of_the_node_lanes(m):
     if m > 1:
         np.testing.assert_array_equal(G[np.arange(K_GREY + 1) * ROW_STRIDE + 1],
                                       table[-1, -1, -1, :K_GREY + 1])
+
+
+@njit
+def _grey_scalar(table, r, g, b):
+    return grey_rho_k(table, r, g, b)
+
+
+@njit
+def _grey16(col, k0, stride, table, out, o0):
+    grey_rho_k16(col, k0, stride, table, out, o0)
+
+
+@pytest.mark.parametrize("n", [2, 3, 100, 257])
+def test_grey_rho_k16_equals_the_scalar_function_bit_for_bit(n):
+    rng = np.random.default_rng(n)
+    table = rng.random(n)
+    stride = 37
+    col = rng.random(3 * stride).astype(np.float32)
+    col[[0, stride, 2 * stride]] = 0.0      # black
+    col[[1, stride + 1, 2 * stride + 1]] = 1.0  # white: x = n - 1, the last interval
+    col[2] = np.nextafter(np.float32(1.0), np.float32(0.0))
+    out = np.full(40, np.float32(-1.0))
+    _grey16(col, np.int64(3), np.int64(stride), table, out, np.int64(5))
+    for lane in range(16):
+        k = 3 + lane
+        ref = _grey_scalar(table, col[k], col[stride + k], col[2 * stride + k])
+        assert out[5 + lane] == ref
+    assert np.all(out[:5] == -1.0) and np.all(out[21:] == -1.0)
+
+
+def test_finish_staging_cleans_colours_and_adds_the_grey():
+    rng = np.random.default_rng(5)
+    table = rng.random(100)
+    col, _, _, _, G, _ = block_buffers()
+    m = 21
+    raw = rng.normal(0.5, 0.8, (3, m)).astype(np.float32)
+    raw[0, 0] = np.nan
+    raw[1, 3] = np.inf
+    raw[2, 4] = -np.inf
+    for c in range(3):
+        col[c * ROW_STRIDE:c * ROW_STRIDE + m] = raw[c]
+        col[c * ROW_STRIDE + m:c * ROW_STRIDE + 32] = np.nan  # stale lanes of the last group
+    finish_staging(col, G, m, table)
+    clean = np.where(np.isnan(raw), 0.0, np.clip(raw, 0.0, 1.0)).astype(np.float32)
+    for c in range(3):
+        np.testing.assert_array_equal(col[c * ROW_STRIDE:c * ROW_STRIDE + m], clean[c])
+    for k in range(m):
+        assert G[K_RHOK * ROW_STRIDE + k] == _grey_scalar(table, *clean[:, k])

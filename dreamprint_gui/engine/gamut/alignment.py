@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..colorimetry import observer_for
 from ..mixture import mixture_colour
 from ..profile import INKS, InkProfile
-from ..vec16 import transpose16x12, weighted_sum16
+from ..vec16 import grey_rho_k16, transpose16x12, weighted_sum16
 from ..vector_math import exp2_f64, log2_f64
 from .forward import N_COLOUR_INKS
 from .grey import grey_concentrations, rho_k_for
@@ -56,7 +56,7 @@ from .tables import (
 
 __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
            "predicted_appearance", "interpolate_block", "align_rows", "grey_rho_k", "clean_rgb",
-           "stage_voxel", "lookup_align_block", "block_buffers",
+           "stage_voxel", "finish_staging", "lookup_align_block", "block_buffers",
            "kernel_table", "LANES", "ROW_BLOCK", "ROW_STRIDE", "K_TARGET", "K_RHOK"]
 
 _I_K = INKS.index("K")
@@ -427,25 +427,38 @@ def align_rows(F, m, sigma_clear, out):
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def stage_voxel(col, G, k, r, g, b, t, rho_k_table):
-    """Voxel ``k`` of a block: its clean colour into ``col`` and its target (1/mm) and grey rho_K
-    into ``G``, where :func:`interpolate_block` and :func:`align_rows` read them."""
+def stage_voxel(col, G, k, r, g, b, t):
+    """Voxel ``k`` of a block: its colour as read into ``col`` and its target (1/mm) into ``G``
+    (:func:`lookup_align_block` cleans the colours and adds the grey's rho_K)."""
     RS = ROW_STRIDE
-    r = clean_rgb(r)
-    g = clean_rgb(g)
-    b = clean_rgb(b)
     col[k] = r
     col[RS + k] = g
     col[2 * RS + k] = b
     G[K_TARGET * RS + k] = np.float32(t)
-    G[K_RHOK * RS + k] = grey_rho_k(rho_k_table, r, g, b)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def finish_staging(col, G, m, rho_k_table):
+    """Clean the staged colours (:func:`clean_rgb`) and put the rho_K of each voxel's grey
+    (:func:`grey_rho_k`) into lane :data:`K_RHOK` of ``G``, 16 voxels at a time
+    (:func:`..vec16.grey_rho_k16`). The lanes up to the next multiple of 16 are cleaned as well,
+    whatever they held, so that every lane the vector step reads indexes inside the table."""
+    RS = ROW_STRIDE
+    m16 = (m + 15) // 16 * 16  # ROW_BLOCK is a multiple of 16
+    for k in range(m16):
+        col[k] = clean_rgb(col[k])
+        col[RS + k] = clean_rgb(col[RS + k])
+        col[2 * RS + k] = clean_rgb(col[2 * RS + k])
+    for k0 in range(0, m16, 16):
+        grey_rho_k16(col, np.int64(k0), np.int64(RS), rho_k_table, G, np.int64(K_RHOK * RS + k0))
 
 
 @nb.njit(cache=True, nogil=True)
-def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
-    """:func:`interpolate_block` then :func:`align_rows` for ``m`` staged voxels (concentrations
-    into ``C``); adds their clamp report to ``stats`` (clamped low, clamped high, worst low
-    shortfall, worst high shortfall)."""
+def lookup_align_block(flat, n, rho_k_table, sigma_clear, col, m, W, off, A, G, C, stats):
+    """:func:`finish_staging`, :func:`interpolate_block` then :func:`align_rows` for ``m``
+    staged voxels (concentrations into ``C``); adds their clamp report to ``stats`` (clamped
+    low, clamped high, worst low shortfall, worst high shortfall)."""
+    finish_staging(col, G, m, rho_k_table)
     interpolate_block(flat, n, col, m, W, off, A, G)
     lo, hi = align_rows(G, m, sigma_clear, C)
     stats[0] += lo
@@ -479,8 +492,8 @@ def _align_kernel(flat, n, rgb, target, rho_k_table, sigma_clear, out, stats):
         m = min(RB, rgb.shape[0] - v0)
         for k in range(m):
             stage_voxel(col, G, k, rgb[v0 + k, 0], rgb[v0 + k, 1], rgb[v0 + k, 2],
-                        target[v0 + k], rho_k_table)
-        lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, c, stats)
+                        target[v0 + k])
+        lookup_align_block(flat, n, rho_k_table, sigma_clear, col, m, W, off, A, G, c, stats)
         for k in range(m):
             for i in range(6):
                 out[v0 + k, i] = c[i * ROW_STRIDE + k]
