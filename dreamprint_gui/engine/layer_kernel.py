@@ -93,7 +93,8 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
 def slab_labels(rgb, dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear,
                 method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
     """:func:`layer_labels` for layers ``z0 .. z0 + L - 1``: ``rgb`` (L, ny*nx, 3), ``dens``
-    (L, ny*nx), ``labels`` (L, ny, nx)."""
+    (L, ny*nx), ``labels`` (L, ny, nx); ``sums`` (L, 7), one row per layer (a layer's sum does
+    not depend on the slab it was in, so the job's total need not either)."""
     for k in range(labels.shape[0]):
         layer_labels(rgb[k], dens[k], z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums, stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)

@@ -29,6 +29,7 @@ so the slices are byte-identical whatever the slab size, worker count or schedul
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import queue
 import threading
@@ -222,7 +223,7 @@ def _load_kernels(ctx: JobContext) -> None:
 
     labels = np.empty((1, 1, 2), np.uint8)
     _labels_of_slab(ctx, np.zeros((1, 1, 2, 3), np.float32), np.array([[[0.0, 1.0]]], np.float32),
-                    0, labels, np.zeros(7, np.int64), np.zeros(7), np.zeros(4))
+                    0, labels, np.zeros(7, np.int64), np.zeros((1, 7)), np.zeros(4))
     encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
     if _scheduler_kind(ctx.settings) != "distributed":
         import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s
@@ -241,7 +242,8 @@ def _labels_of_slab(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z0: int,
                     labels: np.ndarray, counts: np.ndarray, sums: np.ndarray,
                     stats: np.ndarray) -> None:
     """Labels (L, ny, nx) of the sampled layers ``z0 .. z0 + L - 1`` (rgb (L, ny, nx, 3), dens
-    (L, ny, nx)); accumulates counts, intended concentration sums and the clamp report."""
+    (L, ny, nx)); accumulates counts, intended concentration sums (``sums`` (L, 7), per layer)
+    and the clamp report."""
     n_layers = labels.shape[0]
     rgb = np.ascontiguousarray(rgb.reshape(n_layers, -1, 3), dtype=np.float32)
     d = np.ascontiguousarray(dens.reshape(n_layers, -1), dtype=np.float32)
@@ -316,7 +318,7 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
     t1 = time.perf_counter()
     labels = _WORKSPACE.labels_for(z1 - z0, ny, nx)
     counts = np.zeros(7, dtype=np.int64)
-    sums = np.zeros(7, dtype=np.float64)
+    sums = np.zeros((z1 - z0, 7), dtype=np.float64)
     stats = np.zeros(4)
     _labels_of_slab(ctx, rgb, dens, z0, labels, counts, sums, stats)
     t2 = time.perf_counter()
@@ -350,7 +352,7 @@ def halftone_layer(settings: ConvertSettings, layer: int,
     rgb, dens = source.sample_slab(ctx.grid, layer, layer + 1,
                                    density_scale=ctx.settings.density_scale)
     labels = np.empty((1, ny, nx), dtype=np.uint8)
-    _labels_of_slab(ctx, rgb, dens, layer, labels, np.zeros(7, np.int64), np.zeros(7),
+    _labels_of_slab(ctx, rgb, dens, layer, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
                     np.zeros(4))
     return labels[0]
 
@@ -550,7 +552,10 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     workers = settings.workers or os.cpu_count() or 1
     slabs = _slabs(ctx, workers)
     nx, ny, nz = ctx.shape_xyz
-    totals: dict[str, Any] = {"counts": np.zeros(7, np.int64), "conc_sums": np.zeros(7),
+    # Per-layer sums, added exactly (math.fsum) once all are in: the total is then the same
+    # whatever the slab size, the number of workers or the order in which slabs finish.
+    layer_sums = np.zeros((nz, 7))
+    totals: dict[str, Any] = {"counts": np.zeros(7, np.int64),
                               "clamped": {}, "workers": workers, "slabs": len(slabs)}
     stage_t = {"sample": 0.0, "lookup_halftone": 0.0, "png": 0.0, "write": 0.0}
     with JobWriter(settings.output, settings.overwrite) as writer:
@@ -583,7 +588,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                     continue
                 if what == "result":
                     totals["counts"] += np.asarray(payload["counts"], np.int64)
-                    totals["conc_sums"] += np.asarray(payload["conc_sums"])
+                    layer_sums[payload["z0"]:payload["z1"]] = payload["conc_sums"]
                     _merge_clamped(totals["clamped"], payload["clamped"])
                     for k, v in payload["seconds"].items():
                         stage_t[k] += v
@@ -616,8 +621,9 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
         totals["source_sha256"] = sha_box.get("v")
         timings = {"prepare": t_prep, "convert": time.perf_counter() - t_conv,
                    "worker_stage_sum": stage_t}
+        conc_sums = [math.fsum(layer_sums[:, i]) for i in range(7)]
         manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
-                                   "conc_sums": totals["conc_sums"].tolist()},
+                                   "conc_sums": conc_sums},
                              timings, started)
         manifest["timings_s"]["voxels_per_second"] = (nx * ny * nz) / max(
             1e-9, manifest["timings_s"]["total"])

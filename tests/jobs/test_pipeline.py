@@ -101,15 +101,23 @@ def test_evaluate_job_detects_a_tampered_slice(reference_job, tmp_path):
     assert not report["consistent"] and any("missing" in p for p in report["problems"])
 
 
+def _results(manifest):
+    """What a job reports about its voxels (not how it ran: timings, workers, scheduler)."""
+    keep = ("mean_concentration", "voxel_counts", "clamped_density", "grid_dimensions")
+    return {k: manifest.get(k) for k in keep}
+
+
 def test_byte_identical_across_workers_and_slab_sizes(reference_job, tmp_path):
-    job, _, _ = reference_job
+    job, ref_manifest, _ = reference_job
     ref = _digests(job)
     out = tmp_path / "J2"
-    _run(_settings(out, workers=2, slab_layers=7))
+    manifest, _ = _run(_settings(out, workers=2, slab_layers=7))
     assert _digests(out) == ref
+    assert _results(manifest) == _results(ref_manifest)  # float sums too, to the last bit
     out = tmp_path / "J3"
-    _run(_settings(out, workers=2, scheduler="processes", slab_layers=11))
+    manifest, _ = _run(_settings(out, workers=2, scheduler="processes", slab_layers=11))
     assert _digests(out) == ref
+    assert _results(manifest) == _results(ref_manifest)
 
 
 @pytest.mark.parametrize("threshold", [None, 0.0])
