@@ -10,11 +10,15 @@ its free cores means the other core was taken by other processes, not that the j
 Targets on a 2-core machine: >= 1e8 voxels/s, flat peak memory < 1.5 GB. "prepare s" is the
 job's preparation before the first voxel (open the source, load the colour tables and the
 halftone mask from their caches, load the compiled kernels), not included in the voxel rate.
-The job folder goes to the system's temporary folder, or to ``BENCH_DIR`` when set. A job
-writes one file per layer, so the disk's cost of creating a file matters for small jobs:
-"file us" is that cost, probed just before each job (see :func:`file_probe`; on this VM's ext4
-it ranges from ~0.03 to ~0.9 ms), and ``BENCH_DIR=/dev/shm`` separates the conversion's speed
-from the disk's. Job folders are removed when the benchmark ends, not between jobs.
+Job folders go to ``benchmarks/.jobs/`` beside this file (where an operator's jobs folder
+would be: on the disk, not in the system's temporary folder), or to ``BENCH_DIR`` when set. A
+job writes one file per layer, so the disk's cost of creating a file matters for small jobs:
+"file us" is that cost, probed just before each job (see :func:`file_probe`), and
+``BENCH_DIR=/dev/shm`` separates the conversion's speed from the disk's. On this project's VM,
+creating a file anywhere under ``/tmp`` costs 0.1-0.9 ms of kernel time (its ext4 block group is
+churned by every process's temporary files; measured 2026-11-23: ~300 us under /tmp, ~35 us
+in /var/tmp, /root or the checkout, same disk), enough to halve a 1e7-voxel job's rate. Job
+folders are removed when the benchmark ends, not between jobs.
 
     python benchmarks/bench_convert.py                 # 1e7, 1e8 (best of 3) and 1 -> 2 workers
     python benchmarks/bench_convert.py --sizes 1e7,1e8,1e9
@@ -84,11 +88,12 @@ def file_probe(n: int = 200) -> float:
     """Microseconds to create one small file where the jobs go, measured now.
 
     On this project's VM the root file system is ext4 mounted with online ``discard``: right
-    after files are deleted, creating one costs up to ~0.9 ms of kernel time instead of ~0.03,
-    and a job writes one file per layer. The benchmark therefore removes its job folders only
-    at the end, and prints this probe next to each job so a slow disk is seen as such.
+    after files are deleted, and at any time under ``/tmp``, creating one costs up to ~0.9 ms
+    of kernel time instead of ~0.03, and a job writes one file per layer. The benchmark
+    therefore removes its job folders only at the end, and prints this probe next to each job
+    so a slow disk is seen as such.
     """
-    d = tempfile.mkdtemp(prefix="dp-probe-", dir=os.environ.get("BENCH_DIR"))
+    d = tempfile.mkdtemp(prefix="dp-probe-", dir=jobs_dir())
     _KEEP.append(d)
     t = time.perf_counter()
     for i in range(n):
@@ -98,8 +103,15 @@ def file_probe(n: int = 200) -> float:
     return (time.perf_counter() - t) / n * 1e6
 
 
+def jobs_dir() -> str:
+    """Where the benchmark's job folders go: ``BENCH_DIR``, else ``benchmarks/.jobs``."""
+    d = os.environ.get("BENCH_DIR") or str(Path(__file__).resolve().parent / ".jobs")
+    os.makedirs(d, exist_ok=True)
+    return d
+
+
 def child(n: float, workers: int, halftone: str, scheduler: str | None, source: str) -> dict:
-    tmp = tempfile.mkdtemp(prefix="dp-bench-", dir=os.environ.get("BENCH_DIR"))
+    tmp = tempfile.mkdtemp(prefix="dp-bench-", dir=jobs_dir())
     _KEEP.append(tmp)
     probe = file_probe()
     cmd = [sys.executable, __file__, "--one", str(n), "--workers", str(workers),

@@ -218,9 +218,13 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
 def _load_kernels(ctx: JobContext) -> None:
     """Load the compiled kernels (numba's on-disk cache, ~0.5 s on a first call) now, while
     preparing, rather than in the first slab: the preparation is reported as such and the
-    conversion's progress and speed are those of the conversion."""
+    conversion's progress and speed are those of the conversion. The source's sampler is
+    loaded by sampling one voxel (a grid of 1 x 1 x 1 at the job grid's corner)."""
     from ..io.png_slices import encode_labels_pngs
 
+    source, _ = ctx.resources()
+    one_voxel = replace(ctx.grid, shape_xyz=(1, 1, 1))  # the same sampler, types and arrays
+    source.sample_slab(one_voxel, 0, 1, density_scale=ctx.settings.density_scale)
     labels = np.empty((1, 1, 2), np.uint8)
     _labels_of_slab(ctx, np.zeros((1, 1, 2, 3), np.float32), np.array([[[0.0, 1.0]]], np.float32),
                     0, labels, np.zeros(7, np.int64), np.zeros((1, 7)), np.zeros(4))
