@@ -41,17 +41,23 @@ def _chunk(kind: bytes, data: bytes) -> bytes:
             + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)) & 0xFFFFFFFF))
 
 
-def png_bytes(width: int, height: int, colour_type: int, idat: bytes | bytearray,
-              palette: np.ndarray | None = None) -> bytes:
-    """A PNG file from an already zlib-compressed IDAT stream (bit depth 8)."""
+def _frame(width: int, height: int, colour_type: int,
+           palette: np.ndarray | None) -> tuple[bytes, bytes]:
+    """The bytes of a PNG before its IDAT chunk (signature, IHDR, PLTE) and after it (IEND)."""
     ihdr = struct.pack(">IIBBBBB", width, height, 8, colour_type, 0, 0, 0)
     parts = [_SIGNATURE, _chunk(b"IHDR", ihdr)]
     if colour_type == 3:
         if palette is None:
             raise ValueError("an indexed PNG needs a palette")
         parts.append(_chunk(b"PLTE", np.ascontiguousarray(palette, dtype=np.uint8).tobytes()))
-    parts += [_chunk(b"IDAT", idat), _chunk(b"IEND", b"")]
-    return b"".join(parts)
+    return b"".join(parts), _chunk(b"IEND", b"")
+
+
+def png_bytes(width: int, height: int, colour_type: int, idat: bytes | bytearray,
+              palette: np.ndarray | None = None) -> bytes:
+    """A PNG file from an already zlib-compressed IDAT stream (bit depth 8)."""
+    head, tail = _frame(width, height, colour_type, palette)
+    return head + _chunk(b"IDAT", idat) + tail
 
 
 def encode_labels_pngs(stack: np.ndarray, palette: np.ndarray, mode: str = "rgb"
@@ -72,7 +78,9 @@ def encode_labels_pngs(stack: np.ndarray, palette: np.ndarray, mode: str = "rgb"
     else:
         raise ValueError(f"unknown PNG mode {mode!r}")
     idats = label_zlib_stack(stack, pal if ctype == 2 else None, n_labels=len(pal))
-    return [png_bytes(w, h, ctype, idat, pal if ctype == 3 else None) for idat in idats]
+    # Everything but the IDAT chunk is the same for every image of the stack
+    head, tail = _frame(w, h, ctype, pal if ctype == 3 else None)
+    return [head + _chunk(b"IDAT", idat) + tail for idat in idats]
 
 
 def encode_labels_png(labels: np.ndarray, palette: np.ndarray, mode: str = "rgb") -> bytes:
