@@ -60,11 +60,17 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     for j in range(ny):
         base = j * nx
         m_row = m
-        for i in range(nx):
-            idx[m] = base + i
-            jdx[m] = j
-            m += 1 if dens[base + i] >= threshold else 0  # NaN is background
-            out[base + i] = bg_label
+        fg = False
+        for i in range(nx):  # vectorised: an empty row (a third or more of most jobs) is
+            fg |= dens[base + i] >= threshold  # filled with no compaction
+        if fg:
+            for i in range(nx):
+                idx[m] = base + i
+                jdx[m] = j
+                m += 1 if dens[base + i] >= threshold else 0  # NaN is background
+                out[base + i] = bg_label
+        else:
+            out[base:base + nx] = bg_label
         n_bg += nx - (m - m_row)
         if m < RB and j < ny - 1:
             continue

@@ -22,6 +22,9 @@ def test_fused_layer_equals_lookup_then_halftone(tmp_path, halftone):
     dens[:, ::7] = 0.5 * ctx.halftoner.threshold    # background voxels
     dens[0, 5] = np.nan
     rgb[1, 6] = np.nan
+    dens[0, 4 * nx:6 * nx] = 0.0                    # rows without foreground (skipped whole)
+    dens[1, 7 * nx:8 * nx] = np.nan
+    dens[1, 9 * nx:10 * nx - 1] = 0.0               # one foreground voxel, at the row's end
     z0 = 9
     labels = np.empty((2, ny, nx), np.uint8)
     counts = np.zeros(7, np.int64)
