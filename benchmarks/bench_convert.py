@@ -15,10 +15,12 @@ would be: on the disk, not in the system's temporary folder), or to ``BENCH_DIR`
 job writes one file per layer, so the disk's cost of creating a file matters for small jobs:
 "file us" is that cost, probed just before each job (see :func:`file_probe`), and
 ``BENCH_DIR=/dev/shm`` separates the conversion's speed from the disk's. On this project's VM,
-creating a file anywhere under ``/tmp`` costs 0.1-0.9 ms of kernel time (its ext4 block group is
-churned by every process's temporary files; measured 2026-11-23: ~300 us under /tmp, ~35 us
-in /var/tmp, /root or the checkout, same disk), enough to halve a 1e7-voxel job's rate. Job
-folders are removed when the benchmark ends, not between jobs.
+creating a file anywhere under ``/tmp`` costs 0.1-0.9 ms of kernel time (measured 2026-11-23:
+~300 us under /tmp, ~20-35 us in /var/tmp, /root or the checkout, same disk), and so does
+creating one in a folder near which thousands of files were deleted in the last few minutes
+(:func:`file_probe` says why) - such as a previous run's job folders: enough to halve a
+1e7-voxel job's rate. Job folders are removed when the benchmark ends, not between jobs; a
+line under a job says when the probe found the disk in that state.
 
     python benchmarks/bench_convert.py                 # 1e7, 1e8 (best of 3) and 1 -> 2 workers
     python benchmarks/bench_convert.py --sizes 1e7,1e8,1e9
@@ -87,11 +89,14 @@ _KEEP: list[str] = []  # job folders, removed when the benchmark ends (see file_
 def file_probe(n: int = 200) -> float:
     """Microseconds to create one small file where the jobs go, measured now.
 
-    On this project's VM the root file system is ext4 mounted with online ``discard``: right
-    after files are deleted, and at any time under ``/tmp``, creating one costs up to ~0.9 ms
-    of kernel time instead of ~0.03, and a job writes one file per layer. The benchmark
-    therefore removes its job folders only at the end, and prints this probe next to each job
-    so a slow disk is seen as such.
+    On this project's VM the root file system is ext4 without a journal
+    (``/sys/fs/ext4/vda/journal_task`` says ``<none>``): such an ext4 does not reuse an inode
+    freed in the last minutes and steps over each of them, reading its inode table block, when
+    it allocates one (``find_inode_bit`` / ``recently_deleted`` in ``fs/ext4/ialloc.c``). In a
+    folder (a block group) where thousands of files were just deleted, creating one therefore
+    costs up to ~0.9 ms of kernel time instead of ~0.02-0.03, and a job writes one file per
+    layer; ``/tmp`` is always in that state. The benchmark removes its job folders only at the
+    end, and prints this probe next to each job so a slow disk is seen as such.
     """
     d = tempfile.mkdtemp(prefix="dp-probe-", dir=jobs_dir())
     _KEEP.append(d)
@@ -163,6 +168,9 @@ def _run(a: argparse.Namespace) -> None:
               f"{r['job_mb']:>8.0f} {r['cpu_s'] / r['wall_s']:>10.2f} {r['load_before']:>5.1f} "
               f"{r['prepare_s']:>9.2f} {r['file_us']:>7.0f}",
               flush=True)
+        if r["file_us"] > 60:
+            print(f"{'':>12} (creating a file costs {r['file_us']:.0f} us here now, not ~25: "
+                  "files were deleted near this folder minutes ago; see file_probe)", flush=True)
         st = r["stages_s"]
         rates = [f"{x['voxels_per_s'] / 1e6:.1f}" for x in runs]
         print(f"{'':>12} worker-seconds: sample {st['sample']:.1f}, lookup+halftone "
