@@ -13,7 +13,7 @@ from numba import njit
 
 from ...errors import DreamPrintError
 from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
-from .sampling import sample_dense, sample_dense_density
+from .sampling import rows_with_data, sample_dense, sample_dense_density
 
 __all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_window",
            "bounds_list"]
@@ -52,6 +52,15 @@ class DenseVolume:
         lo = self.origin - self.pad * self.spacing
         hi = self.origin + (nxyz - 1 + self.pad) * self.spacing
         self.bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
+        self._rows_nz: np.ndarray | None = None
+
+    def rows_with_data(self) -> np.ndarray:
+        """(nz, ny) bool, rows holding data (:func:`.sampling.rows_with_data`), found on first
+        use (a scan of the grid, e.g. while a job is prepared) and kept: ``data`` must not
+        change afterwards."""
+        if self._rows_nz is None:
+            self._rows_nz = rows_with_data(self.data)
+        return self._rows_nz
 
     def _indices(self, grid: PrintGrid, z0: int, z1: int) -> list[np.ndarray]:
         return [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None)))
@@ -60,14 +69,15 @@ class DenseVolume:
     def sample(self, grid: PrintGrid, z0: int, z1: int) -> np.ndarray:
         """Trilinear samples at the printer voxel centres of layers z0..z1-1: (Z, Y, X, C)."""
         u = self._indices(grid, z0, z1)
-        return sample_dense(self.data, u[2], u[1], u[0], self.pad)
+        return sample_dense(self.data, u[2], u[1], u[0], self.pad, self.rows_with_data())
 
     def sample_density(self, grid: PrintGrid, z0: int, z1: int, scale: float, out=None):
         """(colour (Z, Y, X, 3) or None, density x ``scale`` (Z, Y, X)) of a density grid
         (channel 0 density, channels 1-3 colour premultiplied by it): see
         :func:`.sampling.sample_dense_density`."""
         u = self._indices(grid, z0, z1)
-        return sample_dense_density(self.data, u[2], u[1], u[0], self.pad, scale, out)
+        return sample_dense_density(self.data, u[2], u[1], u[0], self.pad, scale, out,
+                                    self.rows_with_data())
 
 
 def colormap_lut(name: str | None, colour=None, n: int = 256) -> np.ndarray:

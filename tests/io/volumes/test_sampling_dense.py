@@ -75,3 +75,33 @@ def test_print_coarser_than_the_source_in_z_reads_only_the_layers_it_needs():
     rgb, sigma = sample_dense_density(vol, uz, uy, ux, pad=0.0, scale=1.0)
     Z, Y, X = np.meshgrid(uz, uy, ux, indexing="ij")
     np.testing.assert_allclose(sigma, fn(Z, Y, X), rtol=2e-6)
+
+
+def test_rows_without_data_are_skipped_bit_for_bit():
+    """A source row of +0.0 only is zeros without interpolating it; rows holding -0.0 or NaN
+    count as data, so skipping changes no bit of density or colour."""
+    from dreamprint_gui.io.volumes.base import SlabBuffers
+    from dreamprint_gui.io.volumes.sampling import rows_with_data
+
+    rng = np.random.default_rng(7)
+    vol = rng.uniform(0.0, 2.0, (6, 8, 9, 4)).astype(np.float32)
+    vol[..., 1:] *= vol[..., :1]
+    vol[:, 2:5] = 0.0
+    vol[1, 3, 4, 0] = -0.0
+    vol[4, 2, 0, 2] = np.nan
+    vol[0] = 0.0
+    rows = rows_with_data(vol)
+    assert rows[1, 3] and rows[4, 2] and not rows[0].any() and not rows[2, 2]
+    assert rows.sum() == 5 * 5 + 2
+    uz, uy, ux = np.linspace(-0.4, 5.4, 11), np.linspace(-0.4, 7.4, 15), np.linspace(0, 8, 6)
+    every = np.ones(vol.shape[:2], np.bool_)
+    a = sample_dense(vol, uz, uy, ux, 0.5)
+    b = sample_dense(vol, uz, uy, ux, 0.5, every)
+    np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
+    for out in (None, SlabBuffers(), SlabBuffers(colour_where_dense=True)):
+        rgb, d = sample_dense_density(vol, uz, uy, ux, 0.5, 2.0, out)
+        d, rgb = d.copy(), rgb.copy()
+        rgb2, d2 = sample_dense_density(vol, uz, uy, ux, 0.5, 2.0, None, every)
+        np.testing.assert_array_equal(d.view(np.uint32), d2.view(np.uint32))
+        dense = d > 0
+        np.testing.assert_array_equal(rgb[dense].view(np.uint32), rgb2[dense].view(np.uint32))
