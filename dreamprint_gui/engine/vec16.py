@@ -15,10 +15,11 @@ not alias), spilling registers around it; it turns the strided reads of a transp
 gathers, slow on current x86 cores; and it keeps a loop that reads a small table at computed
 indices scalar (one voxel at a time), judging gathers too dear. Here the vectors are LLVM
 ``<16 x float>`` values, lowered to one AVX-512 register, two AVX registers or four SSE
-registers as the CPU has. The arithmetic is
-plain IEEE ``fmul`` / ``fadd`` in a fixed order, without fast-math flags (no fused multiply-add
-contraction, no reassociation), so every CPU computes the same bits, equal to the scalar
-expression above in float32. No bounds checks: callers pass offsets inside the arrays.
+registers as the CPU has. The arithmetic is plain IEEE ``fmul`` / ``fadd`` in a fixed order,
+without fast-math flags (no fused multiply-add contraction, no reassociation), so every CPU
+computes the same bits, equal to the scalar expression above in float32 (a job's slices are
+tested equal with the kernels compiled for baseline x86-64). No bounds checks: callers pass
+offsets inside the arrays.
 """
 
 from __future__ import annotations
