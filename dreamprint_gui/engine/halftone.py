@@ -42,7 +42,8 @@ from numba import njit
 from .profile import INKS
 
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
-           "pick_label", "label_rows", "fg_threshold", "scatter_labels", "mask_columns",
+           "pick_label", "label_rows", "fg_threshold", "scatter_labels", "scatter_counts",
+           "mask_columns",
            "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS", "MASK_VERSION"]
 
 HALFTONE_METHODS = ("blue-noise", "random")
@@ -389,16 +390,16 @@ def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy,
 
 
 @njit(cache=True, nogil=True, inline="always")
-def scatter_labels(row, idx, k0, lab, C, m, counts, conc_sums):
-    """Put labels ``lab[0 .. m-1]`` of foreground voxels ``idx[k0 ..]`` into ``row``; accumulate
-    their label counts and intended concentrations (``C`` (6+, >= m), one row per ink).
+def scatter_counts(row, idx, k0, lab, m, counts):
+    """Put labels ``lab[0 .. m-1]`` of foreground voxels ``idx[k0 ..]`` into ``row`` and add
+    their label counts to ``counts``.
 
     The tallies run in local variables: kept in arrays, every voxel would wait for the previous
     voxel's store to the same counter."""
     for k in range(m):
         row[idx[k0 + k]] = lab[k]
     n0 = n1 = n2 = n3 = n4 = n5 = n6 = 0
-    for k in range(m):  # integer tallies apart from the float sums: this loop vectorises
+    for k in range(m):  # this loop vectorises
         v = lab[k]
         n0 += 1 if v == 0 else 0
         n1 += 1 if v == 1 else 0
@@ -407,6 +408,20 @@ def scatter_labels(row, idx, k0, lab, C, m, counts, conc_sums):
         n4 += 1 if v == 4 else 0
         n5 += 1 if v == 5 else 0
         n6 += 1 if v == 6 else 0
+    counts[0] += n0
+    counts[1] += n1
+    counts[2] += n2
+    counts[3] += n3
+    counts[4] += n4
+    counts[5] += n5
+    counts[6] += n6
+
+
+@njit(cache=True, nogil=True, inline="always")
+def scatter_labels(row, idx, k0, lab, C, m, counts, conc_sums):
+    """:func:`scatter_counts`, and the intended concentrations ``C`` (6+, >= m), one row per
+    ink, added to ``conc_sums`` one voxel at a time."""
+    scatter_counts(row, idx, k0, lab, m, counts)
     s0 = s1 = s2 = s3 = s4 = s5 = 0.0
     for k in range(m):
         s0 += C[0, k]
@@ -415,13 +430,6 @@ def scatter_labels(row, idx, k0, lab, C, m, counts, conc_sums):
         s3 += C[3, k]
         s4 += C[4, k]
         s5 += C[5, k]
-    counts[0] += n0
-    counts[1] += n1
-    counts[2] += n2
-    counts[3] += n3
-    counts[4] += n4
-    counts[5] += n5
-    counts[6] += n6
     conc_sums[0] += s0
     conc_sums[1] += s1
     conc_sums[2] += s2

@@ -15,7 +15,8 @@ few voxels at a time), with their clean colour, target, grey and halftone thresh
 trilinear lookup of the table node fields (:func:`gamut.alignment.interpolate_block`); (3)
 density alignment (:func:`gamut.alignment.align_rows`); (4) halftone
 (:func:`halftone.label_rows`), then the labels are scattered into the layer
-(:func:`halftone.scatter_labels`). A block's working arrays stay in the L2 cache. A voxel's label
+(:func:`halftone.scatter_counts`) and their intended concentrations summed
+(:func:`block_conc_sums`). A block's working arrays stay in the L2 cache. A voxel's label
 depends on its position, the seed and its own inputs only, so the passes do not change what a
 slab, a worker count or a scheduler produces.
 """
@@ -26,9 +27,31 @@ import numpy as np
 from numba import njit
 
 from .gamut.alignment import ROW_BLOCK, ROW_STRIDE, block_buffers, lookup_align_block, stage_voxel
-from .halftone import fg_threshold, label_rows, mask_columns, scatter_labels
+from .halftone import fg_threshold, label_rows, mask_columns, scatter_counts
+from .vec16 import accumulate8
 
-__all__ = ["layer_labels", "slab_labels"]
+__all__ = ["layer_labels", "slab_labels", "block_conc_sums"]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def block_conc_sums(C, m, acc, sums):
+    """``sums[q] += C[q * ROW_STRIDE + k]`` over ``k < m`` for the six inks (``C`` the block's
+    concentration rows, 1-D), as 8 float64 partial sums per ink (:func:`.vec16.accumulate8`,
+    ``acc`` (48,) scratch) added in a fixed order: a float sum written as one loop waits for
+    each addition in turn (~5 cycles per voxel). The same bits on every CPU."""
+    RS = ROW_STRIDE
+    acc[:] = 0.0
+    m8 = m - m % 8
+    for k0 in range(0, m8, 8):
+        for q in range(6):
+            accumulate8(C, np.int64(q * RS + k0), acc, np.int64(q))
+    for q in range(6):
+        s = 0.0
+        for j in range(8):
+            s += acc[q * 8 + j]
+        for k in range(m8, m):
+            s += C[q * RS + k]
+        sums[q] += s
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -54,6 +77,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     C2 = C.reshape((8, ROW_STRIDE))
     tt = np.empty(RB)
     lab = np.empty(RB, np.uint8)
+    acc = np.empty(48)
     out = labels.reshape(-1)
     n_bg = 0
     m = 0
@@ -85,7 +109,8 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
                 tt[k] = fg_threshold(method, mask[mzz, mrows[jj]], xs, seed, i, i, jj, z)
             lookup_align_block(flat, n, rho_k, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tt, mb, order, bg_label, lab)
-            scatter_labels(out, idx, k0, lab, C2, mb, counts, sums)
+            scatter_counts(out, idx, k0, lab, mb, counts)
+            block_conc_sums(C, mb, acc, sums)
             k0 += mb
         for k in range(m - k0):  # the unfinished block's voxels move to the front
             idx[k] = idx[k0 + k]

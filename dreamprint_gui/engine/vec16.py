@@ -8,6 +8,9 @@ Defines
   (lane-major), the layout in which the alignment pass vectorises across voxels.
 - :func:`grey_rho_k16`: :func:`.gamut.alignment.grey_rho_k` of 16 voxels at once, its two
   table reads as vector gathers.
+- :func:`accumulate8`: ``acc[8 j : 8 j + 8] += src[o : o + 8]`` in float64, the step of a sum
+  kept as 8 partial sums (a float reduction written as a loop stays one add at a time: LLVM may
+  not reorder float additions).
 
 Why not plain loops: written as a 16-step loop, LLVM's vectoriser guards each voxel with a
 run-time overlap check between the table and the output (numba cannot state that two arrays do
@@ -29,7 +32,7 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-__all__ = ["weighted_sum16", "transpose16x12", "grey_rho_k16"]
+__all__ = ["weighted_sum16", "transpose16x12", "grey_rho_k16", "accumulate8"]
 
 _F32 = ir.FloatType()
 _I32 = ir.IntType(32)
@@ -177,6 +180,30 @@ def grey_rho_k16(typingctx, col, k0, stride, table, out, o0):
         res = builder.fadd(builder.fmul(lo, builder.fsub(ir.Constant(_D16, [1.0] * 16), v)),
                            builder.fmul(hi, v))
         builder.store(builder.fptrunc(res, _V16), _vec_at(builder, ob, args[5]), align=4)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def accumulate8(typingctx, src, o, acc, j):
+    """``acc[8 j + l] += float64(src[o + l])`` for l < 8; ``src`` float32 and ``acc`` float64
+    1-D arrays, ``o`` and ``j`` int64."""
+    if not (_f32_array(src) and isinstance(acc, types.Array) and acc.ndim == 1
+            and acc.dtype == types.float64 and _is_i64(o) and _is_i64(j)):
+        return None
+    sig = types.void(src, o, acc, j)
+    f8 = ir.VectorType(_F32, 8)
+    d8 = ir.VectorType(_F64, 8)
+
+    def codegen(context, builder, signature, args):
+        sb = _data(context, builder, signature.args[0], args[0])
+        ab = _data(context, builder, signature.args[2], args[2])
+        x = builder.load(builder.bitcast(builder.gep(sb, [args[1]], inbounds=True),
+                                         f8.as_pointer()), align=4)
+        at = builder.bitcast(builder.gep(ab, [builder.mul(args[3], ir.Constant(_I64, 8))],
+                                         inbounds=True), d8.as_pointer())
+        builder.store(builder.fadd(builder.load(at, align=8), builder.fpext(x, d8)), at, align=8)
         return context.get_dummy_value()
 
     return sig, codegen

@@ -1,5 +1,7 @@
 """The explicit-vector kernel steps against numpy written from their definitions."""
 
+import math
+
 import numpy as np
 import pytest
 from numba import njit
@@ -16,7 +18,12 @@ from dreamprint_gui.engine.gamut.alignment import (
     grey_rho_k,
     interpolate_block,
 )
-from dreamprint_gui.engine.vec16 import grey_rho_k16, transpose16x12, weighted_sum16
+from dreamprint_gui.engine.vec16 import (
+    accumulate8,
+    grey_rho_k16,
+    transpose16x12,
+    weighted_sum16,
+)
 
 
 @njit
@@ -147,3 +154,43 @@ def test_finish_staging_cleans_colours_and_adds_the_grey():
         np.testing.assert_array_equal(col[c * ROW_STRIDE:c * ROW_STRIDE + m], clean[c])
     for k in range(m):
         assert G[K_RHOK * ROW_STRIDE + k] == _grey_scalar(table, *clean[:, k])
+
+
+@njit
+def _acc8(src, o, acc, j):
+    accumulate8(src, o, acc, j)
+
+
+def test_accumulate8_adds_eight_floats_in_double():
+    rng = np.random.default_rng(9)
+    src = rng.standard_normal(40).astype(np.float32)
+    acc = rng.standard_normal(24)
+    ref = acc.copy()
+    _acc8(src, np.int64(5), acc, np.int64(1))
+    ref[8:16] += src[5:13].astype(np.float64)
+    np.testing.assert_array_equal(acc, ref)
+
+
+@pytest.mark.parametrize("m", [0, 1, 7, 8, 9, 1023, ROW_BLOCK])
+def test_block_conc_sums_is_the_fixed_order_sum(m):
+    from dreamprint_gui.engine.layer_kernel import block_conc_sums
+
+    rng = np.random.default_rng(m)
+    C = rng.random(8 * ROW_STRIDE).astype(np.float32)
+    sums = np.full(7, 0.25)
+    block_conc_sums_py = njit(lambda C, m, acc, sums: block_conc_sums(C, m, acc, sums))
+    block_conc_sums_py(C, m, np.empty(48), sums)
+    m8 = m - m % 8
+    for q in range(6):
+        row = C[q * ROW_STRIDE:q * ROW_STRIDE + m].astype(np.float64)
+        part = np.zeros(8)
+        for k0 in range(0, m8, 8):  # lane j adds its voxels in order
+            part += row[k0:k0 + 8]
+        s = 0.0
+        for j in range(8):
+            s += part[j]
+        for k in range(m8, m):
+            s += row[k]
+        assert sums[q] == 0.25 + s
+        assert sums[q] == pytest.approx(0.25 + math.fsum(row), rel=1e-12)
+    assert sums[6] == 0.25
