@@ -178,6 +178,10 @@ class VolumeSource(Protocol):
         """The ``dreamprint inspect --json`` description of the file."""
         ...
 
+    # Optional: ``layer_plan(grid, z0, z1, *, density_scale=1.0)`` -> the arguments of
+    # ``engine.dense_job.dense_slab_labels`` up to its layer arrays, or None. A dense grid
+    # offers it so that a print job samples and labels one layer at a time (DenseSource).
+
 
 # format key -> (module, extensions)
 FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {

@@ -13,7 +13,7 @@ from numba import njit
 
 from ...errors import DreamPrintError
 from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
-from .sampling import rows_with_data, sample_dense, sample_dense_density
+from .dense_sampler import DenseLayers, rows_with_data, sample_dense, sample_dense_density
 
 __all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_window",
            "bounds_list"]
@@ -55,7 +55,7 @@ class DenseVolume:
         self._rows_nz: np.ndarray | None = None
 
     def rows_with_data(self) -> np.ndarray:
-        """(nz, ny) bool, rows holding data (:func:`.sampling.rows_with_data`), found on first
+        """(nz, ny) bool, rows holding data (:func:`.dense_sampler.rows_with_data`), found on first
         use (a scan of the grid, e.g. while a job is prepared) and kept: ``data`` must not
         change afterwards."""
         if self._rows_nz is None:
@@ -74,7 +74,7 @@ class DenseVolume:
     def sample_density(self, grid: PrintGrid, z0: int, z1: int, scale: float, out=None):
         """(colour (Z, Y, X, 3) or None, density x ``scale`` (Z, Y, X)) of a density grid
         (channel 0 density, channels 1-3 colour premultiplied by it): see
-        :func:`.sampling.sample_dense_density`."""
+        :func:`.dense_sampler.sample_dense_density`."""
         u = self._indices(grid, z0, z1)
         return sample_dense_density(self.data, u[2], u[1], u[0], self.pad, scale, out,
                                     self.rows_with_data())
@@ -162,6 +162,20 @@ class DenseSource:
         elif self.colour_encoding == "linear":
             rgb = linear_to_srgb(rgb)
         return rgb, sigma
+
+    def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
+                   ) -> tuple | None:
+        """The arguments of :func:`...engine.dense_job.dense_slab_labels` before its layer
+        arrays, for layers z0..z1-1: the samples :meth:`sample_slab` gives, a layer at a time.
+        None for linear colour (its conversion to sRGB is :meth:`sample_slab`'s)."""
+        check_slab(grid, z0, z1)
+        vol = self.volume
+        if vol.data.shape[3] == 4 and self.colour_encoding == "linear":
+            return None
+        u = vol._indices(grid, z0, z1)
+        plan = DenseLayers(vol.data, u[2], u[1], u[0], vol.pad)
+        return (vol.data, vol.rows_with_data(), *plan.args(),
+                np.float32(density_scale / grid.mm_per_unit), self.uniform_colour)
 
     def info(self) -> dict:
         return {"format": self.format, "grids": self._grids_info}
