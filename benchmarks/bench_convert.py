@@ -173,8 +173,12 @@ def _run(a: argparse.Namespace) -> None:
                   "files were deleted near this folder minutes ago; see file_probe)", flush=True)
         st = r["stages_s"]
         rates = [f"{x['voxels_per_s'] / 1e6:.1f}" for x in runs]
-        print(f"{'':>12} worker-seconds: sample {st['sample']:.1f}, lookup+halftone "
-              f"{st['lookup_halftone']:.1f}, png {st['png']:.1f}, write {st['write']:.1f}; "
+        names = {"sample": "sample", "lookup_halftone": "lookup+halftone",
+                 "sample_lookup_halftone": "sample+lookup+halftone (one pass)", "png": "png",
+                 "write": "write"}
+        stages = ", ".join(f"{label} {st[k]:.1f}" for k, label in names.items()
+                           if st.get(k) or k in ("png", "write"))
+        print(f"{'':>12} worker-seconds: {stages}; "
               f"Mvox/s of the {len(runs)} runs: {', '.join(rates)} (median "
               f"{runs[len(runs) // 2]['voxels_per_s'] / 1e6:.1f}); peak RSS max "
               f"{max(x['peak_rss_mb'] for x in runs):.0f} MB", flush=True)

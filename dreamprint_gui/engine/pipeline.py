@@ -16,14 +16,16 @@ volume source's rule) into the worker thread's reused buffers; then one compiled
 (:func:`.layer_kernel.slab_labels`, nogil) does, layer by layer, the background threshold
 (``--background clear|empty``) -> trilinear table lookup of C, M, Y, K, W -> density alignment
 (Clear, K/W grey; the code of ``lookup_and_align_into``) -> halftone (the rule of
-``halftone.pick_label``) -> label; then each layer goes to PNG (:mod:`..io.png_slices`). Only a
-slab is ever in memory
-per worker. Slabs run through Dask: the threaded scheduler (default, all cores), the
-multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed`` cluster
-(``scheduler="tcp://host:8786"``) whose workers write the slices into the job's temporary folder
-directly, so that folder must be on a path every worker sees (docs/print-jobs.md). Every label is
-a function of the voxel's position, the seed and its concentrations, never of the slab or worker,
-so the slices are byte-identical whatever the slab size, worker count or scheduler.
+``halftone.pick_label``) -> label. A dense grid (a source with a ``layer_plan``) is sampled a
+layer at a time into one layer's buffers, each labelled at once by the same kernel, in one
+compiled call (:mod:`.dense_job`). Then each layer goes to PNG (:mod:`..io.png_slices`). Only a
+slab is ever in memory per worker. Slabs run through Dask: the threaded scheduler (default, all
+cores), the multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed``
+cluster (``scheduler="tcp://host:8786"``) whose workers write the slices into the job's
+temporary folder directly, so that folder must be on a path every worker sees
+(docs/print-jobs.md). Every label is a function of the voxel's position, the seed and its
+concentrations, never of the slab or worker, so the slices are byte-identical whatever the slab
+size, worker count or scheduler.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DreamPrintError
+from .dense_job import dense_slab_labels
 from .halftone import HALFTONE_METHODS, Halftoner
 from .layer_kernel import slab_labels
 from .printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
@@ -222,12 +225,15 @@ def _load_kernels(ctx: JobContext) -> None:
     loaded by sampling one voxel (a grid of 1 x 1 x 1 at the job grid's corner)."""
     from ..io.png_slices import encode_labels_pngs
 
-    source, _ = ctx.resources()
     one_voxel = replace(ctx.grid, shape_xyz=(1, 1, 1))  # the same sampler, types and arrays
-    source.sample_slab(one_voxel, 0, 1, density_scale=ctx.settings.density_scale)
-    labels = np.empty((1, 1, 2), np.uint8)
-    _labels_of_slab(ctx, np.zeros((1, 1, 2, 3), np.float32), np.array([[[0.0, 1.0]]], np.float32),
-                    0, labels, np.zeros(7, np.int64), np.zeros((1, 7)), np.zeros(4))
+    labels = np.empty((1, 1, 1), np.uint8)
+    _slab_into(ctx, one_voxel, 0, 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
+               np.zeros(4))
+    if not hasattr(ctx.resources()[0], "layer_plan"):  # the general path's kernel, on 2 voxels
+        labels = np.empty((1, 1, 2), np.uint8)
+        _labels_of_slab(ctx, np.zeros((1, 1, 2, 3), np.float32),
+                        np.array([[[0.0, 1.0]]], np.float32), 0, labels, np.zeros(7, np.int64),
+                        np.zeros((1, 7)), np.zeros(4))
     encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
     if _scheduler_kind(ctx.settings) != "distributed":
         import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s
@@ -254,6 +260,32 @@ def _labels_of_slab(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z0: int,
     # Background voxels skip the lookup: faster, and they are not "clamped" (they become
     # background by choice, not for want of a reachable density).
     slab_labels(rgb, d, z0, *ctx.kernel_args(), labels, counts, sums, stats)
+
+
+def _slab_into(ctx: JobContext, grid: Any, z0: int, z1: int, labels: np.ndarray,
+               counts: np.ndarray, sums: np.ndarray, stats: np.ndarray) -> dict[str, float]:
+    """Labels (L, ny, nx) of layers ``[z0, z1)`` of ``grid`` into ``labels`` (counts, sums and
+    stats as :func:`_labels_of_slab`); returns the seconds per stage. A source that offers a
+    layer plan (a dense grid) is sampled and labelled a layer at a time in one compiled call
+    (:mod:`.dense_job`); any other fills the worker's slab buffers, which are then labelled."""
+    source, _ = ctx.resources()
+    ny, nx = labels.shape[1:]
+    scale = ctx.settings.density_scale
+    t0 = time.perf_counter()
+    planner = getattr(source, "layer_plan", None)
+    plan = planner(grid, z0, z1, density_scale=scale) if planner is not None else None
+    if plan is not None:
+        rgb, dens = _WORKSPACE.samples.take((1, ny, nx))
+        dense_slab_labels(*plan, rgb.reshape(-1, 3), dens.reshape(-1), z0, *ctx.kernel_args(),
+                          labels, counts, sums, stats)
+        return {"sample_lookup_halftone": time.perf_counter() - t0}
+    # The kernel reads colour only where the density reaches a positive threshold: the
+    # sampler may then leave the colour of empty rows stale instead of zeroing it.
+    _WORKSPACE.samples.colour_where_dense = bool(ctx.kernel_args()[0] > 0)
+    rgb, dens = source.sample_slab(grid, z0, z1, density_scale=scale, out=_WORKSPACE.samples)
+    t1 = time.perf_counter()
+    _labels_of_slab(ctx, rgb, dens, z0, labels, counts, sums, stats)
+    return {"sample": t1 - t0, "lookup_halftone": time.perf_counter() - t1}
 
 
 def _clamp_report(stats: np.ndarray) -> dict[str, float]:
@@ -309,22 +341,14 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
     from ..io.job_export import slice_name
     from ..io.png_slices import encode_labels_pngs
 
-    source, _ = ctx.resources()
     nx, ny, nz = ctx.shape_xyz
     if _cancelled(slices_dir, cancel):
         raise JobCancelled()
-    # The kernel reads colour only where the density reaches a positive threshold: the
-    # sampler may then leave the colour of empty rows stale instead of zeroing it.
-    _WORKSPACE.samples.colour_where_dense = bool(ctx.kernel_args()[0] > 0)
-    t0 = time.perf_counter()
-    rgb, dens = source.sample_slab(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale,
-                                   out=_WORKSPACE.samples)
-    t1 = time.perf_counter()
     labels = _WORKSPACE.labels_for(z1 - z0, ny, nx)
     counts = np.zeros(7, dtype=np.int64)
     sums = np.zeros((z1 - z0, 7), dtype=np.float64)
     stats = np.zeros(4)
-    _labels_of_slab(ctx, rgb, dens, z0, labels, counts, sums, stats)
+    seconds = _slab_into(ctx, ctx.grid, z0, z1, labels, counts, sums, stats)
     t2 = time.perf_counter()
     pngs = encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
     t3 = time.perf_counter()
@@ -340,12 +364,9 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
         # Never create folders here: after a cancel the job's temporary folder is removed and
         # a straggling task must fail rather than recreate it.
         _write_new(prefix + slice_name(z0 + k, nz), png)
-    t_lab = t2 - t1
-    t_png = t3 - t2
-    t_io = time.perf_counter() - t3
+    seconds.update(png=t3 - t2, write=time.perf_counter() - t3)
     return {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
-            "clamped": _clamp_report(stats),
-            "seconds": {"sample": t1 - t0, "lookup_halftone": t_lab, "png": t_png, "write": t_io}}
+            "clamped": _clamp_report(stats), "seconds": seconds}
 
 
 def halftone_layer(settings: ConvertSettings, layer: int,
@@ -355,15 +376,12 @@ def halftone_layer(settings: ConvertSettings, layer: int,
     Pass ``context`` (from :func:`prepare_job`) when scrubbing many layers of one job.
     """
     ctx = context if context is not None else prepare_job(settings)
-    source, _ = ctx.resources()
     nx, ny, nz = ctx.shape_xyz
     if not 0 <= layer < nz:
         raise DreamPrintError(f"layer {layer} is outside the job's 0..{nz - 1}")
-    rgb, dens = source.sample_slab(ctx.grid, layer, layer + 1,
-                                   density_scale=ctx.settings.density_scale)
     labels = np.empty((1, ny, nx), dtype=np.uint8)
-    _labels_of_slab(ctx, rgb, dens, layer, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
-                    np.zeros(4))
+    _slab_into(ctx, ctx.grid, layer, layer + 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
+               np.zeros(4))
     return labels[0]
 
 
@@ -567,7 +585,8 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     layer_sums = np.zeros((nz, 7))
     totals: dict[str, Any] = {"counts": np.zeros(7, np.int64),
                               "clamped": {}, "workers": workers, "slabs": len(slabs)}
-    stage_t = {"sample": 0.0, "lookup_halftone": 0.0, "png": 0.0, "write": 0.0}
+    stage_t = {"sample": 0.0, "lookup_halftone": 0.0, "sample_lookup_halftone": 0.0, "png": 0.0,
+               "write": 0.0}
     with JobWriter(settings.output, settings.overwrite) as writer:
         sha_box: dict[str, str | None] = {}
         sha_th = threading.Thread(target=lambda: sha_box.update(v=_sha256(settings.source)),

@@ -1,0 +1,102 @@
+"""The fused path for dense grids (sample a layer, label it: ``engine.dense_job``) writes exactly
+what the general path does (sample the whole slab, then ``slab_labels``): labels, counts,
+per-layer concentration sums and the clamp report, bit for bit, for any slab partition."""
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.engine.dense_job import dense_slab_labels
+from dreamprint_gui.engine.pipeline import ConvertSettings, _labels_of_slab, prepare_job
+from dreamprint_gui.io.volumes.base import SlabBuffers
+from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume
+
+
+def _cloud(shape, channels, seed=5):
+    """A random cloud on [0, 1]^3 (cell-centred): empty rows, empty layers, -0.0 and NaN."""
+    rng = np.random.default_rng(seed)
+    nz, ny, nx = shape
+    data = np.zeros((nz, ny, nx, channels), np.float32)
+    data[..., 0] = rng.uniform(-5.0, 60.0, shape)           # negative: clipped to 0 density
+    data[..., 0] *= rng.random(shape) < 0.7
+    if channels == 4:
+        data[..., 1:] = rng.random(shape + (3,))
+    data[:, ny // 3] = 0.0                                   # an empty source row per layer
+    if nz > 2:
+        data[nz // 2] = 0.0                                  # an empty source layer
+    flat = data.reshape(-1)
+    flat[rng.integers(0, flat.size, 5)] = -0.0
+    flat[rng.integers(0, flat.size, 3)] = np.nan
+    n = np.array([nx, ny, nz], float)
+    return DenseVolume(data, 0.5 / n, 1.0 / n, cell_centred=True)
+
+
+def _general(ctx, source, z0, z1, threshold):
+    nx, ny, _ = ctx.shape_xyz
+    buf = SlabBuffers(colour_where_dense=threshold > 0)
+    rgb, dens = source.sample_slab(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale,
+                                   out=buf)
+    out = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64), np.zeros((z1 - z0, 7)),
+           np.zeros(4))
+    _labels_of_slab(ctx, rgb, dens, z0, *out)
+    return out
+
+
+def _fused(ctx, source, z0, z1):
+    nx, ny, _ = ctx.shape_xyz
+    plan = source.layer_plan(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale)
+    assert plan is not None
+    rgb = np.full((ny * nx, 3), np.nan, np.float32)         # stale garbage must never be read
+    dens = np.full(ny * nx, 7.0, np.float32)
+    out = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64), np.zeros((z1 - z0, 7)),
+           np.zeros(4))
+    dense_slab_labels(*plan, rgb, dens, z0, *ctx.kernel_args(), *out)
+    return out
+
+
+def _assert_same(a, b):
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(np.asarray(x).view(np.uint8), np.asarray(y).view(np.uint8))
+
+
+@pytest.mark.parametrize("shape, channels", [
+    ((3, 5, 4), 4),        # much coarser than the print: planes shared by many layers
+    ((90, 7, 300), 4),     # finer than the print in z and x: two new planes per layer
+    ((1, 6, 6), 4),        # one source layer: both planes are the same layer
+    ((9, 11, 8), 1),       # density only: uniform colour
+])
+@pytest.mark.parametrize("threshold, background, halftone", [
+    (None, "clear", "blue-noise"), (0.0, "empty", "random")])
+def test_fused_path_equals_sample_then_label(tmp_path, shape, channels, threshold, background,
+                                            halftone):
+    ctx = prepare_job(ConvertSettings(source="demo", output=tmp_path / "J", height_mm=0.5,
+                                      table_size=17, seed=2, halftone=halftone,
+                                      background=background, density_threshold=threshold,
+                                      density_scale=0.7))
+    source = DenseSource("cloud", "test", _cloud(shape, channels), uniform_colour=(0.9, 0.2, 0.4))
+    ctx.source = source
+    nz = ctx.shape_xyz[2]
+    thr = float(ctx.kernel_args()[0])
+    whole = _general(ctx, source, 0, nz, thr)
+    assert len(np.unique(whole[0])) > 2                      # the job is not trivially uniform
+    _assert_same(_fused(ctx, source, 0, nz), whole)
+    assert nz > 13
+    cuts = [0, 1, 4, 5, 13, nz]                               # any partition of the layers
+    parts = [_fused(ctx, source, a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+    np.testing.assert_array_equal(np.concatenate([p[0] for p in parts]), whole[0])
+    np.testing.assert_array_equal(sum(p[1] for p in parts), whole[1])
+    np.testing.assert_array_equal(np.concatenate([p[2] for p in parts]).view(np.uint8),
+                                  whole[2].view(np.uint8))
+
+
+def test_linear_colour_takes_the_general_path(tmp_path):
+    """Linear colour needs sample_slab's conversion to sRGB: no layer plan, and the job's slices
+    are those of the general path."""
+    vol = _cloud((5, 6, 7), 4)
+    source = DenseSource("cloud", "test", vol, colour_encoding="linear")
+    assert source.layer_plan(_grid(tmp_path), 0, 2) is None
+    assert DenseSource("c", "test", _cloud((5, 6, 7), 4)).layer_plan(_grid(tmp_path), 0, 2)
+
+
+def _grid(tmp_path):
+    return prepare_job(ConvertSettings(source="demo", output=tmp_path / "G", height_mm=0.5,
+                                       table_size=17)).grid
