@@ -1,6 +1,7 @@
 """Each reader on the shared real files and on generated files, against closed forms or an
 independent reader."""
 
+import os
 import sys
 from pathlib import Path
 
@@ -99,12 +100,13 @@ def test_kubelka_munk_table_refused(shared_data):
     assert exc.value.line == 1 and exc.value.path == str(path)
 
 
-SHARED_FORMATS = sorted(p.name for p in (
-    Path(__file__).resolve().parents[3].parent / "shared/data/spectra/formats").glob("*"))
+SHARED_DATA = Path(os.environ.get("DREAMPRINT_SAMPLE_DATA")  # as tests/conftest.py
+                   or Path(__file__).resolve().parents[3].parent / "shared/data")
+SHARED_FORMATS = sorted(p.name for p in (SHARED_DATA / "spectra/formats").glob("*"))
 
 
 def test_shared_samples_present():
-    assert len(SHARED_FORMATS) >= 6, SHARED_FORMATS
+    assert len(SHARED_FORMATS) >= 6, (SHARED_DATA, SHARED_FORMATS)
 
 
 @pytest.mark.parametrize("name", SHARED_FORMATS)
