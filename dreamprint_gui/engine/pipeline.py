@@ -225,15 +225,11 @@ def _load_kernels(ctx: JobContext) -> None:
     loaded by sampling one voxel (a grid of 1 x 1 x 1 at the job grid's corner)."""
     from ..io.png_slices import encode_labels_pngs
 
-    one_voxel = replace(ctx.grid, shape_xyz=(1, 1, 1))  # the same sampler, types and arrays
+    # The same path (fused or general), sampler, types and arrays as the job's slabs.
+    one_voxel = replace(ctx.grid, shape_xyz=(1, 1, 1))
     labels = np.empty((1, 1, 1), np.uint8)
     _slab_into(ctx, one_voxel, 0, 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
                np.zeros(4))
-    if not hasattr(ctx.resources()[0], "layer_plan"):  # the general path's kernel, on 2 voxels
-        labels = np.empty((1, 1, 2), np.uint8)
-        _labels_of_slab(ctx, np.zeros((1, 1, 2, 3), np.float32),
-                        np.array([[[0.0, 1.0]]], np.float32), 0, labels, np.zeros(7, np.int64),
-                        np.zeros((1, 7)), np.zeros(4))
     encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
     if _scheduler_kind(ctx.settings) != "distributed":
         import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s
