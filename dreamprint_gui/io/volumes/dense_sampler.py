@@ -155,7 +155,6 @@ class DenseLayers:
                  pad: float):
         nz, ny, nx, nc = vol.shape
         self.maps = (*axis_map(uz, nz, pad), *axis_map(uy, ny, pad), *axis_map(ux, nx, pad))
-        self.shape = (len(uz), len(uy), len(ux))
         nxo = len(ux)
         self.rslot, self.srows = _plan_rows(ny, self.maps[4], self.maps[5], self.maps[7])
         self.planes = np.empty((2, len(self.srows), nc * nxo), np.float32)
