@@ -36,7 +36,8 @@ def spectra(file: str, as_json: bool, quantity: str | None, file_quantity: str |
         return
     click.echo(f"file: {sf.path}")
     click.echo(f"format: {sf.format}")
-    click.echo(f"quantity: {sf.quantity}")
+    basis = summary.get("quantity_basis")
+    click.echo(f"quantity: {sf.quantity}" + (f" ({basis})" if basis else ""))
     click.echo(f"conversion: {sf.conversion}")
     click.echo(f"samples: {len(sf.samples)}")
     width = min(max(len(s["name"]) for s in summary["samples"]), 32)
@@ -44,8 +45,9 @@ def spectra(file: str, as_json: bool, quantity: str | None, file_quantity: str |
         lo, hi = s["wavelengths_nm"]
         step = f"step {s['step_nm']:g} nm" + ("" if s["uniform"] else " (median, uneven)")
         rng = ("" if s["min"] is None else f"  values {s['min']:.4g} to {s['max']:.4g}")
+        own = f"  [{s['quantity']}]" if sf.quantity == "mixed" else ""
         click.echo(f"  {s['name'][:32]:<{width}}  {lo:g}-{hi:g} nm  {step}  "
-                   f"{s['points']} points{rng}")
+                   f"{s['points']} points{rng}{own}")
     if sf.problems:
         click.echo(f"problems: {len(sf.problems)}")
         for p in sf.problems:

@@ -9,8 +9,10 @@ Each ``[[layer]]`` names an ink (``C M Y K W Cl``), the layer thickness in mm (`
 optically thick patch, which has a reflectance only) and a reflectance ``R`` and/or a
 transmittance ``T`` measurement: ``{ file = "...", sample = "..." }``, the file resolved against
 the TOML's folder, read with :func:`~dreamprint_gui.io.spectra.read_spectra` in any supported
-format (absorbance files are converted, T = 10^-A). Several layers per ink (several
-thicknesses, or repeats) are allowed. Options per measurement, or for all of them under
+format (absorbance files are converted, T = 10^-A; in a file whose samples hold different
+quantities, such as a Cary export mixing %T and Abs, each named sample is read as its own
+quantity says, and a sample that holds something else is refused by name). Several layers per
+ink (several thicknesses, or repeats) are allowed. Options per measurement, or for all of them under
 ``[defaults]``: ``extrapolate_nm`` (how far the profile grid may reach beyond the data, the end
 values held), ``scale`` (``auto``/``fraction``/``percent``) and ``file_quantity`` (what a file
 that does not say holds: ``reflectance``, ``transmittance`` or ``absorbance``).
@@ -179,12 +181,12 @@ def _pick(sf: SpectraFile, sample: Any, where: str, path: str):
         if len(sf.samples) != 1:
             raise DreamPrintError(f"{where}: the file holds {len(sf.samples)} samples; say which "
                                   "with sample = \"name\" (or its position, 1 = first)", path)
-        return sf.samples[0]
+        return sf.sample(0)
     if isinstance(sample, bool) or not isinstance(sample, str | int):
         raise DreamPrintError(f"{where}: sample must be a name or a position (1 = first)", path)
     if isinstance(sample, int):
         if not 1 <= sample <= len(sf.samples):
             raise DreamPrintError(f"{where}: sample position {sample} is outside 1-"
                                   f"{len(sf.samples)}", path)
-        return sf.samples[sample - 1]
+        return sf.sample(sample - 1)
     return sf.sample(sample)

@@ -14,7 +14,9 @@ follows the layout Cary WinUV writes:
   ``Method Log``), which is not data and is skipped.
 
 Y modes other than those above (``F(R)``, ``Log(1/R)``, concentration...) are refused with the
-mode named; samples with different Y modes are refused (one file, one quantity).
+mode named. Each sample carries its own Y mode: a file whose samples use different modes (some
+in ``%T``, some in ``Abs``) is read with each sample's own quantity and scale (see
+:func:`~.model.finish`), so that a calibration picks the samples it needs by name.
 """
 
 from __future__ import annotations
@@ -92,14 +94,11 @@ def read_cary(text: str, path: str) -> RawSpectra:
     if not pairs:
         raise DreamPrintError("no wavelength/value column pairs in the heading row", path, 2)
     quantities = {_Y_MODES[m.lower()] for _, _, _, m in pairs}
-    if len(quantities) > 1:
-        raise DreamPrintError("the samples have different Y modes ("
-                              + ", ".join(sorted({m for *_, m in pairs}))
-                              + "): export each mode to its own file", path, 2)
     units = {u for _, _, u, _ in pairs}
     if len(units) > 1:
         raise DreamPrintError("the samples have different X units", path, 2)
-    (quantity, scale), = quantities
+    mixed = len(quantities) > 1
+    (quantity, scale), = quantities if not mixed else {(None, None)}
 
     data: list[tuple[list[float], list[float], bool]] = [([], [], False) for _ in pairs]
     ended = [False] * len(pairs)
@@ -126,10 +125,12 @@ def read_cary(text: str, path: str) -> RawSpectra:
                 raise DreamPrintError(f"sample '{name}': '{x}', '{y}' is not a pair of "
                                       "numbers", path, r) from None
     samples = []
-    for (_, name, _, _), (xs, ys, _) in zip(pairs, data, strict=True):
+    for (_, name, _, mode), (xs, ys, _) in zip(pairs, data, strict=True):
         if not xs:
             raise DreamPrintError(f"sample '{name}' has no data", path, 3)
-        samples.append(RawSample(name, np.array(xs), np.array(ys), 3))
+        own_q, own_scale = _Y_MODES[mode.lower()] if mixed else (None, None)
+        samples.append(RawSample(name, np.array(xs), np.array(ys), 3, quantity=own_q,
+                                 scale=own_scale))
     meta = {}
     for row in rows[end_line:]:
         line = ",".join(row)

@@ -28,8 +28,11 @@ What the specification and the common writers give, and how it is read:
   ``SPECTRAL_NORM`` keyword (ArgyllCMS writes 100 for percent) or, when absent, detection from
   the values: i1Profiler writes ``SPECTRAL_NM`` fields as fractions in some versions and as
   0-100 in others without saying which (see model.PERCENT_THRESHOLD).
-- Quantity: ``MEAS_TYPE`` ``REFLECTIVE`` / ``TRANSMISSIVE`` / ``EMISSIVE`` (ArgyllCMS) or a
-  display ``DEVICE_CLASS``; otherwise unstated (the caller decides; charts are reflective).
+- Quantity (:func:`cgats_quantity`): ``MEAS_TYPE`` ``REFLECTIVE`` / ``TRANSMISSIVE`` /
+  ``EMISSIVE`` (ArgyllCMS), another measurement keyword saying transmittance / reflectance /
+  emission, or a display ``DEVICE_CLASS``; otherwise reflectance, the CGATS default (spectral
+  fields are reflectance factors unless the file says otherwise), which a caller stating
+  transmittance overrules.
 - ``SPECTRAL_BANDS``, ``SPECTRAL_START_NM``, ``SPECTRAL_END_NM`` are checked against the fields;
   ``NUMBER_OF_FIELDS`` / ``NUMBER_OF_SETS`` against what was read (a truncated file is an error).
 """
@@ -53,8 +56,36 @@ _WIDE = re.compile(
     r"^(?:(?P<prefix>SPECTRAL_NM|SPECTRAL_PCT|SPECTRAL_DEC|SPECTRAL|SPEC|SPECTRUM|NM|R)_?"
     r"(?P<wl>\d+(?:\.\d+)?)|(?P<wl2>\d+(?:\.\d+)?)_?NM)$", re.IGNORECASE)
 _NAME_FIELDS = ("SAMPLE_NAME", "SAMPLE_ID", "SAMPLEID", "SAMPLE_LOC", "ID")
-_QUANTITY = {"REFLECTIVE": "reflectance", "TRANSMISSIVE": "transmittance",
-             "EMISSIVE": "spd", "AMBIENT": "spd", "ILLUMINANT": "spd"}
+# The predefined data format identifiers of CGATS.17 (as Little CMS's cmscgats.c lists them),
+# by which a plain CSV header is recognised as naming CGATS fields.
+CGATS_FIELDS = frozenset({
+    "SAMPLE_ID", "SAMPLE_NAME", "STRING", "CMYK_C", "CMYK_M", "CMYK_Y", "CMYK_K", "D_RED",
+    "D_GREEN", "D_BLUE", "D_VIS", "D_MAJOR_FILTER", "RGB_R", "RGB_G", "RGB_B", "SPECTRAL_NM",
+    "SPECTRAL_PCT", "SPECTRAL_DEC", "XYZ_X", "XYZ_Y", "XYZ_Z", "XYY_X", "XYY_Y", "XYY_CAPY",
+    "LAB_L", "LAB_A", "LAB_B", "LAB_C", "LAB_H", "LAB_DE", "LAB_DE_94", "LAB_DE_CMC",
+    "LAB_DE_2000", "MEAN_DE", "STDEV_X", "STDEV_Y", "STDEV_Z", "STDEV_L", "STDEV_A", "STDEV_B",
+    "STDEV_DE", "CHI_SQD_PAR"})
+_CGATS_SPECTRAL = re.compile(r"^SPECTRAL_(?:NM|PCT|DEC)_?\d", re.IGNORECASE)
+
+
+def names_cgats_fields(cells: Sequence[str]) -> bool:
+    """Whether a header row names its columns with CGATS spectral field names: two or more
+    ``SPECTRAL_NM380``-style cells, or spectral cells (``nm380``, ``R380``...) beside a
+    predefined CGATS field such as ``SAMPLE_ID`` or ``LAB_L``."""
+    cells = [c.strip() for c in cells]
+    if sum(1 for c in cells if _CGATS_SPECTRAL.match(c)) >= 2:
+        return True
+    return (sum(1 for c in cells if _WIDE.match(c)) >= 2
+            and any(c.upper() in CGATS_FIELDS for c in cells))
+
+
+def read_cgats_rows(fields: list[str], rows: list[tuple[int, list[str]]], path: str,
+                    keywords: dict[str, str] | None = None) -> RawSpectra | None:
+    """Spectra of a table given as CGATS fields and data rows (from any container: a CGATS
+    file, or a CSV whose header uses CGATS field names); ``None`` when it has no spectral
+    fields."""
+    return _table_spectra(_Table(ident=None, keywords=dict(keywords or {}), fields=fields,
+                                 rows=rows, data_line=rows[0][0] if rows else 0), path)
 
 
 def looks_like_cgats(text_head: str) -> bool:
@@ -245,20 +276,12 @@ def _table_spectra(t: _Table, path: str) -> RawSpectra | None:
                                   path) from None
         if not (math.isfinite(scale) and scale > 0):
             raise DreamPrintError(f"SPECTRAL_NORM {scale} must be positive", path)
-    quantity = _QUANTITY.get(kw.get("MEAS_TYPE", "").upper())
-    notes = []
-    implied = False
-    device = kw.get("DEVICE_CLASS", "").upper()
-    if quantity is None and device == "DISPLAY":
-        quantity = "spd"
-    elif quantity is None and (
-            "WHITEBASE" in kw.get("MEASUREMENT_SOURCE", "").upper().replace(" ", "")
-            or re.fullmatch(r"M[0-3]", kw.get("MEASUREMENT_CONDITION", "").strip().upper())
-            or device in ("OUTPUT", "INPUT")):
-        # A white base (paper / absolute), the ISO 13655 conditions M0-M3 and ArgyllCMS's
-        # printer/scanner charts are reflectance measurements, unless the caller says otherwise.
-        quantity, implied = "reflectance", True
-        notes.append("reflectance, as the measurement conditions imply")
+    quantity, implied, notes = cgats_quantity(kw)
+    raw_meta = {k.lower(): v for k, v in kw.items()}
+    if implied and quantity == "reflectance" and not notes:
+        raw_meta["quantity_basis"] = "CGATS default"
+        notes.append("quantity: reflectance (CGATS default: spectral fields hold reflectance "
+                     "factors unless the file says otherwise)")
 
     writer = t.ident or "CGATS"
     if "SPECTROLINO" in kw.get("INSTRUMENTATION", "").upper():
@@ -269,8 +292,50 @@ def _table_spectra(t: _Table, path: str) -> RawSpectra | None:
         writer = f"ArgyllCMS {t.ident}"
     label = "CGATS.17" if writer.upper() in ("CGATS", "CGATS.17") else f"CGATS.17 ({writer})"
     return RawSpectra(format=label, samples=samples, quantity=quantity, implied=implied,
-                      scale=scale, wavelength_unit="nm", notes=notes,
-                      metadata={k.lower(): v for k, v in kw.items()})
+                      scale=scale, wavelength_unit="nm", notes=notes, metadata=raw_meta)
+
+
+_STATED = (
+    (re.compile(r"TRANSMI(?:SSIVE|SSION|TTANCE|TTED)"), "transmittance"),
+    (re.compile(r"REFLECT(?:IVE|ION|ANCE)"), "reflectance"),
+    (re.compile(r"\bEMISSIVE\b|\bEMISSION\b|\bIRRADIANCE\b|\bRADIANCE\b|\bILLUMINANT\b"
+                r"|SPECTRAL POWER"), "spd"),
+)
+# Keywords that describe what was measured (ArgyllCMS's MEAS_TYPE first); other keywords
+# (ORIGINATOR, MEASUREMENT_SOURCE's "Illumination=D50" ...) name things that are not the
+# quantity.
+_STATING_KEYWORD = re.compile(r"^(?:MEAS_TYPE|MEASUREMENT_(?:TYPE|MODE|GEOMETRY)|MEAS_MODE|"
+                              r"DESCRIPTOR|TABLE_DESCRIPTOR|SAMPLE_TYPE|TARGET_TYPE)$")
+
+
+def cgats_quantity(kw: dict[str, str]) -> tuple[str, bool, list[str]]:
+    """(quantity, implied, notes) of a CGATS table's spectral fields from its keywords.
+
+    A keyword describing the measurement (``MEAS_TYPE`` / ``MEASUREMENT_TYPE`` / ``..._MODE`` /
+    ``..._GEOMETRY`` / ``DESCRIPTOR``) that says transmissive/transmittance, reflective or
+    emissive states the quantity; so does a display ``DEVICE_CLASS``. Otherwise the spectral
+    fields are reflectance factors: CGATS.5 / ISO 13655 define the spectral data of graphic-arts
+    measurements as reflectance factor (SPECTRAL_PCT / SPECTRAL_DEC "reflectance/transmittance",
+    transmittance only for a transmissive measurement stated as such), and ArgyllCMS reads
+    spectral .ti3 values as reflectance "unless the input is marked" otherwise. That default is
+    marked ``implied`` so that a caller stating transmittance overrules it.
+    """
+    keys = sorted((k for k in kw if _STATING_KEYWORD.match(k)), key=lambda k: k != "MEAS_TYPE")
+    for k in keys:
+        value = kw[k].upper()
+        for pattern, q in _STATED:
+            if pattern.search(value):
+                return q, False, []
+    device = kw.get("DEVICE_CLASS", "").upper()
+    if device == "DISPLAY":
+        return "spd", False, []
+    if ("WHITEBASE" in kw.get("MEASUREMENT_SOURCE", "").upper().replace(" ", "")
+            or re.fullmatch(r"M[0-3]", kw.get("MEASUREMENT_CONDITION", "").strip().upper())
+            or device in ("OUTPUT", "INPUT")):
+        # A white base (paper / absolute), the ISO 13655 conditions M0-M3 and ArgyllCMS's
+        # printer/scanner charts are reflectance measurements, unless the caller says otherwise.
+        return "reflectance", True, ["reflectance, as the measurement conditions imply"]
+    return "reflectance", True, []
 
 
 def _check_bands(kw: dict[str, str], wl: np.ndarray, path: str, line: int) -> None:

@@ -6,8 +6,9 @@ Defines :func:`read_text` (bounded, encoding-tolerant reading), :func:`detect_fo
 Detection looks at the text, not at the file name (instruments and operators name files
 freely): an ``IESTM2714`` XML root is IES TM-27-14; ``##TITLE=`` / ``##JCAMP-DX=`` records are
 JCAMP-DX; a ``BEGIN_DATA_FORMAT`` line is CGATS.17 (X-Rite, i1Profiler, ArgyllCMS); a name
-row followed by ``Wavelength (nm),Abs|%T|%R`` is an Agilent Cary export; anything else is read
-as a plain delimited table.
+row followed by ``Wavelength (nm),Abs|%T|%R`` is an Agilent Cary export; a delimited table
+whose header names CGATS fields (``SAMPLE_ID,SPECTRAL_NM380,...``) is read with CGATS's
+meaning of those fields; anything else is read as a plain delimited table.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from .cary import looks_like_cary, read_cary
 from .cgats import looks_like_cgats, read_cgats
 from .jcampdx import looks_like_jcamp, read_jcamp
 from .model import RawSpectra, SpectraFile, ValueScale, finish
-from .plain_csv import read_plain_csv
+from .plain_csv import looks_like_cgats_csv, read_cgats_csv, read_plain_csv
 from .spdx import looks_like_spdx, read_spdx
 
 __all__ = ["read_text", "detect_format", "read_spectra", "MAX_BYTES", "FORMATS"]
@@ -27,7 +28,7 @@ __all__ = ["read_text", "detect_format", "read_spectra", "MAX_BYTES", "FORMATS"]
 # Spectral exports are kilobytes; a chart of thousands of patches is a few megabytes. A cap keeps
 # a wrong file (an image, a volume) from being read into memory whole.
 MAX_BYTES = 64 * 1024 * 1024
-FORMATS = ("spdx", "jcamp-dx", "cgats", "cary", "csv")
+FORMATS = ("spdx", "jcamp-dx", "cgats", "cary", "cgats-csv", "csv")
 
 
 def read_text(path: str | os.PathLike) -> str:
@@ -69,6 +70,8 @@ def detect_format(text: str) -> str:
         return "cgats"
     if looks_like_cary(head):
         return "cary"
+    if looks_like_cgats_csv(head):
+        return "cgats-csv"
     return "csv"
 
 
@@ -84,6 +87,8 @@ def read_raw(path: str | os.PathLike) -> RawSpectra:
         return read_cgats(text, p)
     if fmt == "cary":
         return read_cary(text, p)
+    if fmt == "cgats-csv":
+        return read_cgats_csv(text, p)
     return read_plain_csv(text, p)
 
 

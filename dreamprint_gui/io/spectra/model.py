@@ -23,7 +23,7 @@ extrapolation is allowed.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -56,6 +56,9 @@ class Sample:
     name: str
     wavelengths_nm: NDArray[np.float64]
     values: NDArray[np.float64]
+    # Set only in a file whose samples hold different quantities (a Cary export mixing %T and
+    # Abs): what this sample's values are. Empty: the file's quantity.
+    quantity: str = ""
 
     @property
     def range_nm(self) -> tuple[float, float]:
@@ -94,9 +97,13 @@ class Sample:
 class SpectraFile:
     """The spectra of one file, with their meaning.
 
-    ``quantity`` is one of :data:`QUANTITIES` or ``"unstated"`` (the file does not say and the
-    caller did not either). ``conversion`` says, in words, what was done to the numbers
-    (``"none"`` when nothing). ``problems`` lists physically impossible values, one line each.
+    ``quantity`` is one of :data:`QUANTITIES`, ``"unstated"`` (the file does not say and the
+    caller did not either) or ``"mixed"`` (the samples hold different quantities; each
+    sample's :attr:`Sample.quantity` says which). A sample whose quantity differs from the
+    file's (one that could not be converted to what the caller asked for) is refused by
+    :meth:`sample`, naming what it holds. ``conversion`` says, in words, what was done to the
+    numbers (``"none"`` when nothing). ``problems`` lists physically impossible values, one
+    line each.
     """
 
     path: str
@@ -118,7 +125,7 @@ class SpectraFile:
         """A sample by name or by 0-based index; a clear error when absent or ambiguous."""
         if isinstance(key, int) and not isinstance(key, bool):
             if -len(self.samples) <= key < len(self.samples):
-                return self.samples[key]
+                return self._usable(self.samples[key])
             raise DreamPrintError(
                 f"no sample at index {key}: the file holds {len(self.samples)} sample(s)",
                 self.path)
@@ -126,7 +133,7 @@ class SpectraFile:
         if not hits:
             hits = [s for s in self.samples if s.name.strip().casefold() == str(key).casefold()]
         if len(hits) == 1:
-            return hits[0]
+            return self._usable(hits[0])
         if hits:
             raise DreamPrintError(
                 f"{len(hits)} samples are named '{key}': choose one by its position", self.path)
@@ -134,6 +141,12 @@ class SpectraFile:
         more = f" and {len(self.samples) - 8} more" if len(self.samples) > 8 else ""
         raise DreamPrintError(f"no sample named '{key}' (the file holds {shown}{more})",
                               self.path)
+
+    def _usable(self, s: Sample) -> Sample:
+        if s.quantity and self.quantity != "mixed" and s.quantity != self.quantity:
+            raise DreamPrintError(f"sample '{s.name}' holds {s.quantity}, not {self.quantity} "
+                                  "(the file's samples hold different quantities)", self.path)
+        return s
 
     def resample(self, key: str | int, target_nm: ArrayLike, *,
                  extrapolate_nm: float = 0.0) -> NDArray[np.float64]:
@@ -148,6 +161,7 @@ class SpectraFile:
             finite = s.values[np.isfinite(s.values)]
             samples.append({
                 "name": s.name,
+                "quantity": s.quantity or self.quantity,
                 "wavelengths_nm": [s.range_nm[0], s.range_nm[1]],
                 "step_nm": s.step_nm,
                 "uniform": s.uniform,
@@ -155,7 +169,9 @@ class SpectraFile:
                 "min": float(finite.min()) if finite.size else None,
                 "max": float(finite.max()) if finite.size else None,
             })
+        basis = self.metadata.get("quantity_basis")
         return {"file": self.path, "format": self.format, "quantity": self.quantity,
+                **({"quantity_basis": basis} if basis else {}),
                 "conversion": self.conversion, "samples": samples,
                 "problems": list(self.problems)}
 
@@ -168,6 +184,10 @@ class RawSample:
     wavelengths: NDArray[np.float64]
     values: NDArray[np.float64]
     line: int | None = None
+    # A file whose samples state different quantities (Cary: one Y mode per sample) sets these
+    # per sample; ``None``: the file's (RawSpectra.quantity / .scale).
+    quantity: str | None = None
+    scale: float | None = None
 
 
 @dataclass
@@ -292,6 +312,73 @@ def _check(samples: Sequence[Sample], quantity: str) -> list[str]:
 def finish(raw: RawSpectra, path: str, *, quantity: str | None = None,
            file_quantity: str | None = None, value_scale: ValueScale = "auto") -> SpectraFile:
     """Give raw numbers their meaning; see the module docstring.
+
+    A file whose samples state different quantities (:attr:`RawSample.quantity`) is finished
+    one group of samples at a time (same quantity and scale): each group is converted to
+    ``quantity`` when it can be (absorbance <-> transmittance), else keeps its own quantity,
+    which :meth:`SpectraFile.sample` then names when such a sample is asked for.
+    """
+    own = {(s.quantity if s.quantity is not None else raw.quantity,
+            s.scale if s.quantity is not None else raw.scale) for s in raw.samples}
+    if len(own) <= 1:
+        if raw.samples and raw.samples[0].quantity is not None:
+            q, sc = own.pop()
+            raw = replace(raw, quantity=q, scale=sc)
+        return _finish_one(raw, path, quantity=quantity, file_quantity=file_quantity,
+                           value_scale=value_scale)
+    return _finish_mixed(raw, path, quantity=quantity, file_quantity=file_quantity,
+                         value_scale=value_scale)
+
+
+def _finish_mixed(raw: RawSpectra, path: str, *, quantity: str | None,
+                  file_quantity: str | None, value_scale: ValueScale) -> SpectraFile:
+    groups: dict[tuple, list[int]] = {}
+    for i, s in enumerate(raw.samples):
+        key = (s.quantity if s.quantity is not None else raw.quantity,
+               s.scale if s.quantity is not None else raw.scale)
+        groups.setdefault(key, []).append(i)
+    finished: dict[int, Sample] = {}
+    notes: list[str] = []
+    problems: list[str] = []
+    held_by_group = []
+    for (q, sc), idx in groups.items():
+        sub = replace(raw, samples=[raw.samples[i] for i in idx], quantity=q, scale=sc,
+                      implied=False, notes=[])
+        try:
+            part = _finish_one(sub, path, quantity=quantity, file_quantity=file_quantity,
+                               value_scale=value_scale)
+            converted = True
+        except DreamPrintError:
+            if quantity is None:
+                raise
+            sub = replace(sub, samples=[RawSample(s.name, s.wavelengths, s.values, s.line)
+                                        for s in sub.samples])
+            part = _finish_one(sub, path, file_quantity=file_quantity, value_scale=value_scale)
+            converted = False
+        what = q or UNSTATED
+        held_by_group.append(what)
+        label = f"{len(idx)} {what} sample(s)"
+        if part.conversion != "none":
+            notes.append(f"{label}: {part.conversion}")
+        if not converted:
+            notes.append(f"{label} cannot be read as {quantity} and are refused when asked for")
+        problems += part.problems
+        for i, smp in zip(idx, part.samples, strict=True):
+            finished[i] = replace(smp, quantity=part.quantity)
+    held = {smp.quantity for smp in finished.values()}
+    out_q = quantity if quantity is not None else (held.pop() if len(held) == 1 else "mixed")
+    notes.insert(0, "the samples hold different quantities (" + ", ".join(held_by_group) + ")")
+    return SpectraFile(
+        path=path, format=raw.format, quantity=out_q,
+        conversion="; ".join(raw.notes + notes),
+        samples=tuple(finished[i] for i in range(len(raw.samples))),
+        problems=tuple(problems), metadata=dict(raw.metadata))
+
+
+def _finish_one(raw: RawSpectra, path: str, *, quantity: str | None = None,
+                file_quantity: str | None = None,
+                value_scale: ValueScale = "auto") -> SpectraFile:
+    """:func:`finish` of samples that hold one quantity.
 
     ``quantity`` is what the caller wants (``None``: what the file holds); ``file_quantity``
     what the caller says the file holds when the file does not say; ``value_scale`` overrides

@@ -33,7 +33,8 @@ import numpy as np
 from ...errors import DreamPrintError
 from .model import QUANTITIES, RawSample, RawSpectra, Sample, is_number, parse_float
 
-__all__ = ["read_plain_csv", "write_csv_columns", "write_csv_rows"]
+__all__ = ["read_plain_csv", "write_csv_columns", "write_csv_rows", "looks_like_cgats_csv",
+           "read_cgats_csv"]
 
 _WL_WORD = re.compile(r"^\s*(wave\s*length|wl\b|lambda|λ|nm\b|um\b|µm\b|wavenumber|x\b)",
                       re.IGNORECASE)
@@ -271,6 +272,75 @@ def read_plain_csv(text: str, path: str) -> RawSpectra:
     label = "CSV, a wavelength per row" if orientation == "columns" else "CSV, a sample per row"
     return RawSpectra(format=label, samples=samples, quantity=quantity, scale=scale,
                       wavelength_unit=wl_unit, metadata={"orientation": orientation})
+
+
+def _content(text: str) -> tuple[list[str], list[tuple[int, str]]]:
+    comments: list[str] = []
+    content: list[tuple[int, str]] = []
+    for lineno, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            comments.append(s.lstrip("#").strip())
+        else:
+            content.append((lineno, line))
+    return comments, content
+
+
+def looks_like_cgats_csv(text_head: str) -> bool:
+    """A delimited table whose header names CGATS fields (``SAMPLE_ID,SPECTRAL_NM380,...``)."""
+    from .cgats import names_cgats_fields
+
+    _, content = _content(text_head)
+    if not content:
+        return False
+    delim = _delimiter([ln for _, ln in content[:20]])
+    if delim is None:
+        return False
+    header = next(csv.reader([content[0][1]], delimiter=delim))
+    return names_cgats_fields(header)
+
+
+def read_cgats_csv(text: str, path: str) -> RawSpectra:
+    """A sample per row, columns named with CGATS field names (``SAMPLE_ID``, ``SAMPLE_NAME``,
+    ``SPECTRAL_NM380`` ... or ``SPECTRAL_PCT380`` / ``SPECTRAL_DEC380``, ``LAB_L`` ... beside
+    them), as spreadsheets and colour tools export a CGATS table: the fields mean what CGATS.17
+    says (wavelengths from the spectral field names, percent for ``SPECTRAL_PCT``, reflectance
+    unless the file says otherwise), columns that are not spectral are ignored. A ``#
+    quantity: ...`` / ``# scale: ...`` comment states what CGATS's default would not.
+    """
+    from .cgats import read_cgats_rows
+
+    comments, content = _content(text)
+    delim = _delimiter([ln for _, ln in content[:20]]) or ","
+    rows = [(ln, [c.strip() for c in next(csv.reader([line], delimiter=delim))])
+            for ln, line in content]
+    (header_line, fields), data = rows[0], rows[1:]
+    while fields and not fields[-1]:        # a trailing delimiter on every line
+        fields = fields[:-1]
+        data = [(ln, c[:-1] if len(c) > len(fields) and not c[-1] else c) for ln, c in data]
+    if not data:
+        raise DreamPrintError("no data rows after the header", path, header_line)
+    declared = {m.group(1).lower().replace(" ", "_"): m.group(2).lower().rstrip(".,;")
+                for c in comments if (m := _DECL.match(c))}
+    raw = read_cgats_rows(fields, data, path)
+    if raw is None:
+        raise DreamPrintError("the header names no spectral fields", path, header_line)
+    if "quantity" in declared:
+        q = declared["quantity"]
+        if q not in QUANTITIES:
+            raise DreamPrintError(f"'# quantity: {q}' is not one of " + ", ".join(QUANTITIES),
+                                  path)
+        raw.quantity, raw.implied = q, False
+        raw.notes = [n for n in raw.notes if "CGATS default" not in n]
+        raw.metadata.pop("quantity_basis", None)
+    if "scale" in declared:
+        if declared["scale"] not in ("fraction", "percent"):
+            raise DreamPrintError("'# scale:' must be fraction or percent", path)
+        raw.scale = 100.0 if declared["scale"] == "percent" else 1.0
+    raw.format = "CSV with CGATS field names"
+    return raw
 
 
 def _cell(x: str, path: str, lineno: int) -> float:

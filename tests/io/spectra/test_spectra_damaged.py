@@ -116,14 +116,10 @@ def test_cary_cut_inside_a_row(spectra_data, tmp_path):
     assert exc.value.line == 21
 
 
-def test_cary_unknown_y_mode_and_mixed_modes(tmp_path):
+def test_cary_unknown_y_mode(tmp_path):
     p = tmp_path / "fr.csv"
     p.write_text("s1,\nWavelength (nm),F(R),\n500,0.1,\n400,0.2,\n")
     with pytest.raises(DreamPrintError, match="Y mode 'F\\(R\\)'"):
-        read_spectra(p)
-    p.write_text("a,,b,\nWavelength (nm),%T,Wavelength (nm),Abs,\n500,50,500,0.3,\n"
-                 "400,40,400,0.4,\n")
-    with pytest.raises(DreamPrintError, match="different Y modes"):
         read_spectra(p)
 
 
