@@ -190,13 +190,18 @@ FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
     "vtk": ("vtkimage", (".vti", ".vtk", ".mhd", ".mha", ".nrrd", ".nhdr")),
     "radiance-npz": ("radiance", (".npz",)),
     "radiance-exr": ("radiance", (".exr",)),
-    "splats": ("splats", (".ply", ".spz")),
+    "splats": ("splats", (".ply", ".spz", ".splat", ".ksplat", ".sog")),
     "magicavoxel": ("magicavoxel", (".vox",)),
 }
 
 
 def sniff_format(path: Path) -> str:
     """Format key of ``path`` from its extension, falling back to its first bytes."""
+    if path.is_dir() or path.name == "meta.json":
+        from .splat_formats import is_sog
+
+        if is_sog(path):
+            return "splats"
     if path.is_dir():
         return "radiance-exr"
     suffix = path.suffix.lower()
@@ -226,8 +231,8 @@ def sniff_format(path: Path) -> str:
             or head.startswith(b"ObjectType"):
         return "vtk"
     raise DreamPrintError("not a volume format DreamPrint reads (OpenVDB, NanoVDB, VTK image, "
-                          "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ, MagicaVoxel)",
-                          path)
+                          "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ/.splat/"
+                          ".ksplat/SOG, MagicaVoxel)", path)
 
 
 def inspect_file(path_or_name: str | os.PathLike) -> dict:

@@ -1,4 +1,6 @@
-"""3D Gaussian splats as a density field: INRIA PLY, SuperSplat compressed PLY, Niantic SPZ.
+"""3D Gaussian splats as a density field: INRIA PLY (and nerfstudio's ``ns-export gaussian-splat``
+PLY), SuperSplat compressed PLY, Niantic SPZ, antimatter15 ``.splat``, ``.ksplat``, PlayCanvas SOG
+(the last four read in :mod:`.splat_formats`).
 
 Defines :class:`GaussianCloud` (the source), :func:`peak_density` and :func:`open_path`.
 
@@ -210,17 +212,23 @@ def _read_inria(path: Path) -> GaussianCloud:
 
 
 def open_path(path: Path, fmt: str = "splats") -> GaussianCloud:
-    """Open a splat PLY (INRIA or SuperSplat compressed) or an SPZ file."""
+    """Open a splat file: PLY (INRIA, nerfstudio's export, SuperSplat compressed), SPZ,
+    antimatter15 ``.splat``, ``.ksplat`` or PlayCanvas SOG (see :mod:`.splat_formats`)."""
     import gsply
 
+    from . import splat_formats
+
+    if splat_formats.is_sog(path):
+        return splat_formats.read_sog(path)
+    suffix = path.suffix.lower()
+    if suffix == ".splat":
+        return splat_formats.read_splat(path)
+    if suffix == ".ksplat":
+        return splat_formats.read_ksplat(path)
     with open(path, "rb") as f:
         magic = f.read(3)
-    if path.suffix.lower() == ".spz" or magic != b"ply":
-        try:
-            data = gsply.read_spz(path)
-        except Exception as exc:  # noqa: BLE001
-            raise DreamPrintError(f"cannot read SPZ: {exc}", path) from None
-        return _from_gsply(path, "splats (SPZ)", data)
+    if suffix == ".spz" or magic != b"ply":
+        return splat_formats.read_spz(path)
     _fmt, elements = _ply_header(path)
     if any(name == "chunk" for name, _, _ in elements):
         try:
