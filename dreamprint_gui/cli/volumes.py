@@ -44,7 +44,8 @@ def inspect(file: str, as_json: bool) -> None:
     """Describe a volume file: format and, per grid, class, size, active voxels, range, bounds.
 
     FILE is an OpenVDB, NanoVDB, VTK/MetaImage/NRRD image, radiance .npz or EXR stack (file or
-    folder), splat PLY/SPZ or MagicaVoxel file, or "demo".
+    folder), Gaussian splats (PLY, SPZ, .splat, .ksplat, SOG .sog / folder / meta.json) or
+    MagicaVoxel file, or "demo".
     """
     from ..io.volumes.base import inspect_file
 

@@ -37,7 +37,7 @@ __all__ = ["MainWindow", "classify_path", "VOLUME_FILTER", "PROFILE_FILTER"]
 log = logging.getLogger(__name__)
 
 VOLUME_FILTER = ("Volumes (*.vdb *.nvdb *.vti *.vtk *.mhd *.mha *.nrrd *.nhdr *.npz *.exr "
-                 "*.ply *.spz *.vox);;All files (*)")
+                 "*.ply *.spz *.splat *.ksplat *.sog meta.json *.vox);;All files (*)")
 PROFILE_FILTER = "Ink profiles (*.json);;All files (*)"
 
 
