@@ -161,6 +161,8 @@ class _InkRow:
                                                                      if sample in ch.names else 0)
                 elif self.ink in ch.names:
                     idx = ch.names.index(self.ink)
+                elif not ch.file.usable[0] and any(ch.file.usable):
+                    idx = ch.file.usable.index(True)   # a mixed file: its first sample of q
                 combo.setCurrentIndex(idx)
                 self.sample_changed(q)
                 return

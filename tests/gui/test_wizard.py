@@ -121,6 +121,31 @@ def test_real_instrument_file_and_inline_errors(qtbot, tmp_path, shared_data):
     assert "absent.csv" in row_m.error.text()
 
 
+def test_cary_file_with_mixed_y_modes(qtbot, tmp_path):
+    """A Cary export with %R, %T and Abs samples: the T row reads the Abs sample as T = 10^-A,
+    picks a usable sample by itself, and names the quantity of one it cannot use."""
+    wl = default_profile().wavelengths_nm
+    r, t = 0.3 + 0.2 * np.sin(wl / 50), 0.2 + 0.1 * np.cos(wl / 40)
+    rows = ["white,,cyan T,,cyan A,", "Wavelength (nm),%R,Wavelength (nm),%T,Wavelength (nm),Abs"]
+    rows += [f"{w:g},{100 * a:.8f},{w:g},{100 * b:.8f},{w:g},{-np.log10(b):.10f}"
+             for w, a, b in zip(wl, r, t, strict=True)]
+    p = tmp_path / "mixed.csv"
+    p.write_text("\n".join(rows) + "\n")
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    row = wiz.measurements_page.rows["C"]
+    row.load("T", str(p))
+    assert row.combos["T"].count() == 3 and row.combos["T"].currentIndex() == 1
+    np.testing.assert_allclose(row.channels["T"].values, t, atol=1e-9)
+    row.combos["T"].setCurrentIndex(2)
+    np.testing.assert_allclose(row.channels["T"].values, t, rtol=1e-8)
+    row.combos["T"].setCurrentIndex(0)
+    assert row.channels["T"].values is None
+    assert "holds reflectance, not transmittance" in row.error.text()
+    row.load("R", str(p))
+    np.testing.assert_allclose(row.channels["R"].values, r, atol=1e-9)
+
+
 def test_chart_only_calibration(qtbot, tmp_path, truth):
     """A mixture chart alone: the refit brings the prediction closer to the measured patches
     than the base profile, and the cross-validated dE2000 is reported and plotted."""

@@ -142,6 +142,13 @@ class SpectraFile:
         raise DreamPrintError(f"no sample named '{key}' (the file holds {shown}{more})",
                               self.path)
 
+    @property
+    def usable(self) -> list[bool]:
+        """Per sample, whether it holds the file's quantity (False only for a sample of a
+        mixed file that could not be converted to what the caller asked for)."""
+        return [not (s.quantity and self.quantity != "mixed" and s.quantity != self.quantity)
+                for s in self.samples]
+
     def _usable(self, s: Sample) -> Sample:
         if s.quantity and self.quantity != "mixed" and s.quantity != self.quantity:
             raise DreamPrintError(f"sample '{s.name}' holds {s.quantity}, not {self.quantity} "
