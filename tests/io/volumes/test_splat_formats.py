@@ -197,30 +197,41 @@ def _spz_sections(version, means, sig, q, a, rgb, fb=12):
     return [pos, alphas, colours, scales, rot]
 
 
-def write_spz(path, version, means, sig, q, a, rgb, fb=12):
+def write_spz(path, version, means, sig, q, a, rgb, fb=12, degree=0, extension=b""):
+    """SPZ as load-spz.cc reads it; ``extension`` bytes go where the format puts extensions
+    (after the sections in v1-v3, between header and table in v4) with flag 0x2 set."""
     secs = _spz_sections(version, means, sig, q, a, rgb, fb)
     n = len(means)
+    if degree:
+        dim = {1: 3, 2: 8, 3: 15}[degree]
+        secs.append(_u8(np.linspace(0, 255, n * dim * 3)).tobytes())   # SH, not sampled
+    flags = 2 if extension else 0
     if version < 4:
-        header = struct.pack("<IIIBBBB", 0x5053474E, version, n, 0, fb if version > 1 else 0,
-                             0, 0)
-        path.write_bytes(gzip.compress(header + b"".join(secs)))
+        header = struct.pack("<IIIBBBB", 0x5053474E, version, n, degree,
+                             fb if version > 1 else 0, flags, 0)
+        path.write_bytes(gzip.compress(header + b"".join(secs) + extension))
         return
     import zstandard
 
     comp = [zstandard.ZstdCompressor(level=3).compress(s) for s in secs]
     toc = b"".join(struct.pack("<QQ", len(c), len(s)) for c, s in zip(comp, secs, strict=True))
-    header = struct.pack("<IIIBBBBI12x", 0x5053474E, 4, n, 0, fb, 0, len(secs), 32)
-    path.write_bytes(header + toc + b"".join(comp))
+    header = struct.pack("<IIIBBBBI12x", 0x5053474E, 4, n, degree, fb, flags, len(secs),
+                         32 + len(extension))
+    path.write_bytes(header + extension + toc + b"".join(comp))
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 4])
-def test_spz_round_trip(tmp_path, version):
+@pytest.mark.parametrize("version, extra", [
+    (1, {}), (2, {}), (3, {}), (4, {}), (2, {"degree": 1, "extension": b"\x01\x00\x00\x00ext"}),
+    (3, {"degree": 3, "fb": 10}), (4, {"degree": 2, "extension": b"\x07" * 12}),
+])
+def test_spz_round_trip(tmp_path, version, extra):
     k = _known()
     p = tmp_path / f"c{version}.spz"
-    write_spz(p, version, *k)
+    write_spz(p, version, *k, **extra)
     g = decode_spz(p)
+    assert g.sh_degree == extra.get("degree", 0)
     assert g.format == f"splats (SPZ v{version})"
-    pos = 2e-3 if version == 1 else 0.5 / 4096 + 1e-9          # float16 at |x| <= 2
+    pos = 2e-3 if version == 1 else 0.5 / 2 ** extra.get("fb", 12) + 1e-9  # float16 at |x|<=2
     rot = 2e-4 if version >= 3 else 1e-2
     colour = SH_C0 * 0.5 / (0.15 * 255) + 1e-9
     _check(g, *k, pos=pos, log_sig=0.5 / 16 + 1e-9, rot=rot, colour=colour,
@@ -391,3 +402,24 @@ def test_damaged_spz_gzip_payload(tmp_path):
     p.write_bytes(gzip.compress(payload)[:-30])
     with pytest.raises(DreamPrintError, match="gzip stream itself is cut short"):
         open_source(p)
+
+
+@pytest.mark.parametrize("version", [3, 4])
+def test_spz_from_gsply_writer_agrees_with_gsply_reader(tmp_path, version):
+    """An independent writer and reader (gsply) against this decoder."""
+    import gsply
+    from gsply.gsdata import GSData
+
+    means, sig, q, a, rgb = _known(200, 5)
+    data = GSData(means=means.astype(np.float32), scales=np.log(sig).astype(np.float32),
+                  quats=q.astype(np.float32), opacities=np.log(a / (1 - a)).astype(np.float32),
+                  sh0=((rgb - 0.5) / SH_C0).astype(np.float32), shN=None)
+    p = tmp_path / "g.spz"
+    gsply.write_spz(p, data, version=version)
+    g, ref = decode_spz(p), gsply.read_spz(p)
+    np.testing.assert_allclose(g.means, ref.means, atol=1e-6)
+    np.testing.assert_allclose(np.log(g.sigmas), ref.scales, atol=1e-5)
+    _same_rotation(g.quats, np.asarray(ref.quats, float), 1e-5)
+    np.testing.assert_allclose(g.rgb, 0.5 + SH_C0 * np.asarray(ref.sh0, float), atol=1e-5)
+    _check(g, means, sig, q, a, rgb, pos=0.5 / 4096 + 1e-6, log_sig=0.5 / 16 + 1e-6, rot=2e-4,
+           colour=SH_C0 * 0.5 / (0.15 * 255) + 1e-6, alpha=0.5 / 255 + 1e-6)
