@@ -192,8 +192,11 @@ def _read_inria(path: Path) -> GaussianCloud:
     except Exception as exc:  # noqa: BLE001 - plyfile raises assorted types on bad input
         raise DreamPrintError(f"cannot read PLY: {exc}", path) from None
     names = set(v.dtype.names or ())
-    need = ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1",
-            "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
+    # nerfstudio's splatfacto export at SH degree 0 (through open3d) writes the activated
+    # colour as uchar red/green/blue instead of f_dc_*.
+    rgb_bytes = not {"f_dc_0", "f_dc_1", "f_dc_2"} <= names and {"red", "green", "blue"} <= names
+    need = ["x", "y", "z", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1",
+            "rot_2", "rot_3"] + ([] if rgb_bytes else ["f_dc_0", "f_dc_1", "f_dc_2"])
     missing = [n for n in need if n not in names]
     if missing:
         raise DreamPrintError("not a Gaussian-splat PLY (missing vertex properties "
@@ -202,13 +205,18 @@ def _read_inria(path: Path) -> GaussianCloud:
     def col(*ks):
         return np.stack([np.asarray(v[k], float) for k in ks], axis=1)
 
+    if rgb_bytes:
+        rgb = col("red", "green", "blue")
+        if v["red"].dtype.kind in "ui" or rgb.max(initial=0.0) > 1.0:
+            rgb = rgb / 255.0
+    else:
+        rgb = 0.5 + SH_C0 * col("f_dc_0", "f_dc_1", "f_dc_2")
     n_rest = sum(1 for n in names if n.startswith("f_rest_"))
     degree = {0: 0, 9: 1, 24: 2, 45: 3}.get(n_rest, 0)
     return GaussianCloud(str(path), "splats (INRIA PLY)", col("x", "y", "z"),
                          np.exp(col("scale_0", "scale_1", "scale_2")),
                          col("rot_0", "rot_1", "rot_2", "rot_3"),
-                         _sigmoid(np.asarray(v["opacity"], float)),
-                         0.5 + SH_C0 * col("f_dc_0", "f_dc_1", "f_dc_2"), degree)
+                         _sigmoid(np.asarray(v["opacity"], float)), rgb, degree)
 
 
 def open_path(path: Path, fmt: str = "splats") -> GaussianCloud:

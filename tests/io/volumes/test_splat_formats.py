@@ -342,6 +342,33 @@ def test_nerfstudio_gaussian_splat_export(tmp_path, n_rest, degree):
     np.testing.assert_allclose(s.inv_cov, ref.inv_cov, rtol=1e-3, atol=1e-3)
 
 
+def test_nerfstudio_open3d_export_at_sh_degree_0(tmp_path):
+    """The open3d-written export of splatfacto at SH degree 0: activated colour as uchar
+    red/green/blue (``map_to_tensors["colors"] = (colors * 255).astype(np.uint8)``)."""
+    from plyfile import PlyData, PlyElement
+
+    means, sig, q, a, rgb = _known()
+    names = [("x", "f4"), ("y", "f4"), ("z", "f4"), ("nx", "f4"), ("ny", "f4"), ("nz", "f4"),
+             ("red", "u1"), ("green", "u1"), ("blue", "u1"), ("opacity", "f4"),
+             ("scale_0", "f4"), ("scale_1", "f4"), ("scale_2", "f4"), ("rot_0", "f4"),
+             ("rot_1", "f4"), ("rot_2", "f4"), ("rot_3", "f4")]
+    v = np.zeros(N, names)
+    for i, k in enumerate("xyz"):
+        v[k] = means[:, i]
+        v[f"scale_{i}"] = np.log(sig[:, i])
+    for i, k in enumerate(("red", "green", "blue")):
+        v[k] = _u8(rgb[:, i] * 255)
+    v["opacity"] = np.log(a / (1 - a))
+    for i in range(4):
+        v[f"rot_{i}"] = q[:, i]
+    p = tmp_path / "splat.ply"
+    PlyData([PlyElement.describe(v, "vertex")]).write(str(p))
+    s = open_source(p)
+    ref = GaussianCloud("r", "t", means, sig, q, a, rgb)
+    np.testing.assert_allclose(s.rgb, ref.rgb, atol=0.5 / 255 + 1e-6)
+    np.testing.assert_allclose(s.peak, ref.peak, rtol=1e-4)
+
+
 # ------------------------------------------------------------------------------ CLI, damage
 
 def _all_formats(tmp_path):
