@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import Qt, QTimer, Signal
-from PySide6.QtGui import QImage, QPixmap
+from PySide6.QtGui import QImage
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -26,13 +26,13 @@ from PySide6.QtWidgets import (
     QGroupBox,
     QHBoxLayout,
     QLabel,
-    QSizePolicy,
     QSlider,
     QSplitter,
     QVBoxLayout,
     QWidget,
 )
 
+from .layer_view import LayerView, MaterialLegend
 from .preview_data import PreviewData, compute_preview, job_context
 from .volume_view import ViewHost, add_rgba_volume
 from .workers import Task, run_task
@@ -46,7 +46,8 @@ class PreviewPage(QWidget):
     """Source vs predicted print, with the controls that change the print."""
 
     rendered = Signal()  # both views drawn with current data
-    failed = Signal(str)
+    failed = Signal(str)  # the preview could not be computed (the window says it, once)
+    problem = Signal(str)  # something that stops nothing failed (a layer); said by the window
     paramsChanged = Signal()
 
     def __init__(self, parent: QWidget | None = None, table_size: int | None = None) -> None:
@@ -62,6 +63,7 @@ class PreviewPage(QWidget):
         self.data: PreviewData | None = None
         self.slice_labels: np.ndarray | None = None
         self.slice_image: QImage | None = None
+        self.shown_layer: int | None = None  # the layer the layer view shows
         self._task: Task | None = None
         self._slice_task: Task | None = None
         self._pending = False
@@ -83,9 +85,12 @@ class PreviewPage(QWidget):
                                    "resin, or no material at all")
         self.status = QLabel("no source")
         self.status.setWordWrap(True)
+        # The footnote of the 3D views (preview grid, downsampling) in the application's font,
+        # under the views.
         self.note = QLabel("")
         self.note.setWordWrap(True)
         self.note.setObjectName("downsampleNote")
+        self.note.setContentsMargins(6, 2, 6, 2)
 
         form = QFormLayout()
         form.addRow("Height", self.height_mm)
@@ -97,14 +102,8 @@ class PreviewPage(QWidget):
         self.slice_slider = QSlider(Qt.Orientation.Horizontal)
         self.slice_slider.setEnabled(False)
         self.slice_label = QLabel("layer -")
-        self.slice_view = QLabel()
-        self.slice_view.setMinimumSize(220, 160)
-        self.slice_view.setAlignment(Qt.AlignmentFlag.AlignCenter)
-        self.slice_view.setSizePolicy(QSizePolicy.Policy.Expanding,
-                                      QSizePolicy.Policy.Expanding)
-        self.slice_view.setStyleSheet("background: #222;")
-        self.legend = QLabel("")
-        self.legend.setWordWrap(True)
+        self.slice_view = LayerView()
+        self.legend = MaterialLegend()
         sbox = QGroupBox("Halftoned layer (material labels)")
         sl = QVBoxLayout(sbox)
         sl.addWidget(self.slice_slider)
@@ -116,12 +115,18 @@ class PreviewPage(QWidget):
         side_l = QVBoxLayout(side)
         side_l.addWidget(box)
         side_l.addWidget(self.status)
-        side_l.addWidget(self.note)
         side_l.addWidget(sbox, 1)
-        side.setMinimumWidth(260)
+        side.setMinimumWidth(280)
+
+        views = QWidget()
+        vl = QVBoxLayout(views)
+        vl.setContentsMargins(0, 0, 0, 0)
+        vl.setSpacing(0)
+        vl.addWidget(self.view, 1)
+        vl.addWidget(self.note)
 
         split = QSplitter()
-        split.addWidget(self.view)
+        split.addWidget(views)
         split.addWidget(side)
         split.setStretchFactor(0, 4)
         split.setStretchFactor(1, 1)
@@ -144,10 +149,13 @@ class PreviewPage(QWidget):
         return self.view.plotter
 
     def show_waiting(self, text: str) -> None:
-        """Say what the preview is waiting for (in the view until it has drawn, and below)."""
-        self.status.setText(text)
+        """Say what the preview is waiting for: in the view until it has drawn, then below
+        the controls (one place at a time)."""
         if self.data is None:
             self.view.set_message(text)
+            self.status.setText("")
+        else:
+            self.status.setText(text)
 
     # inputs -----------------------------------------------------------------------------------
     def params(self) -> dict:
@@ -247,8 +255,8 @@ class PreviewPage(QWidget):
             self.recompute()
 
     def _failed(self, message: str, _tb: str) -> None:
-        self.show_waiting(f"<span style='color:#e55'>Preview failed: {message}</span>")
-        self.failed.emit(message)
+        self.show_waiting("no preview")  # the message itself: the window's status bar
+        self.failed.emit(f"Preview failed: {message}")
 
     def _show(self, result) -> None:
         if self._pending:
@@ -270,9 +278,6 @@ class PreviewPage(QWidget):
                         reset_camera=False, line_width=1, render=False)
             pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}",
                         render=False)
-        pl.subplot(0, 0)
-        pl.add_text(data.downsample_note(), position="lower_left", font_size=7, name="note",
-                    render=False)
         if first:
             pl.subplot(0, 0)
             pl.view_isometric(render=False)
@@ -333,7 +338,9 @@ class PreviewPage(QWidget):
         self._slice_task = run_task(task)
 
     def _slice_failed(self, message: str, _tb: str) -> None:
-        self.legend.setText(f"<span style='color:#e55'>{message}</span>")
+        self.legend.clear()
+        self.slice_label.setText(f"layer {self.slice_slider.value()}: not available")
+        self.problem.emit(f"Layer {self.slice_slider.value()} failed: {message}")
         if self._await_slice and not self._slice_pending:
             self._emit_rendered()
 
@@ -358,34 +365,14 @@ class PreviewPage(QWidget):
         # Voxels are anisotropic (e.g. 84 x 28 um): scale to physical proportions.
         vx, vy = (self.printer.voxel_mm[0], self.printer.voxel_mm[1]) if self.printer else (1, 1)
         self.slice_image = img  # rows as in the slice PNG
-        self._slice_aspect = (w * vx, h * vy)
-        self._update_slice_pixmap()
+        self.slice_view.set_layer(img, (vx, vy))
         counts = np.bincount(labels.ravel(), minlength=len(names))
-        total = max(1, labels.size)
-        parts = []
-        for i, name in enumerate(names):
-            if counts[i]:
-                c = colours[i]
-                parts.append(f"<span style='background:rgb({c[0]},{c[1]},{c[2]})'>"
-                             f"&nbsp;&nbsp;&nbsp;</span> {name} {100 * counts[i] / total:.1f}%")
-        self.legend.setText(f"layer {layer}: " + " &nbsp;".join(parts))
+        self.legend.set_counts(colours, names, counts)
+        self.slice_label.setText(f"layer {layer} of {self.slice_slider.maximum() + 1} "
+                                 f"({w} x {h} voxels)")
+        self.shown_layer = layer
         if self._await_slice:
             self._emit_rendered()
-
-    def _update_slice_pixmap(self) -> None:
-        if self.slice_image is None:
-            return
-        box = self.slice_view.size()
-        pw, ph = self._slice_aspect
-        s = min(box.width() / pw, box.height() / ph)
-        w, h = max(1, int(pw * s)), max(1, int(ph * s))
-        self.slice_view.setPixmap(QPixmap.fromImage(self.slice_image).scaled(
-            w, h, Qt.AspectRatioMode.IgnoreAspectRatio,
-            Qt.TransformationMode.FastTransformation))
-
-    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
-        super().resizeEvent(event)
-        self._update_slice_pixmap()
 
     def shutdown(self) -> None:
         for t in (self._task, self._slice_task):
