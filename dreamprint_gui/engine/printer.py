@@ -59,6 +59,12 @@ class PrinterProfile:
     description: str = ""
     source: str = ""
     path: str | None = None
+    title: str = ""  # the name people use ("Stratasys J850 (paper profile)"); ``name`` is the id
+
+    @property
+    def display_name(self) -> str:
+        """The printer as an operator names it: its title, else its id."""
+        return self.title or self.name
 
     @property
     def layer_thickness_mm(self) -> float:
@@ -157,7 +163,7 @@ def printer_from_dict(d: dict[str, Any], src: str = "<printer>") -> PrinterProfi
                           flip_rows=flip, png_mode=mode,
                           description=str(d.get("description", "")),
                           source=str(d.get("source", "")), path=None if src.startswith("<")
-                          else src)
+                          else src, title=str(d.get("title", "")))
 
 
 def load_printer(name_or_path: str | os.PathLike | None = None) -> PrinterProfile:

@@ -33,6 +33,7 @@ from PySide6.QtWidgets import (
 )
 
 from .layer_view import LayerView, MaterialLegend
+from .names import BACKGROUNDS, printer_name
 from .preview_data import PreviewData, compute_preview, job_context
 from .volume_view import ViewHost, add_rgba_volume
 from .workers import Task, run_task
@@ -79,8 +80,10 @@ class PreviewPage(QWidget):
                                             value=1.0, singleStep=0.1)
         self.density_scale.setToolTip("Multiplies the source's density (1/mm per source unit)")
         self.background = QComboBox()
-        self.background.addItem("clear resin", "clear")
-        self.background.addItem("empty", "empty")
+        for key, name, tip in BACKGROUNDS:
+            self.background.addItem(name, key)
+            self.background.setItemData(self.background.count() - 1, tip,
+                                        Qt.ItemDataRole.ToolTipRole)
         self.background.setToolTip("What voxels below the density threshold become: Clear "
                                    "resin, or no material at all")
         self.status = QLabel("no source")
@@ -285,7 +288,7 @@ class PreviewPage(QWidget):
         pl.render()
         sx, sy, sz = data.size_mm
         self.status.setText(f"{Path(str(self.source_path)).name}: print "
-                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {self.printer.name}")
+                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {printer_name(self.printer)}")
         self.note.setText(data.downsample_note())
         if not self.slice_slider.isEnabled():
             self._emit_rendered()
