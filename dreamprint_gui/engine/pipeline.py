@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DreamPrintError
+from .content import CONTENT_MODES, apply_content
 from .dense_job import dense_slab_labels
 from .halftone import HALFTONE_METHODS, Halftoner
 from .layer_kernel import slab_labels
@@ -81,6 +82,8 @@ class ConvertSettings:
     objective: str | None = None          # gamut table objective (None: its default)
     table_size: int = 100
     source_options: dict[str, Any] = field(default_factory=dict)
+    content: str = "auto"                 # "fog" | "solid" | "auto" (engine.content)
+    sampling: str | None = None           # None: the reader's default; "nearest" | "linear"
 
 
 @dataclass(frozen=True)
@@ -100,10 +103,36 @@ _WORKER_CACHE: dict[Any, Any] = {}
 _WORKER_LOCK = threading.Lock()
 
 
-def _open_source(spec: str, options: dict[str, Any]):
+def source_options_for(spec: str, options: dict[str, Any], content: str = "fog",
+                       sampling: str | None = None) -> dict[str, Any]:
+    """The reader options of a job: ``options`` plus what ``content`` and ``sampling`` imply.
+
+    ``content`` solid or auto opens a level set as a solid (``level_set="solid"``) unless the
+    operator chose otherwise; ``sampling`` ("nearest" or "linear") goes to a reader that offers
+    it (voxel models); every other reader samples trilinearly, so "nearest" is refused there.
+    """
+    from ..io.volumes.base import reader_options
+
+    opts = dict(options)
+    takes = reader_options(spec)
+    if content != "fog" and "level_set" in takes and "level_set" not in opts:
+        opts["level_set"] = "solid"
+    if sampling is not None:
+        if sampling not in ("nearest", "linear"):
+            raise DreamPrintError(f"--sampling must be nearest or linear, not '{sampling}'")
+        if "sampling" in takes:
+            opts.setdefault("sampling", sampling)
+        elif sampling == "nearest":
+            raise DreamPrintError("--sampling nearest applies to voxel models (.vox); this "
+                                  "source is sampled trilinearly", spec)
+    return opts
+
+
+def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
+                 sampling: str | None = None):
     from ..io.volumes import open_source
 
-    return open_source(spec, **options)
+    return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
 def _tables_for(profile_spec, layer_mm: float, objective, size: int):
@@ -128,6 +157,7 @@ class JobContext:
     profile_fingerprint: str = ""
     source: Any = None
     tables: Any = None
+    content: Any = None  # engine.content.ContentChoice (None: fog)
 
     @property
     def shape_xyz(self) -> tuple[int, int, int]:
@@ -159,10 +189,15 @@ class JobContext:
             return self.source, self.tables
         s = self.settings
         key = (s.source, repr(sorted(s.source_options.items())), str(s.profile),
-               self.printer.layer_thickness_mm, s.objective, s.table_size)
+               self.printer.layer_thickness_mm, s.objective, s.table_size, s.content,
+               s.sampling)
         with _WORKER_LOCK:
             if key not in _WORKER_CACHE:
-                src = _open_source(s.source, s.source_options)
+                from .content import apply_content
+
+                mode = self.content.mode if self.content is not None else "fog"
+                src = _open_source(s.source, s.source_options, s.content, s.sampling)
+                src, _ = apply_content(src, mode, self.halftoner.threshold)
                 _, tables = _tables_for(s.profile, self.printer.layer_thickness_mm,
                                         s.objective, s.table_size)
                 _WORKER_CACHE.clear()  # one job per worker process at a time
@@ -194,8 +229,10 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
         raise DreamPrintError(f"--density-scale must be >= 0, got {s.density_scale}")
     if s.workers is not None and s.workers < 1:
         raise DreamPrintError(f"--workers must be at least 1, got {s.workers}")
+    if s.content not in CONTENT_MODES:
+        raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
     printer = load_printer(s.printer)
-    source = _open_source(s.source, s.source_options)
+    source = _open_source(s.source, s.source_options, s.content, s.sampling)
     grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
                            size_mm=tuple(s.size_mm) if s.size_mm is not None else None)
     shape = tuple(int(v) for v in grid.shape_xyz)
@@ -211,9 +248,11 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
     thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
     bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
+    source, content = apply_content(source, s.content, thr)
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
                      palette=printer.palette(), profile_name=profile.name,
-                     profile_fingerprint=profile.fingerprint(), source=source, tables=tables)
+                     profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
+                     content=content)
     _load_kernels(ctx)
     return ctx
 
@@ -516,7 +555,9 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "source": {"path": str(Path(src_path).absolute()) if src_path else s.source,
                    "sha256": totals["source_sha256"], "options": s.source_options,
-                   "density_scale": s.density_scale},
+                   "density_scale": s.density_scale, "sampling": s.sampling,
+                   "content": (ctx.content.to_json() if ctx.content is not None else
+                               {"mode": "fog", "requested": s.content, "reason": ""})},
         "profile": {"name": ctx.profile_name, "fingerprint": ctx.profile_fingerprint,
                     "path": None if s.profile is None else str(s.profile),
                     "objective": getattr(ctx.tables, "objective", s.objective),

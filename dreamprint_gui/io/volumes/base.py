@@ -33,7 +33,7 @@ from ...errors import DreamPrintError
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
            "uniform_rgb", "SlabBuffers",
-           "sniff_format", "open_source", "inspect_file", "FORMATS"]
+           "sniff_format", "open_source", "inspect_file", "reader_options", "FORMATS"]
 
 
 @dataclass(frozen=True)
@@ -264,6 +264,24 @@ def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
     key = sniff_format(path)
     module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
     return module.open_path(path, fmt=key, **_checked_options(module.open_path, options, path))
+
+
+def reader_options(path_or_name: str | os.PathLike) -> set[str]:
+    """The option names the reader of ``path_or_name`` takes (empty for an unknown format)."""
+    import importlib
+    import inspect
+
+    if str(path_or_name) == "demo":
+        from .demo import DemoCloud
+        func = DemoCloud
+    else:
+        path = Path(path_or_name)
+        if not path.exists():
+            return set()
+        module = importlib.import_module(f"{__package__}.{FORMATS[sniff_format(path)][0]}")
+        func = module.open_path
+    return {p.name for p in inspect.signature(func).parameters.values()
+            if p.name not in ("self", "path", "fmt")}
 
 
 OPTION_ALIASES = {"grid": "density_grid", "color": "colour", "colormap": "colormap",
