@@ -17,7 +17,7 @@ import math
 import os
 from pathlib import Path
 
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
     QButtonGroup,
     QCheckBox,
@@ -27,6 +27,7 @@ from PySide6.QtWidgets import (
     QDoubleSpinBox,
     QFileDialog,
     QFormLayout,
+    QGroupBox,
     QHBoxLayout,
     QLabel,
     QLineEdit,
@@ -40,7 +41,7 @@ from PySide6.QtWidgets import (
 )
 
 from ..errors import DreamPrintError
-from .names import BACKGROUNDS, background_name, printer_name
+from .names import BACKGROUNDS, CONTENTS, background_name, gui_wording, printer_name
 from .settings import AppSettings
 from .workers import Task, generator_job, run_task
 
@@ -81,8 +82,10 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      halftone: str = "blue-noise", seed: int = 0,
                      output: str | os.PathLike | None = None, overwrite: bool = False,
                      workers: int | None = None, scheduler: str | None = None,
-                     table_size: int | None = None):
-    """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile)."""
+                     table_size: int | None = None, content: str = "auto",
+                     sampling: str | None = None):
+    """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
+    ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear")."""
     from ..engine.pipeline import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
@@ -93,7 +96,7 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            size_mm=None if size_mm is None else tuple(size_mm),
                            density_scale=float(density_scale), halftone=halftone,
                            seed=int(seed), workers=workers, scheduler=scheduler,
-                           background=background,
+                           background=background, content=content, sampling=sampling,
                            overwrite=overwrite, **extra)
 
 
@@ -163,7 +166,7 @@ def manifest_summary(manifest: dict, target: str) -> str:
     run_on = (f"; run on {ex.get('scheduler', 'threads')}"
               + (f", {ex['workers']} workers" if ex.get("workers") else "")
               + (f", {ex['slabs']} slabs" if ex.get("slabs") else "")) if ex else ""
-    content = manifest.get("content")
+    content = src.get("content") or manifest.get("content")
     content_text = ""
     if isinstance(content, dict) and content.get("mode"):
         content_text = (f", content {escape(str(content['mode']))}"
@@ -200,6 +203,19 @@ def manifest_summary(manifest: dict, target: str) -> str:
         f"<th>share</th><th>mean conc.</th></tr>{''.join(rows)}</table>")
 
 
+def preflight_html(pf) -> str:
+    """The engine's pre-flight summary (``Preflight.summary_lines``) as the dialog shows it:
+    the figures, then the warnings in bold, with command-line options named as the controls."""
+    from html import escape
+
+    lines = [ln for ln in pf.summary_lines() if not ln.startswith("warning: ")]
+    body = "".join(f"<li>{escape(ln)}</li>" for ln in lines)
+    warn = "".join(f"<li><b>{escape(gui_wording(w.message))}</b></li>" for w in pf.warnings)
+    return (f"<ul style='margin-left: -20px'>{body}</ul>"
+            + (f"<p><b>Warnings</b></p><ul style='margin-left: -20px'>{warn}</ul>" if warn
+               else "<p>No warnings.</p>"))
+
+
 def _printer_file_name(path: str) -> str:
     from ..engine.printer import load_printer
 
@@ -217,7 +233,8 @@ class ExportDialog(QDialog):
 
     def __init__(self, parent: QWidget | None, *, source_path: str, profile_path: str | None,
                  settings: AppSettings | None = None, preview_params: dict | None = None,
-                 source_name: str | None = None, table_size: int | None = None) -> None:
+                 source_name: str | None = None, table_size: int | None = None,
+                 context=None) -> None:
         super().__init__(parent)
         from ..engine.printer import DEFAULT_PRINTER, builtin_printers
 
@@ -231,6 +248,11 @@ class ExportDialog(QDialog):
         self.setWindowTitle("Export print job")
         self.setMinimumWidth(560)
         pp = preview_params or {}
+        self.context = context  # the preview's JobContext: reused when the job's source matches
+        self.sampling_choice = pp.get("sampling")  # the preview's voxel-edge choice
+        self.preflight = None  # the engine's Preflight of the current settings
+        self._preflight_task: Task | None = None
+        self._preflight_pending = False
 
         self.printer = QComboBox()
         self.printer.setEditable(False)
@@ -270,6 +292,12 @@ class ExportDialog(QDialog):
                                         Qt.ItemDataRole.ToolTipRole)
         self.background.setCurrentIndex(max(0, self.background.findData(
             pp.get("background", "clear"))))
+        self.content = QComboBox()
+        for key, name, tip in CONTENTS:
+            self.content.addItem(name, key)
+            self.content.setItemData(self.content.count() - 1, tip,
+                                     Qt.ItemDataRole.ToolTipRole)
+        self.content.setCurrentIndex(max(0, self.content.findData(pp.get("content", "auto"))))
         self.halftone = QComboBox()
         self.halftone.addItem("blue noise (low noise, default)", "blue-noise")
         self.halftone.addItem("random (paper's stochastic)", "random")
@@ -315,6 +343,7 @@ class ExportDialog(QDialog):
         form.addRow("Size", size_row)
         form.addRow("Density scale", self.density_scale)
         form.addRow("Background", self.background)
+        form.addRow("Content", self.content)
         form.addRow("Halftoning", self.halftone)
         form.addRow("Seed", self.seed)
         form.addRow("Folder", frow)
@@ -336,6 +365,16 @@ class ExportDialog(QDialog):
         self.summary.setOpenExternalLinks(False)
         self.summary.setMinimumHeight(120)
         self.summary.setVisible(False)
+        # Before Export: the engine's pre-flight of these settings (grid, slices, disk, time,
+        # material fractions, warnings), recomputed when a setting changes.
+        self.preflight_view = QTextBrowser()
+        self.preflight_view.setObjectName("preflight")
+        self.preflight_view.setMinimumHeight(150)
+        self.preflight_box = QGroupBox("Pre-flight estimate")
+        pl = QVBoxLayout(self.preflight_box)
+        pl.addWidget(self.preflight_view)
+        self._preflight_debounce = QTimer(self, singleShot=True, interval=400)
+        self._preflight_debounce.timeout.connect(self.update_preflight)
         self.buttons = QDialogButtonBox()
         self.start_button = self.buttons.addButton("Export",
                                                    QDialogButtonBox.ButtonRole.AcceptRole)
@@ -351,17 +390,71 @@ class ExportDialog(QDialog):
         form.setContentsMargins(0, 0, 0, 0)
         lay = QVBoxLayout(self)
         lay.addWidget(self.form_box)
+        lay.addWidget(self.preflight_box, 1)
         lay.addWidget(self.progress)
         lay.addWidget(self.remaining)
         lay.addWidget(self.error)
         lay.addWidget(self.summary, 1)
         lay.addWidget(self.buttons)
         self._form_widgets = [self.printer, self.by_height, self.by_box, self.height, *self.box,
-                              self.density_scale, self.background, self.halftone, self.seed,
+                              self.density_scale, self.background, self.content,
+                              self.halftone, self.seed,
                               self.folder, browse, self.job_name, self.overwrite,
                               self.scheduler, self.scheduler_address, self.workers]
         self._printer_obj = None
         self._update_printer()
+        for w in (self.height, *self.box, self.density_scale, self.seed):
+            w.valueChanged.connect(self._settings_changed)
+        for w in (self.background, self.content, self.halftone, self.printer):
+            w.currentIndexChanged.connect(self._settings_changed)
+        for w in (self.by_height, self.by_box):
+            w.toggled.connect(self._settings_changed)
+        QTimer.singleShot(0, self.update_preflight)
+
+    # pre-flight -------------------------------------------------------------------------------
+    def _settings_changed(self, *_args) -> None:
+        if self.task is None or self.task.outcome is not None:
+            self._preflight_debounce.start()
+
+    def update_preflight(self) -> None:
+        """Estimate the job of the current settings on a worker (``engine.preflight``)."""
+        if self._preflight_task is not None and self._preflight_task.outcome is None:
+            self._preflight_pending = True  # one at a time; the latest settings win
+            return
+        try:
+            settings = self.settings_for_job()
+        except DreamPrintError as exc:
+            self.preflight = None
+            self.preflight_view.setPlainText(f"no estimate: {exc}")
+            return
+        previous = self.context
+
+        def job(report, cancel):
+            from ..engine.preflight import preflight
+            from .preview_data import job_context
+
+            return settings, preflight(job_context(settings, previous))
+
+        self.preflight_view.setPlainText("estimating the job ...")
+        task = Task(job, "export-preflight")
+        task.succeeded.connect(self._show_preflight)
+        task.failed.connect(lambda msg, _tb: self.preflight_view.setPlainText(
+            f"no estimate: {msg}"))
+        task.done.connect(self._preflight_done)
+        self._preflight_task = run_task(task)
+
+    def _preflight_done(self) -> None:
+        if self._preflight_pending:
+            self._preflight_pending = False
+            self._preflight_task = None
+            self.update_preflight()
+
+    def _show_preflight(self, result) -> None:
+        _settings, pf = result
+        if self._preflight_pending:
+            return
+        self.preflight = pf
+        self.preflight_view.setHtml(preflight_html(pf))
 
     # choices ----------------------------------------------------------------------------------
     def _printer_chosen(self, index: int) -> None:
@@ -433,7 +526,8 @@ class ExportDialog(QDialog):
             background=str(self.background.currentData()),
             halftone=str(self.halftone.currentData()), seed=int(self.seed.value()),
             output=self.target_path(), overwrite=self.overwrite.isChecked(),
-            workers=workers, scheduler=scheduler, table_size=self.table_size)
+            workers=workers, scheduler=scheduler, table_size=self.table_size,
+            content=str(self.content.currentData()), sampling=self.sampling_choice)
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:
@@ -485,6 +579,7 @@ class ExportDialog(QDialog):
         self.remaining.setText("done")
         self.summary.setHtml(manifest_summary(manifest, str(self.target)))
         self.form_box.setVisible(False)
+        self.preflight_box.setVisible(False)
         self.summary.setVisible(True)
         self._fit_summary()
         self.start_button.setVisible(False)

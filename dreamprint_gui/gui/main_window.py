@@ -450,7 +450,7 @@ class MainWindow(QMainWindow):
         dlg = ExportDialog(self, source_path=self.source_path, profile_path=self.profile_path,
                            settings=self.settings, preview_params=self.preview.params(),
                            source_name="demo" if self.source_path == "demo" else None,
-                           table_size=self.table_size)
+                           table_size=self.table_size, context=self.preview.ctx)
         dlg.printerChanged.connect(self.set_printer)
         dlg.open()
         self._export = dlg
@@ -485,7 +485,8 @@ class MainWindow(QMainWindow):
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
         self.settings.save_window_state(self.saveGeometry(), self.saveState())
         for k, v in self.preview.params().items():
-            self.settings.set(f"preview/{k}", v)
+            if k not in ("content", "sampling"):  # chosen per source: each file starts on auto
+                self.settings.set(f"preview/{k}", v)
         self.settings.sync()
         from .workers import wait_all
 

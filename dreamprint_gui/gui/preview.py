@@ -14,6 +14,7 @@ is being prepared.
 from __future__ import annotations
 
 import logging
+from html import escape
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +34,7 @@ from PySide6.QtWidgets import (
 )
 
 from .layer_view import LayerView, MaterialLegend
-from .names import BACKGROUNDS, printer_name
+from .names import BACKGROUNDS, CONTENTS, SAMPLINGS, gui_wording, printer_name
 from .preview_data import PreviewData, compute_preview, job_context
 from .volume_view import ViewHost, add_rgba_volume
 from .workers import Task, run_task
@@ -50,6 +51,7 @@ class PreviewPage(QWidget):
     failed = Signal(str)  # the preview could not be computed (the window says it, once)
     problem = Signal(str)  # something that stops nothing failed (a layer); said by the window
     paramsChanged = Signal()
+    preflightReady = Signal(object)  # the engine's Preflight of the current settings
 
     def __init__(self, parent: QWidget | None = None, table_size: int | None = None) -> None:
         super().__init__(parent)
@@ -67,6 +69,7 @@ class PreviewPage(QWidget):
         self.shown_layer: int | None = None  # the layer the layer view shows
         self._task: Task | None = None
         self._slice_task: Task | None = None
+        self._preflight_task: Task | None = None
         self._pending = False
         self._slice_pending = False
         self._await_slice = False
@@ -86,6 +89,24 @@ class PreviewPage(QWidget):
                                         Qt.ItemDataRole.ToolTipRole)
         self.background.setToolTip("What voxels below the density threshold become: Clear "
                                    "resin, or no material at all")
+        self.content = QComboBox()
+        for key, name, tip in CONTENTS:
+            self.content.addItem(name, key)
+            self.content.setItemData(self.content.count() - 1, tip,
+                                     Qt.ItemDataRole.ToolTipRole)
+        self.content.setToolTip("What the source's density means: a fog (as stated) or a "
+                                "solid object (occupied voxels print opaque)")
+        self.content_note = QLabel("")  # what auto picked, and why
+        self.content_note.setWordWrap(True)
+        self.content_note.setObjectName("contentNote")
+        self.sampling = QComboBox()
+        for key, name, tip in SAMPLINGS:
+            self.sampling.addItem(name, key)
+            self.sampling.setItemData(self.sampling.count() - 1, tip,
+                                      Qt.ItemDataRole.ToolTipRole)
+        self.sampling.setToolTip("Voxel models: sharp voxel edges (nearest) or smooth "
+                                 "(trilinear); other sources are always smooth")
+        self.sampling.setEnabled(False)
         self.status = QLabel("no source")
         self.status.setWordWrap(True)
         # The footnote of the 3D views (preview grid, downsampling) in the application's font,
@@ -99,6 +120,9 @@ class PreviewPage(QWidget):
         form.addRow("Height", self.height_mm)
         form.addRow("Density scale", self.density_scale)
         form.addRow("Background", self.background)
+        form.addRow("Content", self.content)
+        form.addRow("", self.content_note)
+        form.addRow("Voxel edges", self.sampling)
         box = QGroupBox("Print")
         box.setLayout(form)
 
@@ -116,8 +140,20 @@ class PreviewPage(QWidget):
 
         side = QWidget()
         side_l = QVBoxLayout(side)
+        # Pre-flight warnings of the job these settings make (engine.preflight), shown here
+        # only (hidden when there are none).
+        self.warnings = QLabel("")
+        self.warnings.setWordWrap(True)
+        self.warnings.setObjectName("preflightWarnings")
+        self.warnings.setTextFormat(Qt.TextFormat.RichText)
+        self.warnings_box = QGroupBox("Warnings")
+        wl = QVBoxLayout(self.warnings_box)
+        wl.addWidget(self.warnings)
+        self.warnings_box.setVisible(False)
+        self.preflight = None  # the engine's Preflight of the shown settings
         side_l.addWidget(box)
         side_l.addWidget(self.status)
+        side_l.addWidget(self.warnings_box)
         side_l.addWidget(sbox, 1)
         side.setMinimumWidth(280)
 
@@ -143,7 +179,8 @@ class PreviewPage(QWidget):
         self._slice_debounce.timeout.connect(self._compute_slice)
         for w in (self.height_mm, self.density_scale):
             w.valueChanged.connect(self._params_changed)
-        self.background.currentIndexChanged.connect(self._params_changed)
+        for w in (self.background, self.content, self.sampling):
+            w.currentIndexChanged.connect(self._params_changed)
         self.slice_slider.valueChanged.connect(lambda _v: self._slice_moved())
 
     @property
@@ -164,18 +201,44 @@ class PreviewPage(QWidget):
     def params(self) -> dict:
         return {"height_mm": float(self.height_mm.value()),
                 "density_scale": float(self.density_scale.value()),
-                "background": str(self.background.currentData())}
+                "background": str(self.background.currentData()),
+                "content": str(self.content.currentData()),
+                "sampling": self.sampling.currentData() if self.sampling.isEnabled() else None}
+
+    _KEEP = object()
 
     def set_params(self, height_mm: float | None = None, density_scale: float | None = None,
-                   background: str | None = None) -> None:
+                   background: str | None = None, content: str | None = None,
+                   sampling=_KEEP) -> None:
         if height_mm is not None:
             self.height_mm.setValue(height_mm)
         if density_scale is not None:
             self.density_scale.setValue(density_scale)
-        if background is not None:
-            i = self.background.findData(background)
+        for combo, value in ((self.background, background), (self.content, content)):
+            if value is not None:
+                i = combo.findData(value)
+                if i >= 0:
+                    combo.setCurrentIndex(i)
+        if sampling is not self._KEEP:
+            i = self.sampling.findData(sampling)
             if i >= 0:
-                self.background.setCurrentIndex(i)
+                self.sampling.setCurrentIndex(i)
+
+    def _new_source(self, path: str) -> None:
+        """A new source starts on auto content and its reader's own sampling; the voxel-edge
+        choice is offered only for sources that have one (voxel models)."""
+        from ..io.volumes.base import reader_options
+
+        try:
+            takes = reader_options(path)
+        except Exception:  # noqa: BLE001 - an unreadable file is reported when opened
+            takes = set()
+        for combo in (self.content, self.sampling):
+            combo.blockSignals(True)
+            combo.setCurrentIndex(0)
+            combo.blockSignals(False)
+        self.sampling.setEnabled("sampling" in takes)
+        self.content_note.setText("")
 
     _UNSET = object()
 
@@ -187,6 +250,8 @@ class PreviewPage(QWidget):
         cached on disk), so the job context below loads them instead of building them twice.
         """
         if source_path is not None:
+            if source_path != self.source_path:
+                self._new_source(source_path)
             self.source_path = source_path
         if profile is not None:
             self.profile = profile
@@ -219,7 +284,8 @@ class PreviewPage(QWidget):
         return convert_settings(self.source_path, self.profile_path, self.printer,
                                 height_mm=p["height_mm"], density_scale=p["density_scale"],
                                 background=p["background"], output=output,
-                                table_size=self.table_size)
+                                table_size=self.table_size, content=p["content"],
+                                sampling=p["sampling"])
 
     def recompute(self) -> None:
         if not self.ready_to_compute():
@@ -271,11 +337,15 @@ class PreviewPage(QWidget):
         self._setup_slider(at_once=True)
         pl = self.plotter
         first = not pl.renderers[0].actors
+        # a voxel model sampled nearest is drawn with sharp voxels too (no blending between
+        # the preview's voxels)
+        sharp = getattr(self.ctx.source, "sampling", None) == "nearest"
         for i, (rgb, sigma, title) in enumerate((
                 (data.source_rgb, data.source_sigma, "Source"),
                 (data.print_rgb, data.print_sigma, "Predicted print"))):
             pl.subplot(0, i)
-            add_rgba_volume(pl, rgb, sigma, data.voxel_mm, name=f"volume{i}")
+            add_rgba_volume(pl, rgb, sigma, data.voxel_mm, name=f"volume{i}",
+                            interpolation="nearest" if sharp else "linear")
             box = _box(data.size_mm)
             pl.add_mesh(box, color="#888888", style="wireframe", name=f"box{i}",
                         reset_camera=False, line_width=1, render=False)
@@ -290,8 +360,44 @@ class PreviewPage(QWidget):
         self.status.setText(f"{Path(str(self.source_path)).name}: print "
                             f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {printer_name(self.printer)}")
         self.note.setText(data.downsample_note())
+        choice = self.ctx.content
+        if choice is None:
+            self.content_note.setText("")
+        elif choice.picked:
+            self.content_note.setText(f"auto: {choice.mode}, {choice.reason}")
+        else:
+            self.content_note.setText(choice.reason)
+        self._start_preflight()
         if not self.slice_slider.isEnabled():
             self._emit_rendered()
+
+    # pre-flight -------------------------------------------------------------------------------
+    def _start_preflight(self) -> None:
+        """The engine's pre-flight of the job these settings make, on a worker; its warnings
+        are shown in the Warnings box (and only there)."""
+        if self._preflight_task is not None and self._preflight_task.outcome is None:
+            self._preflight_task.cancel()  # its result is ignored (ctx check below)
+        ctx = self.ctx
+
+        def job(report, cancel):
+            from ..engine.preflight import preflight
+
+            return ctx, preflight(ctx)
+
+        task = Task(job, "preflight")
+        task.succeeded.connect(self._show_preflight)
+        task.failed.connect(lambda msg, _tb: self.problem.emit(f"Pre-flight failed: {msg}"))
+        self._preflight_task = run_task(task)
+
+    def _show_preflight(self, result) -> None:
+        ctx, pf = result
+        if ctx is not self.ctx:
+            return  # an estimate of earlier settings
+        self.preflight = pf
+        items = "".join(f"<li>{escape(gui_wording(w.message))}</li>" for w in pf.warnings)
+        self.warnings.setText(f"<ul style='margin-left: -20px'>{items}</ul>" if items else "")
+        self.warnings_box.setVisible(bool(pf.warnings))
+        self.preflightReady.emit(pf)
 
     def _emit_rendered(self) -> None:
         self._await_slice = False
@@ -378,7 +484,7 @@ class PreviewPage(QWidget):
             self._emit_rendered()
 
     def shutdown(self) -> None:
-        for t in (self._task, self._slice_task):
+        for t in (self._task, self._slice_task, self._preflight_task):
             if t is not None:
                 t.cancel()
         self.view.close_view()
