@@ -230,3 +230,31 @@ def test_gamut_page_fits_1280x800(qtbot, gl_display, job_profile, table_size):
     page.set_colour((0.6, 0.6, 0.6))
     assert "in gamut" in page.de_label.text() and "out of" not in page.de_label.text()
     w.close()
+
+
+def test_export_shows_the_preflight_before_export(qtbot, tmp_path, table_size):
+    """Before Export the dialog shows the engine's estimate of the job these settings make
+    (grid, slices, disk, time, materials) and its warnings; it follows the settings."""
+    from dreamprint_gui.engine.preflight import preflight
+    from dreamprint_gui.gui.names import gui_wording
+
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    qtbot.waitUntil(lambda: dlg.preflight is not None, timeout=120000)
+    pf = dlg.preflight
+    text = dlg.preflight_view.toPlainText()
+    nx, ny, nz = pf.grid_shape
+    assert f"{nx} x {ny} x {nz} voxels" in text and f"{nz:,} slices" in text
+    assert "disk: about" in text and "materials (estimated" in text
+    for w in pf.warnings:  # every warning of the estimate, once, options named as controls
+        assert text.count(gui_wording(w.message)) == 1, w.message
+        assert "--" not in gui_wording(w.message)
+    assert ("No warnings" in text) == (not pf.warnings)
+    # the same figures as the engine gives for these settings (what `convert` prints)
+    ref = preflight(dlg.settings_for_job())
+    assert ref.grid_shape == pf.grid_shape and ref.fractions == pf.fractions
+    dlg.density_scale.setValue(0.01)  # a nearly empty fog
+    qtbot.waitUntil(lambda: dlg.preflight is not None and dlg.preflight.density_scale == 0.01,
+                    timeout=120000)
+    assert "mostly-clear" in [w.code for w in dlg.preflight.warnings]
+    assert "Clear or empty" in dlg.preflight_view.toPlainText()
+    assert not (tmp_path / "job").exists()  # nothing written by an estimate

@@ -183,3 +183,58 @@ def test_opening_a_file_shows_the_preview(qtbot, shared_data):
     with qtbot.waitSignal(w.sourceChanged, timeout=30000):
         w.open_path("demo")
     assert w.tabs.currentWidget() is w.preview
+
+
+def test_voxel_model_previews_solid_with_its_intent(qtbot, gl_display, table_size, shared_data):
+    """A .vox opens on auto content: the engine picks solid, the preview says so, the source
+    is sampled nearest (sharp) and its occupied voxels are opaque; fog is one choice away."""
+    from dreamprint_gui.engine.content import SOLID_SIGMA
+
+    w = MainWindow(table_size=table_size)
+    w.interactive = False
+    qtbot.addWidget(w)
+    p = w.preview
+    p.set_params(height_mm=4.0)
+    w.show()
+    knight = shared_data / "voxels" / "magicavoxel_chr_knight.vox"
+    with qtbot.waitSignal(p.preflightReady, timeout=180000):
+        w.use_default_profile()
+        w.open_path(knight)
+    assert p.ctx.content.mode == "solid" and p.ctx.content.picked
+    assert "auto: solid" in p.content_note.text() and "voxel model" in p.content_note.text()
+    assert p.sampling.isEnabled() and p.params()["sampling"] is None  # the reader's: nearest
+    assert getattr(p.ctx.source, "sampling", None) == "nearest"
+    occupied = p.data.source_sigma > 0
+    assert 0.01 < occupied.mean() < 0.5
+    assert np.all(p.data.source_sigma[occupied] == SOLID_SIGMA)  # opaque, not a haze
+    # the printed solid is far denser than the fog the same file gives
+    solid_print = float(np.median(p.data.print_sigma[occupied]))
+    with qtbot.waitSignal(p.rendered, timeout=120000):
+        p.set_params(content="fog")
+    assert p.ctx.content.mode == "fog" and not p.ctx.content.picked
+    fog = p.data.source_sigma[p.data.source_sigma > 0]
+    assert fog.max() < 0.1 * SOLID_SIGMA
+    assert float(np.median(p.data.print_sigma[occupied])) < solid_print
+    # the demo cloud offers no voxel-edge choice and goes back to auto
+    with qtbot.waitSignal(p.rendered, timeout=120000):
+        w.open_path("demo")
+    assert not p.sampling.isEnabled() and p.params()["content"] == "auto"
+    assert p.ctx.content.mode == "fog"
+    w.close()
+
+
+def test_preflight_warning_shown_once(window, qtbot):
+    """A nearly empty fog (density scale 0.01): the pre-flight's mostly-clear warning shows in
+    the preview's Warnings box and nowhere else."""
+    p = window.preview
+    with qtbot.waitSignal(p.preflightReady, timeout=120000):
+        p.set_params(density_scale=0.01)
+    codes = [wn.code for wn in p.preflight.warnings]
+    assert "mostly-clear" in codes, codes
+    assert p.warnings_box.isVisible()
+    where = _texts_showing("Clear or empty")
+    assert where == ["label in MainWindow"], where
+    assert "--density-scale" not in p.warnings.text()  # named as the control is
+    with qtbot.waitSignal(p.preflightReady, timeout=120000):
+        p.set_params(density_scale=1.0)
+    assert "mostly-clear" not in [wn.code for wn in p.preflight.warnings]
