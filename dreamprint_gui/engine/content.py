@@ -35,7 +35,7 @@ from ..errors import DreamPrintError
 from .gamut.alignment import SOLID_TARGET
 
 __all__ = ["CONTENT_MODES", "SOLID_SIGMA", "ContentChoice", "choose_content", "SolidSource",
-           "apply_content", "solid_depth_mm", "is_binary_mask"]
+           "apply_content", "solid_depth_mm", "is_binary_mask", "content_of_info"]
 
 CONTENT_MODES = ("fog", "solid", "auto")
 # The target density (1/mm) that means "solid" to density alignment (no medium is this dense:
@@ -126,6 +126,22 @@ def choose_content(source) -> tuple[str, str]:
         else:
             kind = "a scalar volume (more than two values)"
     return "fog", kind
+
+
+def content_of_info(info: dict) -> tuple[str, str]:
+    """(mode, reason) ``auto`` picks for a sparse file described by its ``inspect`` info alone
+    (OpenVDB, NanoVDB): the grid a job would read (``density``, else the only fog volume, else
+    a level set) decides."""
+    grids = info.get("grids", [])
+    by_name = {g.get("name"): g for g in grids}
+    g = by_name.get("density")
+    if g is None:
+        fog = [x for x in grids if x.get("class") == "fog volume"]
+        ls = [x for x in grids if x.get("class") == "level set"]
+        g = fog[0] if fog else (ls[0] if ls else None)
+    if g is not None and g.get("class") == "level set":
+        return "solid", f"a level set (grid {g.get('name')!r})"
+    return "fog", "a fog volume" if g is not None else "no density grid"
 
 
 class SolidSource:

@@ -96,6 +96,7 @@ class ConvertProgress:
     elapsed_s: float
     eta_s: float | None
     message: str = ""
+    preflight: Any = None      # engine.preflight.Preflight, on the "preflight" stage
 
 
 # ----------------------------------------------------------------------------- context
@@ -427,7 +428,9 @@ def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
         step = int(ctx.settings.slab_layers)
     else:
         step = max(1, DEFAULT_SLAB_VOXELS // max(1, nx * ny))
-        step = min(step, max(1, -(-nz // (4 * workers))))  # >= 4 slabs per worker to balance
+        # >= 4 slabs per worker to balance, and >= 32 (if there are as many layers) so that
+        # the progress moves with the slabs: a slab costs one call and no new memory.
+        step = min(step, max(1, -(-nz // max(32, 4 * workers))))
     return [(z, min(nz, z + step)) for z in range(0, nz, step)]
 
 
@@ -596,13 +599,16 @@ def _slice(z: int, nz: int) -> str:
 
 
 def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,
-                   context: JobContext | None = None
+                   context: JobContext | None = None, preflight: Any = True
                    ) -> Generator[ConvertProgress, None, dict[str, Any]]:
     """Convert ``settings.source`` into the job folder ``settings.output``.
 
     Yields :class:`ConvertProgress`; returns the manifest dict (also written to
     ``manifest.json``). Setting ``cancel`` (or closing the generator, or Ctrl-C) stops the work
     and removes the partial job; nothing is ever left under the final name unless complete.
+    ``preflight``: True estimates the job first (:func:`.preflight.preflight`, yielded once
+    with stage "preflight"), a :class:`.preflight.Preflight` already made is used as is, False
+    skips it; the manifest records its estimate and warnings (``preflight``).
     """
     from ..io.job_export import JobWriter, check_target
 
@@ -612,6 +618,19 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     check_target(settings.output, settings.overwrite)  # before any work
     yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
     ctx = context if context is not None else prepare_job(settings)
+    pf = None
+    t_pf = 0.0
+    if preflight is True:
+        from .preflight import preflight as estimate
+
+        t0 = time.perf_counter()
+        pf = estimate(ctx, seed=settings.seed)
+        t_pf = time.perf_counter() - t0
+    elif preflight is not False and preflight is not None:
+        pf = preflight
+    if pf is not None:
+        yield ConvertProgress("preflight", 0, 0, 0, 0, time.perf_counter() - started, None,
+                              "\n".join(pf.summary_lines()), preflight=pf)
     t_prep = time.perf_counter() - started
     kind = _scheduler_kind(settings)
     workers = settings.workers or os.cpu_count() or 1
@@ -685,7 +704,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                               time.perf_counter() - started, 0.0, "writing the manifest")
         sha_th.join()
         totals["source_sha256"] = sha_box.get("v")
-        timings = {"prepare": t_prep, "convert": time.perf_counter() - t_conv,
+        timings = {"prepare": t_prep, "preflight": t_pf, "convert": time.perf_counter() - t_conv,
                    "worker_stage_sum": stage_t}
         conc_sums = [math.fsum(layer_sums[:, i]) for i in range(7)]
         manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
@@ -693,7 +712,13 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                              timings, started)
         manifest["timings_s"]["voxels_per_second"] = (nx * ny * nz) / max(
             1e-9, manifest["timings_s"]["total"])
+        if pf is not None:
+            manifest["preflight"] = pf.to_json()
+            manifest["warnings"] = [w.to_json() for w in pf.warnings]
         writer.commit(manifest)
+    from .preflight import record_rate
+
+    record_rate(nx * ny * nz, timings["convert"])
     yield ConvertProgress("done", nz, nz, nx * ny * nz, nx * ny * nz,
                           time.perf_counter() - started, 0.0, str(writer.target))
     return manifest

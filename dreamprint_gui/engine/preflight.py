@@ -49,8 +49,8 @@ from .profile import INKS
 __all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measured_rate",
            "BENCHMARK_RATE", "MOSTLY_CLEAR", "OUT_OF_GAMUT_WARN"]
 
-# Voxels per second of a whole `convert` (preparation included) on the 2-core development machine
-# at 1e8 voxels: 27.7-45.6 Mvox/s in docs/print-jobs.md's rounds; the lower figure is used.
+# Voxels per second of `convert` on the 2-core development machine at 1e8 voxels (the demo,
+# benchmarks/bench_convert.py): 27.7-45.6 Mvox/s in docs/print-jobs.md's rounds; the lower.
 BENCHMARK_RATE = 27.7e6
 MOSTLY_CLEAR = 0.98      # warn when Clear + empty exceed this fraction of the job
 OUT_OF_GAMUT_WARN = 0.01  # warn when more than this fraction of printed voxels is out of gamut
@@ -110,7 +110,7 @@ class Preflight:
             f"{nz:,} slices, {self.total_voxels:,} voxels",
             f"content: {self.content.get('mode')} ({self.content.get('reason')})",
             f"materials (estimated from {self.sampled_voxels:,} voxels): {fr}",
-            f"disk: about {_human_bytes(self.disk_bytes)}; time: about "
+            f"disk: about {_human_bytes(self.disk_bytes)}; conversion: about "
             f"{_human_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
             f"({self.rate_source})",
         ]
@@ -164,8 +164,8 @@ def _rates_file() -> Path:
 
 
 def record_rate(voxels: int, seconds: float) -> None:
-    """Keep a finished job's rate (voxels per wall second, preparation included) for the time
-    estimate; the last few are kept. Jobs under 1e6 voxels are ignored (setup dominates)."""
+    """Keep a finished job's rate (voxels per second of its conversion, after the preparation)
+    for the time estimate; the last few are kept. Jobs under 1e6 voxels are ignored."""
     if voxels < 1_000_000 or not seconds > 0:
         return
     path = _rates_file()

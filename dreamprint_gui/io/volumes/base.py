@@ -33,7 +33,8 @@ from ...errors import DreamPrintError
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
            "uniform_rgb", "SlabBuffers",
-           "sniff_format", "open_source", "inspect_file", "reader_options", "FORMATS"]
+           "sniff_format", "open_source", "inspect_file", "inspect_source", "reader_options",
+           "FORMATS"]
 
 
 @dataclass(frozen=True)
@@ -233,18 +234,26 @@ def sniff_format(path: Path) -> str:
 def inspect_file(path_or_name: str | os.PathLike) -> dict:
     """The ``inspect`` description of a file, without choosing grids or options (a file whose
     density grid is empty or missing can still be inspected)."""
+    return inspect_source(path_or_name)[0]
+
+
+def inspect_source(path_or_name: str | os.PathLike) -> tuple[dict, VolumeSource | None]:
+    """(the ``inspect`` description, the source opened with default options for it, or None
+    for the formats described without opening a source: OpenVDB, NanoVDB)."""
     import importlib
 
     if str(path_or_name) == "demo":
-        return open_source("demo").info()
+        src = open_source("demo")
+        return src.info(), src
     path = Path(path_or_name)
     if not path.exists():
         raise DreamPrintError("no such file", path)
     key = sniff_format(path)
     module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
     if hasattr(module, "inspect_path"):
-        return module.inspect_path(path)
-    return module.open_path(path, fmt=key).info()
+        return module.inspect_path(path), None
+    src = module.open_path(path, fmt=key)
+    return src.info(), src
 
 
 def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
