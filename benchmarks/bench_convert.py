@@ -67,7 +67,7 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
     load = os.getloadavg()[0]
     ru0 = resource.getrusage(resource.RUSAGE_SELF)
     t = time.perf_counter()
-    gen = run_conversion(s, context=ctx)
+    gen = run_conversion(s, context=ctx, preflight=False)
     while True:
         try:
             next(gen)

@@ -1,6 +1,6 @@
 """Screenshots of the real application for the README (docs/screenshots/).
 
-Run under a virtual screen:  xvfb-run -a -s "-screen 0 1600x1000x24" \
+Run under a virtual screen:  xvfb-run -a -s "-screen 0 1280x800x24" \
     .venv/bin/python scripts/gui_screenshots.py [--table-size 100]
 
 Drives the application as an operator would: the main window on the default profile and the demo
@@ -24,6 +24,8 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=str(ROOT / "docs" / "screenshots"))
     ap.add_argument("--table-size", type=int, default=None)
+    ap.add_argument("--size", default="1280x800", help="window size WxH (default 1280x800, a "
+                    "laptop screen)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -52,7 +54,7 @@ def main() -> int:
 
     w = MainWindow(table_size=args.table_size)
     w.interactive = False
-    w.resize(1500, 900)
+    w.resize(*(int(v) for v in args.size.split("x")))
     w.move(0, 0)
     w.show()
     w.use_default_profile()
@@ -67,10 +69,10 @@ def main() -> int:
     if not w.gamut.drawn:  # the page draws its 3D view once it is shown
         wait(w.gamut.rendered)
     w.gamut.set_colour((0.85, 0.35, 0.2))
-    w.gamut.side.setCurrentIndex(0)
+    w.gamut.pages.setCurrentIndex(0)
     settle()
     grab_window(w, str(out / "gamut.png"))
-    w.gamut.side.setCurrentIndex(1)
+    w.gamut.pages.setCurrentIndex(1)
     settle(600)
     grab_window(w, str(out / "gamut-chart.png"))
 

@@ -170,9 +170,10 @@ def gamut(profile_path, objective, size, samples, chart, plot, as_json) -> None:
         return
     lv = report["lut_vs_direct_dE2000"]
     og = report["out_of_gamut_dE2000"]
-    click.echo(f"table {report['lut_size']}^3, objective {report['objective']}, "
-               f"{'cached' if report['cached'] else 'built'} "
-               f"(build {report['build_seconds']:.1f} s)")
+    how = (f"loaded from the cache in {report['load_seconds']:.1f} s (built earlier in "
+           f"{report['built_seconds_when_cached']:.1f} s)" if report["cached"] else
+           f"built in {report['build_seconds']:.1f} s")
+    click.echo(f"table {report['lut_size']}^3, objective {report['objective']}, {how}")
     click.echo(f"sRGB in gamut (dE2000 <= {report['in_gamut_threshold_dE2000']}): "
                f"{100 * report['srgb_in_gamut_fraction']:.1f} %; CIELAB volume printable "
                f"{report['lab_gamut_volume']:.0f} vs sRGB {report['srgb_lab_volume']:.0f}")

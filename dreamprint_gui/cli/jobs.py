@@ -62,14 +62,28 @@ def _fmt_time(s: float | None) -> str:
 @click.option("--slab-layers", type=int, default=None, help="Layers per task (default: auto).")
 @click.option("--option", "source_options", multiple=True,
               help="Source reader option KEY=VALUE (e.g. grid=density); repeatable.")
+@click.option("--content", type=click.Choice(["auto", "fog", "solid"]), default="auto",
+              show_default=True,
+              help="Material intent: fog (density as the source states it), solid (occupied "
+                   "voxels printed as undiluted colour, the rest empty/Clear), or auto (solid "
+                   "for voxel models, level sets and binary masks; fog otherwise).")
+@click.option("--sampling", type=click.Choice(["nearest", "linear"]), default=None,
+              help="Voxel models (.vox): nearest (default, sharp edges) or linear (smooth).")
 @click.option("--table-size", type=int, default=100, hidden=True,
               help="Colour table nodes per axis (tests use small tables).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")
-@click.option("--json", "as_json", is_flag=True, help="Print the manifest as JSON at the end.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the manifest (with the pre-flight estimate and warnings) as JSON.")
+@click.option("-q", "--quiet", is_flag=True,
+              help="No pre-flight summary, warnings or progress on stderr.")
 def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
             workers, scheduler, background, density_threshold, slab_layers, source_options,
-            table_size, overwrite, as_json) -> None:
-    """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack."""
+            content, sampling, table_size, overwrite, as_json, quiet) -> None:
+    """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack.
+
+    Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
+    warnings (mostly Clear, clamping, out of gamut) go to stderr; after the job, how many voxels
+    were clamped. --quiet silences both; --json adds them to the printed manifest."""
     from ..engine.pipeline import ConvertSettings, JobCancelled, run_conversion
 
     opts = {}
@@ -83,15 +97,15 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         size_mm=_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
         workers=workers, scheduler=scheduler, background=background,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
-        table_size=table_size, source_options=opts)
+        table_size=table_size, source_options=opts, content=content, sampling=sampling)
 
     def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
         raise KeyboardInterrupt()
 
     old = signal.signal(signal.SIGTERM, on_term)
-    tty = sys.stderr.isatty()
     gen = run_conversion(settings)
-    last = 0.0
+    progress = _Progress(sys.stderr.isatty(), quiet)
+    pf = None
     try:
         while True:
             try:
@@ -99,27 +113,26 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
             except StopIteration as stop:
                 manifest = stop.value
                 break
-            now = time.monotonic()
-            if p.stage == "converting" and p.layers_total and (tty or now - last > 10):
-                last = now
-                frac = p.layers_done / p.layers_total
-                width = 30
-                bar = "#" * int(frac * width) + "-" * (width - int(frac * width))
-                rate = p.voxels_done / max(p.elapsed_s, 1e-9)
-                line = (f"[{bar}] {p.layers_done}/{p.layers_total} layers  "
-                        f"{rate / 1e6:.1f} Mvox/s  elapsed {_fmt_time(p.elapsed_s)}  "
-                        f"eta {_fmt_time(p.eta_s)}")
-                click.echo(("\r" + line) if tty else line, err=True, nl=not tty)
-            elif p.message and p.stage != "done":
-                click.echo(("\n" if tty and p.stage == "finishing" else "") + p.message,
-                           err=True)
+            if p.stage == "preflight":
+                pf = p.preflight
+                if not quiet:
+                    for line in pf.summary_lines():
+                        click.echo(line, err=True)
+            elif p.stage == "converting" and p.layers_total:
+                progress.update(p)
+            elif p.message and p.stage not in ("done", "finishing") and not quiet:
+                click.echo(p.message, err=True)
     except JobCancelled:
         raise DreamPrintError("cancelled; the partial job was removed", output) from None
     finally:
+        progress.close()
         gen.close()
         signal.signal(signal.SIGTERM, old)
     t = manifest["timings_s"]
     nx, ny, nz = manifest["grid_dimensions"]
+    clamp_line = clamp_report(manifest)
+    if clamp_line and not quiet:
+        click.echo(clamp_line, err=True)
     if as_json:
         click.echo(json.dumps(manifest, indent=2))
     else:
@@ -128,6 +141,74 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
                    f"({size[0]:.2f} x {size[1]:.2f} x {size[2]:.2f} mm), "
                    f"{nx * ny * nz:,} voxels in {t['total']:.1f} s "
                    f"({t['voxels_per_second'] / 1e6:.1f} Mvox/s)")
+
+
+def clamp_report(manifest: dict) -> str | None:
+    """The line about the voxels the finished job clamped as too dense (manifest
+    ``clamped_density``), or None when none were. Voxels clamped as too thin alone are not
+    reported: they lie between the background threshold and pure Clear's density and print as
+    Clear, as the background does."""
+    c = manifest.get("clamped_density") or {}
+    hi = int(c.get("n_clamped_high", 0))
+    lo = int(c.get("n_clamped_low", 0))
+    if hi == 0:
+        return None
+    n = max(1, int(manifest.get("total_voxels", 1)))
+    parts = []
+    if hi:
+        parts.append(f"{hi:,} too dense (printed at the inks' densest, short by up to "
+                     f"{c.get('max_shortfall_high', 0.0):.3g}/mm)")
+    if lo:
+        parts.append(f"{lo:,} too thin (printed as Clear, denser by up to "
+                     f"{c.get('max_shortfall_low', 0.0):.3g}/mm)")
+    return (f"clamped: {hi + lo:,} voxels ({100 * (hi + lo) / n:.2f} % of the job): "
+            + "; ".join(parts))
+
+
+class _Progress:
+    """The conversion's progress on stderr: a click progress bar on a terminal (layers, percent,
+    Mvox/s, time left), else a line every 10 s; it moves as each slab finishes."""
+
+    def __init__(self, tty: bool, quiet: bool) -> None:
+        self.tty = tty
+        self.quiet = quiet
+        self.bar = None
+        self.done = 0
+        self.last = 0.0
+        self.rate = 0.0
+        self.eta: float | None = None
+        self.start: float | None = None
+
+    def _info(self, _item=None) -> str:
+        return f"{self.rate / 1e6:.1f} Mvox/s, {_fmt_time(self.eta)} left"
+
+    def update(self, p) -> None:
+        if self.quiet:
+            return
+        if self.start is None:  # the conversion's own rate, without the preparation
+            self.start = p.elapsed_s
+        self.rate = p.voxels_done / max(p.elapsed_s - self.start, 1e-9)
+        self.eta = p.eta_s
+        if self.tty:
+            if self.bar is None:
+                self.bar = click.progressbar(length=p.layers_total, label="converting",
+                                             file=sys.stderr, show_eta=False, show_pos=True,
+                                             item_show_func=self._info, width=30)
+                self.bar.__enter__()
+            self.bar.update(p.layers_done - self.done, current_item=p)
+            self.done = p.layers_done
+            return
+        now = time.monotonic()
+        if p.layers_done and (now - self.last > 10 or p.layers_done == p.layers_total):
+            self.last = now
+            click.echo(f"converting: {p.layers_done}/{p.layers_total} layers "
+                       f"({100 * p.layers_done / p.layers_total:.0f} %), {self._info()}",
+                       err=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.__exit__(None, None, None)
+            self.bar = None
 
 
 def _option_value(v: str):

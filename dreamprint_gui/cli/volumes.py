@@ -1,4 +1,5 @@
-"""``dreamprint inspect FILE [--json]``: what a volume file holds, per grid or element."""
+"""``dreamprint inspect FILE [--json] [--height-mm H | --size-mm X,Y,Z]``: what a volume file
+holds, per grid or element, and what ``--content auto`` would print it as."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import json
 
 import click
 
+from ..errors import DreamPrintError
 from . import cli
 
 
@@ -17,40 +19,135 @@ def _fmt_num(v) -> str:
     return f"{v:.6g}" if isinstance(v, float) else str(v)
 
 
-def _fmt_bounds(b) -> str:
-    return f"{_fmt_num(b[0])} .. {_fmt_num(b[1])}" if b else "-"
+def _fmt_bounds(b, unit: str = "source units") -> str:
+    """``x lo .. hi, y lo .. hi, z lo .. hi <unit>`` of ((x0, y0, z0), (x1, y1, z1))."""
+    if not b:
+        return "-"
+    return ", ".join(f"{a} {_fmt_num(lo)} .. {_fmt_num(hi)}"
+                     for a, lo, hi in zip("xyz", b[0], b[1], strict=True)) + f" {unit}"
 
 
-def format_info(path: str, info: dict) -> str:
-    """The human-readable form of a source's ``info()``."""
+def _range(g: dict) -> str:
+    lo, hi = g.get("min"), g.get("max")
+    if isinstance(lo, (list, tuple)) and isinstance(hi, (list, tuple)):
+        parts = ", ".join(f"{a} {_fmt_num(a_lo)} .. {_fmt_num(a_hi)}"
+                          for a, a_lo, a_hi in zip("xyz", lo, hi, strict=False))
+        mag = g.get("magnitude")
+        if mag:
+            parts += f"; magnitude {_fmt_num(mag[0])} .. {_fmt_num(mag[1])}"
+        return f"values per component {parts}"
+    if lo is None or hi is None:
+        return "values (range not read)"
+    return f"values {_fmt_num(lo)} .. {_fmt_num(hi)}"
+
+
+def _size_line(bounds, height_mm, size_mm) -> str | None:
+    """``at ...: 1 source unit = k mm; the bounds span X x Y x Z mm`` (the rule of
+    ``grid_for_source``) or None without a size."""
+    if not bounds or (height_mm is None and size_mm is None):
+        return None
+    ext = [hi - lo for lo, hi in zip(bounds[0], bounds[1], strict=True)]
+    if height_mm is not None:
+        if ext[2] <= 0:
+            return None
+        mpu, what = height_mm / ext[2], f"--height-mm {height_mm:g}"
+    else:
+        ok = [(b / e) for b, e in zip(size_mm, ext, strict=True) if e > 0]
+        if not ok:
+            return None
+        mpu, what = min(ok), "--size-mm " + ",".join(f"{v:g}" for v in size_mm)
+    return (f"  at {what}: 1 source unit = {mpu:.4g} mm; the bounds span "
+            + " x ".join(f"{e * mpu:.2f}" for e in ext) + " mm")
+
+
+def _union(bounds_list):
+    b = [x for x in bounds_list if x]
+    if not b:
+        return None
+    return ([min(x[0][a] for x in b) for a in range(3)],
+            [max(x[1][a] for x in b) for a in range(3)])
+
+
+def format_info(path: str, info: dict, height_mm: float | None = None,
+                size_mm: tuple[float, float, float] | None = None) -> str:
+    """The human-readable form of a source's ``info()`` (with ``content``, if present): one
+    heading line per grid, then its voxels, values and bounds with their units."""
     lines = [f"{path}: {info['format']}"]
+    c = info.get("content")
+    if c:
+        lines.append(f"  content: {c['mode']} (--content auto: {c['reason']})")
     if "gaussians" in info:
-        lines.append(f"  {info['gaussians']:,} Gaussians, SH degree {info['sh_degree']}, "
-                     f"bounds {_fmt_bounds(info['bounds'])}")
+        lines.append(f"  {info['gaussians']:,} Gaussians, SH degree {info['sh_degree']}")
+        lines.append(f"    bounds {_fmt_bounds(info['bounds'])}")
+        s = _size_line(info["bounds"], height_mm, size_mm)
+        if s:
+            lines.append(s)
     for g in info.get("grids", []):
-        shape = " x ".join(str(s) for s in g["shape"]) if g.get("shape") else "-"
-        lines.append(f"  {g['name']!s}: {g['class']}, {shape}, "
-                     f"{g['active_voxels']:,} active voxels, range {_fmt_num(g['min'])} .. "
-                     f"{_fmt_num(g['max'])}, {g['dtype']}, bounds {_fmt_bounds(g['bounds'])}")
+        shape = g.get("shape") or g.get("shape_zyx", [])[::-1]
+        head = f"  {g['name']!s}: {g.get('class', 'grid')}"
+        if g.get("dtype"):
+            head += f", {g['dtype']}"
+        lines.append(head)
+        vox = " x ".join(str(v) for v in shape) if shape else "-"
+        act = g.get("active_voxels")
+        row = f"    voxels {vox}" + (f" ({act:,} active)" if act is not None else "")
+        if "min" in g:
+            row += f"; {_range(g)}"
+        lines.append(row)
+        if g.get("bounds"):
+            lines.append(f"    bounds {_fmt_bounds(g['bounds'])}")
+            ib = g.get("index_bounds")
+            if ib:
+                lines.append("    index " + ", ".join(
+                    f"{a} {lo} .. {hi}" for a, lo, hi in zip("ijk", ib[0], ib[1], strict=True))
+                    + " (voxel coordinates)")
+        elif g.get("baked_from"):
+            lines.append(f"    baked from {g['baked_from']}; bounds x 0 .. 1, y 0 .. 1, "
+                         "z 0 .. 1 source units")
+    if info.get("grids"):
+        bounds = _union([g.get("bounds") for g in info["grids"]])
+        if bounds is None and info["grids"][0].get("baked_from"):
+            bounds = ([0, 0, 0], [1, 1, 1])
+        s = _size_line(bounds, height_mm, size_mm)
+        if s:
+            lines.append(s)
     if not info.get("grids") and "gaussians" not in info:
         lines.append("  (no grids)")
     return "\n".join(lines)
 
 
+def describe(file: str) -> dict:
+    """The ``inspect`` description of ``file`` plus ``content``: what ``--content auto`` picks."""
+    from ..engine.content import choose_content, content_of_info
+    from ..io.volumes.base import inspect_source
+
+    info, src = inspect_source(file)
+    mode, reason = choose_content(src) if src is not None else content_of_info(info)
+    return {**info, "content": {"mode": mode, "reason": reason}}
+
+
 @cli.command()
 @click.argument("file")
 @click.option("--json", "as_json", is_flag=True, help="Print the description as JSON.")
-def inspect(file: str, as_json: bool) -> None:
-    """Describe a volume file: format and, per grid, class, size, active voxels, range, bounds.
+@click.option("--height-mm", type=float, default=None,
+              help="Also give the size in mm at this print height.")
+@click.option("--size-mm", default=None, help="Also give the size in mm fitted into X,Y,Z mm.")
+def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | None) -> None:
+    """Describe a volume file: format, the material intent --content auto picks, and per grid
+    its class, voxels, value range and bounds (source units; index; mm with a size).
 
     FILE is an OpenVDB, NanoVDB, VTK/MetaImage/NRRD image, radiance .npz or EXR stack (file or
     folder), Gaussian splats (PLY, SPZ, .splat, .ksplat, SOG .sog / folder / meta.json) or
     MagicaVoxel file, or "demo".
     """
-    from ..io.volumes.base import inspect_file
+    from .jobs import _size
 
-    info = inspect_file(file)
+    if height_mm is not None and size_mm is not None:
+        raise DreamPrintError("give at most one of --height-mm and --size-mm")
+    if height_mm is not None and not height_mm > 0:
+        raise DreamPrintError(f"--height-mm must be positive, got {height_mm}")
+    info = describe(file)
     if as_json:
         click.echo(json.dumps(info, indent=2))
     else:
-        click.echo(format_info(file, info))
+        click.echo(format_info(file, info, height_mm, _size(size_mm)))

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DreamPrintError
+from .content import CONTENT_MODES, apply_content
 from .dense_job import dense_slab_labels
 from .halftone import HALFTONE_METHODS, Halftoner
 from .layer_kernel import slab_labels
@@ -81,6 +82,8 @@ class ConvertSettings:
     objective: str | None = None          # gamut table objective (None: its default)
     table_size: int = 100
     source_options: dict[str, Any] = field(default_factory=dict)
+    content: str = "auto"                 # "fog" | "solid" | "auto" (engine.content)
+    sampling: str | None = None           # None: the reader's default; "nearest" | "linear"
 
 
 @dataclass(frozen=True)
@@ -93,6 +96,7 @@ class ConvertProgress:
     elapsed_s: float
     eta_s: float | None
     message: str = ""
+    preflight: Any = None      # engine.preflight.Preflight, on the "preflight" stage
 
 
 # ----------------------------------------------------------------------------- context
@@ -100,10 +104,36 @@ _WORKER_CACHE: dict[Any, Any] = {}
 _WORKER_LOCK = threading.Lock()
 
 
-def _open_source(spec: str, options: dict[str, Any]):
+def source_options_for(spec: str, options: dict[str, Any], content: str = "fog",
+                       sampling: str | None = None) -> dict[str, Any]:
+    """The reader options of a job: ``options`` plus what ``content`` and ``sampling`` imply.
+
+    ``content`` solid or auto opens a level set as a solid (``level_set="solid"``) unless the
+    operator chose otherwise; ``sampling`` ("nearest" or "linear") goes to a reader that offers
+    it (voxel models); every other reader samples trilinearly, so "nearest" is refused there.
+    """
+    from ..io.volumes.base import reader_options
+
+    opts = dict(options)
+    takes = reader_options(spec)
+    if content != "fog" and "level_set" in takes and "level_set" not in opts:
+        opts["level_set"] = "solid"
+    if sampling is not None:
+        if sampling not in ("nearest", "linear"):
+            raise DreamPrintError(f"--sampling must be nearest or linear, not '{sampling}'")
+        if "sampling" in takes:
+            opts.setdefault("sampling", sampling)
+        elif sampling == "nearest":
+            raise DreamPrintError("--sampling nearest applies to voxel models (.vox); this "
+                                  "source is sampled trilinearly", spec)
+    return opts
+
+
+def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
+                 sampling: str | None = None):
     from ..io.volumes import open_source
 
-    return open_source(spec, **options)
+    return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
 def _tables_for(profile_spec, layer_mm: float, objective, size: int):
@@ -128,6 +158,7 @@ class JobContext:
     profile_fingerprint: str = ""
     source: Any = None
     tables: Any = None
+    content: Any = None  # engine.content.ContentChoice (None: fog)
 
     @property
     def shape_xyz(self) -> tuple[int, int, int]:
@@ -159,10 +190,15 @@ class JobContext:
             return self.source, self.tables
         s = self.settings
         key = (s.source, repr(sorted(s.source_options.items())), str(s.profile),
-               self.printer.layer_thickness_mm, s.objective, s.table_size)
+               self.printer.layer_thickness_mm, s.objective, s.table_size, s.content,
+               s.sampling)
         with _WORKER_LOCK:
             if key not in _WORKER_CACHE:
-                src = _open_source(s.source, s.source_options)
+                from .content import apply_content
+
+                mode = self.content.mode if self.content is not None else "fog"
+                src = _open_source(s.source, s.source_options, s.content, s.sampling)
+                src, _ = apply_content(src, mode, self.halftoner.threshold)
                 _, tables = _tables_for(s.profile, self.printer.layer_thickness_mm,
                                         s.objective, s.table_size)
                 _WORKER_CACHE.clear()  # one job per worker process at a time
@@ -194,8 +230,10 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
         raise DreamPrintError(f"--density-scale must be >= 0, got {s.density_scale}")
     if s.workers is not None and s.workers < 1:
         raise DreamPrintError(f"--workers must be at least 1, got {s.workers}")
+    if s.content not in CONTENT_MODES:
+        raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
     printer = load_printer(s.printer)
-    source = _open_source(s.source, s.source_options)
+    source = _open_source(s.source, s.source_options, s.content, s.sampling)
     grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
                            size_mm=tuple(s.size_mm) if s.size_mm is not None else None)
     shape = tuple(int(v) for v in grid.shape_xyz)
@@ -211,9 +249,11 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
     thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
     bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
+    source, content = apply_content(source, s.content, thr)
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
                      palette=printer.palette(), profile_name=profile.name,
-                     profile_fingerprint=profile.fingerprint(), source=source, tables=tables)
+                     profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
+                     content=content)
     _load_kernels(ctx)
     return ctx
 
@@ -388,7 +428,9 @@ def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
         step = int(ctx.settings.slab_layers)
     else:
         step = max(1, DEFAULT_SLAB_VOXELS // max(1, nx * ny))
-        step = min(step, max(1, -(-nz // (4 * workers))))  # >= 4 slabs per worker to balance
+        # >= 4 slabs per worker to balance, and >= 32 (if there are as many layers) so that
+        # the progress moves with the slabs: a slab costs one call and no new memory.
+        step = min(step, max(1, -(-nz // max(32, 4 * workers))))
     return [(z, min(nz, z + step)) for z in range(0, nz, step)]
 
 
@@ -516,7 +558,9 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "source": {"path": str(Path(src_path).absolute()) if src_path else s.source,
                    "sha256": totals["source_sha256"], "options": s.source_options,
-                   "density_scale": s.density_scale},
+                   "density_scale": s.density_scale, "sampling": s.sampling,
+                   "content": (ctx.content.to_json() if ctx.content is not None else
+                               {"mode": "fog", "requested": s.content, "reason": ""})},
         "profile": {"name": ctx.profile_name, "fingerprint": ctx.profile_fingerprint,
                     "path": None if s.profile is None else str(s.profile),
                     "objective": getattr(ctx.tables, "objective", s.objective),
@@ -555,13 +599,16 @@ def _slice(z: int, nz: int) -> str:
 
 
 def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,
-                   context: JobContext | None = None
+                   context: JobContext | None = None, preflight: Any = True
                    ) -> Generator[ConvertProgress, None, dict[str, Any]]:
     """Convert ``settings.source`` into the job folder ``settings.output``.
 
     Yields :class:`ConvertProgress`; returns the manifest dict (also written to
     ``manifest.json``). Setting ``cancel`` (or closing the generator, or Ctrl-C) stops the work
     and removes the partial job; nothing is ever left under the final name unless complete.
+    ``preflight``: True estimates the job first (:func:`.preflight.preflight`, yielded once
+    with stage "preflight"), a :class:`.preflight.Preflight` already made is used as is, False
+    skips it; the manifest records its estimate and warnings (``preflight``).
     """
     from ..io.job_export import JobWriter, check_target
 
@@ -571,6 +618,19 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     check_target(settings.output, settings.overwrite)  # before any work
     yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
     ctx = context if context is not None else prepare_job(settings)
+    pf = None
+    t_pf = 0.0
+    if preflight is True:
+        from .preflight import preflight as estimate
+
+        t0 = time.perf_counter()
+        pf = estimate(ctx, seed=settings.seed)
+        t_pf = time.perf_counter() - t0
+    elif preflight is not False and preflight is not None:
+        pf = preflight
+    if pf is not None:
+        yield ConvertProgress("preflight", 0, 0, 0, 0, time.perf_counter() - started, None,
+                              "\n".join(pf.summary_lines()), preflight=pf)
     t_prep = time.perf_counter() - started
     kind = _scheduler_kind(settings)
     workers = settings.workers or os.cpu_count() or 1
@@ -644,7 +704,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                               time.perf_counter() - started, 0.0, "writing the manifest")
         sha_th.join()
         totals["source_sha256"] = sha_box.get("v")
-        timings = {"prepare": t_prep, "convert": time.perf_counter() - t_conv,
+        timings = {"prepare": t_prep, "preflight": t_pf, "convert": time.perf_counter() - t_conv,
                    "worker_stage_sum": stage_t}
         conc_sums = [math.fsum(layer_sums[:, i]) for i in range(7)]
         manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
@@ -652,7 +712,13 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                              timings, started)
         manifest["timings_s"]["voxels_per_second"] = (nx * ny * nz) / max(
             1e-9, manifest["timings_s"]["total"])
+        if pf is not None:
+            manifest["preflight"] = pf.to_json()
+            manifest["warnings"] = [w.to_json() for w in pf.warnings]
         writer.commit(manifest)
+    from .preflight import record_rate
+
+    record_rate(nx * ny * nz, timings["convert"])
     yield ConvertProgress("done", nz, nz, nx * ny * nz, nx * ny * nz,
                           time.perf_counter() - started, 0.0, str(writer.target))
     return manifest

@@ -35,12 +35,16 @@ from ..resources import resource_path
 from .profile import INKS
 
 __all__ = ["PrinterProfile", "load_printer", "builtin_printers", "check_tray", "EMPTY_LABEL",
-           "DEFAULT_PRINTER", "printer_from_dict"]
+           "DEFAULT_PRINTER", "printer_from_dict", "material_legend", "PRINTER_NAMES"]
 
 FORMAT = "dreamprint-printer"
 FORMAT_VERSION = 1
 EMPTY_LABEL = len(INKS)  # 6: after the six inks
 DEFAULT_PRINTER = "j850-paper"
+# Human names of the built-in printers (the ids stay in files and on the command line).
+PRINTER_NAMES = {"j850-paper": "Stratasys J850, DreamPrinting paper voxel (84 x 28 x 14 um)",
+                 "voxelprint-14um": "Stratasys J750/J850 Voxel Print, 14 um layers",
+                 "voxelprint-27um": "Stratasys J750/J850 Voxel Print, 27 um layers"}
 
 
 @dataclass(frozen=True)
@@ -59,6 +63,12 @@ class PrinterProfile:
     description: str = ""
     source: str = ""
     path: str | None = None
+    title: str = ""  # the name people use ("Stratasys J850 (paper profile)"); ``name`` is the id
+
+    @property
+    def display_name(self) -> str:
+        """The printer as an operator names it: its title, else its id."""
+        return self.title or self.name
 
     @property
     def layer_thickness_mm(self) -> float:
@@ -157,7 +167,7 @@ def printer_from_dict(d: dict[str, Any], src: str = "<printer>") -> PrinterProfi
                           flip_rows=flip, png_mode=mode,
                           description=str(d.get("description", "")),
                           source=str(d.get("source", "")), path=None if src.startswith("<")
-                          else src)
+                          else src, title=str(d.get("title", "")))
 
 
 def load_printer(name_or_path: str | os.PathLike | None = None) -> PrinterProfile:
@@ -185,6 +195,18 @@ def load_printer(name_or_path: str | os.PathLike | None = None) -> PrinterProfil
     except tomllib.TOMLDecodeError as exc:
         raise DreamPrintError(f"invalid TOML: {exc}", p) from None
     return printer_from_dict(d, str(p))
+
+
+def material_legend(printer: PrinterProfile | None = None
+                    ) -> list[tuple[str, str, tuple[int, int, int]]]:
+    """(label, material name, RGB code) of labels 0..6 (INKS, then ``empty``) exactly as the
+    slices of ``printer`` (default: the default printer) encode them: ``palette()`` is the one
+    definition the PNG writer and the GUI's legend both read."""
+    p = printer if printer is not None else load_printer()
+    pal = p.palette()
+    names = [*p.material_names, "empty (no material)"]
+    return [(lab, name, tuple(int(v) for v in pal[i]))
+            for i, (lab, name) in enumerate(zip((*INKS, "empty"), names, strict=True))]
 
 
 def check_tray(shape_xyz: tuple[int, int, int], printer: PrinterProfile) -> None:

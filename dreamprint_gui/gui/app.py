@@ -109,8 +109,6 @@ def main(argv: list[str] | None = None) -> int:
 
     window = MainWindow(table_size=args.table_size)
     window.interactive = not headless
-    if args.tab:
-        window.tabs.setCurrentIndex(0 if args.tab == "preview" else 1)
     status: dict = {"code": 0}
 
     class _FirstExpose(QObject):
@@ -208,6 +206,8 @@ def main(argv: list[str] | None = None) -> int:
                 finish(2)
                 return
             window.open_path("demo")
+        if args.tab:  # opening a volume shows the preview; --tab asks for another page
+            window.tabs.setCurrentIndex(0 if args.tab == "preview" else 1)
 
     QTimer.singleShot(0, start)
     app.exec()

@@ -17,7 +17,7 @@ import math
 import os
 from pathlib import Path
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
     QButtonGroup,
     QCheckBox,
@@ -27,6 +27,7 @@ from PySide6.QtWidgets import (
     QDoubleSpinBox,
     QFileDialog,
     QFormLayout,
+    QGroupBox,
     QHBoxLayout,
     QLabel,
     QLineEdit,
@@ -40,6 +41,7 @@ from PySide6.QtWidgets import (
 )
 
 from ..errors import DreamPrintError
+from .names import BACKGROUNDS, CONTENTS, background_name, gui_wording, printer_name
 from .settings import AppSettings
 from .workers import Task, generator_job, run_task
 
@@ -80,8 +82,10 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      halftone: str = "blue-noise", seed: int = 0,
                      output: str | os.PathLike | None = None, overwrite: bool = False,
                      workers: int | None = None, scheduler: str | None = None,
-                     table_size: int | None = None):
-    """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile)."""
+                     table_size: int | None = None, content: str = "auto",
+                     sampling: str | None = None):
+    """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
+    ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear")."""
     from ..engine.pipeline import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
@@ -92,7 +96,7 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            size_mm=None if size_mm is None else tuple(size_mm),
                            density_scale=float(density_scale), halftone=halftone,
                            seed=int(seed), workers=workers, scheduler=scheduler,
-                           background=background,
+                           background=background, content=content, sampling=sampling,
                            overwrite=overwrite, **extra)
 
 
@@ -112,36 +116,113 @@ def format_duration(seconds: float | None) -> str:
     return f"{h} h {m:02d} min" if h else (f"{m} min {s:02d} s" if m else f"{s} s")
 
 
+def _num(v, fmt: str = ",.0f") -> str:
+    return format(v, fmt) if isinstance(v, int | float) else str(v)
+
+
 def manifest_summary(manifest: dict, target: str) -> str:
-    """HTML summary of a finished job from its manifest (what the operator checks)."""
+    """HTML summary of a finished job from its manifest: everything the operator checks
+    (where, what from, which printer, size, halftoning, background, materials, clamping,
+    time), with human names for the printer and the background (the ids stay in the file)."""
+    from html import escape
+
     nx, ny, nz = manifest["grid_dimensions"]
     sx, sy, sz = manifest["physical_size_mm"]
     total = max(1, int(manifest.get("total_voxels", nx * ny * nz)))
+    pr = manifest.get("printer", {})
+    vx, vy, vz = (1000 * v for v in manifest.get("voxel_mm", pr.get("voxel_mm", (0, 0, 0))))
+    src = manifest.get("source", {})
+    prof = manifest.get("profile", {})
+    ht = manifest.get("halftoning", {})
+    bg = manifest.get("background", {})
+    bg_mode = bg.get("mode", "") if isinstance(bg, dict) else str(bg)
+    labels = manifest.get("labels", {})
+    mean = manifest.get("mean_concentration", {})
     rows = []
     for lab, n in manifest.get("voxel_counts", {}).items():
-        name = manifest.get("labels", {}).get(lab, {}).get("material", "")
-        rows.append(f"<tr><td>{lab}</td><td>{name}</td><td align=right>{n:,}</td>"
-                    f"<td align=right>{100 * n / total:.2f} %</td></tr>")
+        info = labels.get(lab, {})
+        rgb = info.get("rgb") or pr.get("empty_rgb")
+        swatch = (f"<td bgcolor='#{rgb[0]:02x}{rgb[1]:02x}{rgb[2]:02x}'>&nbsp;&nbsp;&nbsp;</td>"
+                  if rgb else "<td></td>")
+        conc = mean.get(lab)
+        rows.append(f"<tr>{swatch}<td>{escape(lab)}</td><td>{escape(info.get('material', ''))}"
+                    f"</td><td align=right>{n:,}</td><td align=right>{100 * n / total:.2f} %"
+                    f"</td><td align=right>{'' if conc is None else f'{conc:.4f}'}</td></tr>")
     clamped = manifest.get("clamped_density") or {}
-    clamp_text = ", ".join(f"{k} {v:,.0f}" if isinstance(v, int | float) else f"{k} {v}"
-                           for k, v in clamped.items()) or "none"
+    if clamped:
+        low, high = clamped.get("n_clamped_low", 0), clamped.get("n_clamped_high", 0)
+        clamp_text = (f"{_num(low)} voxels too thin to print (printed denser, by at most "
+                      f"{_num(clamped.get('max_shortfall_low', 0), '.3g')} /mm), "
+                      f"{_num(high)} too dense (printed thinner, by at most "
+                      f"{_num(clamped.get('max_shortfall_high', 0), '.3g')} /mm)")
+        other = {k: v for k, v in clamped.items() if k not in (
+            "n_clamped_low", "n_clamped_high", "max_shortfall_low", "max_shortfall_high")}
+        if other:
+            clamp_text += "; " + ", ".join(f"{k} {_num(v, '.4g')}" for k, v in other.items())
+    else:
+        clamp_text = "none"
     t = manifest.get("timings_s", {})
     ex = manifest.get("execution") or {}
     run_on = (f"; run on {ex.get('scheduler', 'threads')}"
               + (f", {ex['workers']} workers" if ex.get("workers") else "")
               + (f", {ex['slabs']} slabs" if ex.get("slabs") else "")) if ex else ""
+    content = src.get("content") or manifest.get("content")
+    content_text = ""
+    if isinstance(content, dict) and content.get("mode"):
+        content_text = (f", content {escape(str(content['mode']))}"
+                        + (f" ({escape(str(content['reason']))})" if content.get("reason")
+                           else ""))
+    threshold = bg.get("density_threshold_per_mm") if isinstance(bg, dict) else None
+    sl = manifest.get("slices", {})
     return (
-        f"<p><b>Job complete</b>: {target}</p>"
-        f"<p>{nz} slices of {nx} x {ny} voxels ({total:,} voxels), "
-        f"{sx:.2f} x {sy:.2f} x {sz:.2f} mm, printer {manifest['printer'].get('name', '')}, "
-        f"halftoning {manifest.get('halftoning', {}).get('method', '')}, "
-        f"seed {manifest.get('seed')}</p>"
-        f"<table cellspacing=6><tr><th>label</th><th>material</th><th>voxels</th>"
-        f"<th>share</th></tr>{''.join(rows)}</table>"
-        f"<p>Density targets clamped: {clamp_text}</p>"
-        f"<p>Time {format_duration(t.get('total'))}"
-        + (f", {t['voxels_per_second']:.3g} voxels/s" if "voxels_per_second" in t else "")
-        + run_on + "</p>")
+        f"<p><b>Job complete</b>: {escape(target)}</p>"
+        "<table cellspacing=3>"
+        f"<tr><td><b>Source</b></td><td>{escape(str(src.get('path', '')))}, density scale "
+        f"{_num(src.get('density_scale', 1.0), 'g')}{content_text}</td></tr>"
+        f"<tr><td><b>Printer</b></td><td>{escape(pr.get('title') or pr.get('name', ''))} "
+        f"(voxel {vx:.0f} x {vy:.0f} x {vz:.0f} um, {escape(str(pr.get('png_mode', '')))} "
+        "PNG)</td></tr>"
+        f"<tr><td><b>Size</b></td><td>{sx:.2f} x {sy:.2f} x {sz:.2f} mm: {nz} slices of "
+        f"{nx} x {ny} voxels ({total:,} voxels)"
+        + (f", {escape(str(sl.get('first', '')))} .. {escape(str(sl.get('last', '')))}"
+           if sl.get("first") else "") + "</td></tr>"
+        f"<tr><td><b>Ink profile</b></td><td>{escape(str(prof.get('name', '')))}, table "
+        f"{prof.get('table_size', '')}<sup>3</sup> ({escape(str(prof.get('objective', '')))})"
+        "</td></tr>"
+        f"<tr><td><b>Halftoning</b></td><td>{escape(str(ht.get('method', '')))}, seed "
+        f"{manifest.get('seed')}</td></tr>"
+        f"<tr><td><b>Background</b></td><td>{escape(background_name(bg_mode))}"
+        + (f" below {threshold:.3g} /mm" if isinstance(threshold, float) else "")
+        + "</td></tr>"
+        f"<tr><td><b>Clamped densities</b></td><td>{clamp_text}</td></tr>"
+        f"<tr><td><b>Time</b></td><td>{format_duration(t.get('total'))}"
+        + (f", {t['voxels_per_second']:,.0f} voxels/s" if "voxels_per_second" in t else "")
+        + run_on + "</td></tr></table>"
+        "<p><b>Materials</b></p>"
+        "<table cellspacing=4><tr><th></th><th>label</th><th>material</th><th>voxels</th>"
+        f"<th>share</th><th>mean conc.</th></tr>{''.join(rows)}</table>")
+
+
+def preflight_html(pf) -> str:
+    """The engine's pre-flight summary (``Preflight.summary_lines``) as the dialog shows it:
+    the figures, then the warnings in bold, with command-line options named as the controls."""
+    from html import escape
+
+    lines = [ln for ln in pf.summary_lines() if not ln.startswith("warning: ")]
+    body = "".join(f"<li>{escape(ln)}</li>" for ln in lines)
+    warn = "".join(f"<li><b>{escape(gui_wording(w.message))}</b></li>" for w in pf.warnings)
+    return (f"<ul style='margin-left: -20px'>{body}</ul>"
+            + (f"<p><b>Warnings</b></p><ul style='margin-left: -20px'>{warn}</ul>" if warn
+               else "<p>No warnings.</p>"))
+
+
+def _printer_file_name(path: str) -> str:
+    from ..engine.printer import load_printer
+
+    try:
+        return printer_name(load_printer(path))
+    except DreamPrintError:
+        return Path(path).stem  # the dialog says what is wrong with it
 
 
 class ExportDialog(QDialog):
@@ -152,7 +233,8 @@ class ExportDialog(QDialog):
 
     def __init__(self, parent: QWidget | None, *, source_path: str, profile_path: str | None,
                  settings: AppSettings | None = None, preview_params: dict | None = None,
-                 source_name: str | None = None, table_size: int | None = None) -> None:
+                 source_name: str | None = None, table_size: int | None = None,
+                 context=None) -> None:
         super().__init__(parent)
         from ..engine.printer import DEFAULT_PRINTER, builtin_printers
 
@@ -166,11 +248,18 @@ class ExportDialog(QDialog):
         self.setWindowTitle("Export print job")
         self.setMinimumWidth(560)
         pp = preview_params or {}
+        self.context = context  # the preview's JobContext: reused when the job's source matches
+        self.sampling_choice = pp.get("sampling")  # the preview's voxel-edge choice
+        self.preflight = None  # the engine's Preflight of the current settings
+        self._preflight_task: Task | None = None
+        self._preflight_pending = False
 
         self.printer = QComboBox()
         self.printer.setEditable(False)
         for name in builtin_printers():
-            self.printer.addItem(name, name)
+            self.printer.addItem(printer_name(name), name)
+            self.printer.setItemData(self.printer.count() - 1, f"id {name}",
+                                     Qt.ItemDataRole.ToolTipRole)
         self.printer.addItem("Printer file (TOML)...", "")
         self.printer.setCurrentIndex(max(0, self.printer.findData(
             self.settings.get("export/printer", DEFAULT_PRINTER, str))))
@@ -197,10 +286,18 @@ class ExportDialog(QDialog):
         self.density_scale = QDoubleSpinBox(decimals=3, minimum=0.0, maximum=1000.0,
                                             value=float(pp.get("density_scale", 1.0)))
         self.background = QComboBox()
-        self.background.addItem("clear", "clear")
-        self.background.addItem("empty", "empty")
+        for key, name, tip in BACKGROUNDS:
+            self.background.addItem(name, key)
+            self.background.setItemData(self.background.count() - 1, tip,
+                                        Qt.ItemDataRole.ToolTipRole)
         self.background.setCurrentIndex(max(0, self.background.findData(
             pp.get("background", "clear"))))
+        self.content = QComboBox()
+        for key, name, tip in CONTENTS:
+            self.content.addItem(name, key)
+            self.content.setItemData(self.content.count() - 1, tip,
+                                     Qt.ItemDataRole.ToolTipRole)
+        self.content.setCurrentIndex(max(0, self.content.findData(pp.get("content", "auto"))))
         self.halftone = QComboBox()
         self.halftone.addItem("blue noise (low noise, default)", "blue-noise")
         self.halftone.addItem("random (paper's stochastic)", "random")
@@ -246,6 +343,7 @@ class ExportDialog(QDialog):
         form.addRow("Size", size_row)
         form.addRow("Density scale", self.density_scale)
         form.addRow("Background", self.background)
+        form.addRow("Content", self.content)
         form.addRow("Halftoning", self.halftone)
         form.addRow("Seed", self.seed)
         form.addRow("Folder", frow)
@@ -260,8 +358,23 @@ class ExportDialog(QDialog):
         self.error = QLabel("")
         self.error.setStyleSheet("color: #d33;")
         self.error.setWordWrap(True)
+        # The finished job's summary: the whole of it, scrolling inside its own box if the
+        # screen is small (the form is hidden then, the summary restates the settings).
         self.summary = QTextBrowser()
+        self.summary.setObjectName("jobSummary")
+        self.summary.setOpenExternalLinks(False)
+        self.summary.setMinimumHeight(120)
         self.summary.setVisible(False)
+        # Before Export: the engine's pre-flight of these settings (grid, slices, disk, time,
+        # material fractions, warnings), recomputed when a setting changes.
+        self.preflight_view = QTextBrowser()
+        self.preflight_view.setObjectName("preflight")
+        self.preflight_view.setMinimumHeight(150)
+        self.preflight_box = QGroupBox("Pre-flight estimate")
+        pl = QVBoxLayout(self.preflight_box)
+        pl.addWidget(self.preflight_view)
+        self._preflight_debounce = QTimer(self, singleShot=True, interval=400)
+        self._preflight_debounce.timeout.connect(self.update_preflight)
         self.buttons = QDialogButtonBox()
         self.start_button = self.buttons.addButton("Export",
                                                    QDialogButtonBox.ButtonRole.AcceptRole)
@@ -272,19 +385,76 @@ class ExportDialog(QDialog):
         self.cancel_button.clicked.connect(self._cancel_clicked)
         self.close_button.clicked.connect(self.accept)
 
+        self.form_box = QWidget()
+        self.form_box.setLayout(form)
+        form.setContentsMargins(0, 0, 0, 0)
         lay = QVBoxLayout(self)
-        lay.addLayout(form)
+        lay.addWidget(self.form_box)
+        lay.addWidget(self.preflight_box, 1)
         lay.addWidget(self.progress)
         lay.addWidget(self.remaining)
         lay.addWidget(self.error)
         lay.addWidget(self.summary, 1)
         lay.addWidget(self.buttons)
         self._form_widgets = [self.printer, self.by_height, self.by_box, self.height, *self.box,
-                              self.density_scale, self.background, self.halftone, self.seed,
+                              self.density_scale, self.background, self.content,
+                              self.halftone, self.seed,
                               self.folder, browse, self.job_name, self.overwrite,
                               self.scheduler, self.scheduler_address, self.workers]
         self._printer_obj = None
         self._update_printer()
+        for w in (self.height, *self.box, self.density_scale, self.seed):
+            w.valueChanged.connect(self._settings_changed)
+        for w in (self.background, self.content, self.halftone, self.printer):
+            w.currentIndexChanged.connect(self._settings_changed)
+        for w in (self.by_height, self.by_box):
+            w.toggled.connect(self._settings_changed)
+        QTimer.singleShot(0, self.update_preflight)
+
+    # pre-flight -------------------------------------------------------------------------------
+    def _settings_changed(self, *_args) -> None:
+        if self.task is None or self.task.outcome is not None:
+            self._preflight_debounce.start()
+
+    def update_preflight(self) -> None:
+        """Estimate the job of the current settings on a worker (``engine.preflight``)."""
+        if self._preflight_task is not None and self._preflight_task.outcome is None:
+            self._preflight_pending = True  # one at a time; the latest settings win
+            return
+        try:
+            settings = self.settings_for_job()
+        except DreamPrintError as exc:
+            self.preflight = None
+            self.preflight_view.setPlainText(f"no estimate: {exc}")
+            return
+        previous = self.context
+
+        def job(report, cancel):
+            from ..engine.preflight import preflight
+            from .preview_data import job_context
+
+            return settings, preflight(job_context(settings, previous))
+
+        self.preflight_view.setPlainText("estimating the job ...")
+        task = Task(job, "export-preflight")
+        task.succeeded.connect(self._show_preflight)
+        task.failed.connect(lambda msg, _tb: self.preflight_view.setPlainText(
+            f"no estimate: {msg}"))
+        task.done.connect(self._preflight_done)
+        self._preflight_task = run_task(task)
+
+    def _preflight_done(self) -> None:
+        if self._preflight_pending:
+            self._preflight_pending = False
+            self._preflight_task = None
+            self.update_preflight()
+
+    def _show_preflight(self, result) -> None:
+        _settings, pf = result
+        if self._preflight_pending:
+            return
+        self.preflight = pf
+        self.preflight_view.setHtml(preflight_html(pf))
 
     # choices ----------------------------------------------------------------------------------
     def _printer_chosen(self, index: int) -> None:
@@ -293,7 +463,7 @@ class ExportDialog(QDialog):
                                                   self.settings.last_folder("printer"),
                                                   "Printer profiles (*.toml)")
             if path:
-                self.printer.insertItem(index, Path(path).stem, path)
+                self.printer.insertItem(index, _printer_file_name(path), path)
                 self.printer.setCurrentIndex(index)
             else:
                 self.printer.setCurrentIndex(0)
@@ -313,7 +483,7 @@ class ExportDialog(QDialog):
         vx, vy, vz = (v * 1000 for v in p.voxel_mm)
         tx, ty, tz = p.tray_mm
         self.printer_info.setText(f"voxel {vx:.0f} x {vy:.0f} x {vz:.0f} um, "
-                                  f"tray {tx:.0f} x {ty:.0f} x {tz:.0f} mm")
+                                  f"tray {tx:.0f} x {ty:.0f} x {tz:.0f} mm (id {p.name})")
         self.printerChanged.emit(p)
 
     def _scheduler_changed(self) -> None:
@@ -356,7 +526,8 @@ class ExportDialog(QDialog):
             background=str(self.background.currentData()),
             halftone=str(self.halftone.currentData()), seed=int(self.seed.value()),
             output=self.target_path(), overwrite=self.overwrite.isChecked(),
-            workers=workers, scheduler=scheduler, table_size=self.table_size)
+            workers=workers, scheduler=scheduler, table_size=self.table_size,
+            content=str(self.content.currentData()), sampling=self.sampling_choice)
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:
@@ -407,12 +578,27 @@ class ExportDialog(QDialog):
         self.progress.setValue(1000)
         self.remaining.setText("done")
         self.summary.setHtml(manifest_summary(manifest, str(self.target)))
+        self.form_box.setVisible(False)
+        self.preflight_box.setVisible(False)
         self.summary.setVisible(True)
+        self._fit_summary()
         self.start_button.setVisible(False)
         self.cancel_button.setVisible(False)
         self.close_button.setVisible(True)
         self._finish_run()
         self.finished_job.emit(manifest)
+
+    def _fit_summary(self) -> None:
+        """Make the dialog tall enough for the whole summary (within the screen; the box
+        scrolls beyond that)."""
+        doc = self.summary.document()
+        doc.setTextWidth(self.summary.viewport().width())
+        need = int(doc.size().height()) + 2 * self.summary.frameWidth() + 8
+        screen = self.screen().availableGeometry() if self.screen() else None
+        limit = int(0.85 * screen.height()) if screen is not None else 900
+        other = self.sizeHint().height() - self.summary.sizeHint().height()
+        self.summary.setMinimumHeight(max(120, min(need, limit - other)))
+        self.adjustSize()
 
     def _failed(self, message: str, _tb: str) -> None:
         self.error.setText(message)

@@ -1,11 +1,16 @@
 """The gamut page: printable gamut vs sRGB in CIELAB, the hexagon chart, a colour picker.
 
-Defines :class:`GamutPage`. Left, a pyvista view with two linked cameras: the printable gamut
-of the active profile (convex hull of predicted mixture colours, each vertex in its own colour)
-and the sRGB gamut with the printable gamut as a wireframe inside it. Right, a colour picker
-(any colour -> the table's C, M, Y, K, W concentrations, the reproduced colour and the dE2000;
-both colours are marked in the 3D view) and the paper's Fig. 7-style hexagon chart (target vs
-reproduced per cell), drawn by the engine's ``gamut.charts.hexagon_chart`` on a worker thread.
+Defines :class:`GamutPage` and :class:`FittedImage` (an image drawn whole, scaled to fit its
+widget). Left, two pages: a pyvista view with two linked cameras (the printable gamut of the
+active profile, convex hull of predicted mixture colours, each vertex in its own colour; and the
+sRGB gamut with the printable gamut as a wireframe inside it, the camera framing the sRGB solid
+so that neither is cropped), and the paper's Fig. 7-style hexagon chart (target vs reproduced per
+cell) drawn by the engine's ``gamut.charts.hexagon_chart`` on a worker thread. Right, a colour
+picker: any colour -> the table's C, M, Y, K, W concentrations, the colour the table prints
+beside the requested one with their dE2000 and whether the requested colour is in gamut (the
+engine's rule, ``evaluation.IN_GAMUT_DE2000``); both colours are marked in the 3D view. Below
+it, the share of sRGB that is printable (the table nodes within that dE2000, as ``dreamprint
+gamut`` reports it).
 
 The page can be put on hold (:meth:`GamutPage.set_hold`): the main window holds it while the
 preview starts up, so the two pages do not compete for the cores; and it draws into its 3D
@@ -16,8 +21,8 @@ from __future__ import annotations
 
 import logging
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QColor, QImage, QPixmap
+from PySide6.QtCore import QRect, QSize, Qt, Signal
+from PySide6.QtGui import QColor, QImage, QPainter
 from PySide6.QtWidgets import (
     QColorDialog,
     QFormLayout,
@@ -45,6 +50,51 @@ __all__ = ["GamutPage"]
 log = logging.getLogger(__name__)
 
 
+class FittedImage(QWidget):
+    """An image drawn whole, as large as the widget allows (aspect kept, centred)."""
+
+    def __init__(self, text: str, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.text = text
+        self.image: QImage | None = None
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+
+    def sizeHint(self) -> QSize:  # noqa: N802 - Qt override
+        return QSize(400, 300)
+
+    def minimumSizeHint(self) -> QSize:  # noqa: N802 - Qt override
+        return QSize(200, 150)
+
+    def set_image(self, image: QImage | None) -> None:
+        self.image = image
+        self.update()
+
+    def set_text(self, text: str) -> None:
+        self.text = text
+        self.update()
+
+    def image_rect(self) -> QRect:
+        """Where the image is drawn, in widget coordinates (empty without an image)."""
+        if self.image is None or self.image.isNull():
+            return QRect()
+        box = self.contentsRect()
+        size = self.image.size().scaled(box.size(), Qt.AspectRatioMode.KeepAspectRatio)
+        return QRect(box.x() + (box.width() - size.width()) // 2,
+                     box.y() + (box.height() - size.height()) // 2,
+                     size.width(), size.height())
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
+        p = QPainter(self)
+        r = self.image_rect()
+        if r.isEmpty():
+            p.drawText(self.rect(), Qt.AlignmentFlag.AlignCenter | Qt.TextFlag.TextWordWrap,
+                       self.text)
+        else:
+            p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform, True)
+            p.drawImage(r, self.image)
+        p.end()
+
+
 def _swatch_style(rgb) -> str:
     r, g, b = (int(round(255 * max(0.0, min(1.0, c)))) for c in rgb)
     return f"background: rgb({r},{g},{b}); border: 1px solid #555;"
@@ -56,6 +106,7 @@ class GamutPage(QWidget):
     rendered = Signal()
     picked = Signal(dict)
     chartReady = Signal()
+    problem = Signal(str)  # a computation of the page failed (the window's status bar says it)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -86,13 +137,16 @@ class GamutPage(QWidget):
         self.repro_swatch = QLabel()
         for w in (self.target_swatch, self.repro_swatch):
             w.setMinimumSize(90, 60)
+        self.repro_swatch.setToolTip("The colour the printer makes of the requested one: the "
+                                     "colour table's ink mixture, as the model predicts it")
         sw = QGridLayout()
-        sw.addWidget(QLabel("target"), 0, 0, Qt.AlignmentFlag.AlignHCenter)
-        sw.addWidget(QLabel("reproduced"), 0, 1, Qt.AlignmentFlag.AlignHCenter)
+        sw.addWidget(QLabel("requested"), 0, 0, Qt.AlignmentFlag.AlignHCenter)
+        sw.addWidget(QLabel("printed (mapped)"), 0, 1, Qt.AlignmentFlag.AlignHCenter)
         sw.addWidget(self.target_swatch, 1, 0)
         sw.addWidget(self.repro_swatch, 1, 1)
         self.de_label = QLabel("dE2000 -")
         self.de_label.setObjectName("dE2000")
+        self.de_label.setWordWrap(True)
         self.lab_label = QLabel("")
         self.lab_label.setWordWrap(True)
         self.bars = {}
@@ -112,13 +166,18 @@ class GamutPage(QWidget):
         cbox = QGroupBox("Concentrations (table lookup)")
         cbox.setLayout(conc_form)
         pl.addWidget(cbox)
+        # the printable share of sRGB (the table nodes in gamut, as `dreamprint gamut` says)
+        self.fraction_label = QLabel("sRGB in gamut: - (colour tables not ready)")
+        self.fraction_label.setObjectName("inGamutFraction")
+        self.fraction_label.setWordWrap(True)
+        gbox = QGroupBox("Printable share of sRGB")
+        gl = QVBoxLayout(gbox)
+        gl.addWidget(self.fraction_label)
+        pl.addWidget(gbox)
         pl.addStretch(1)
 
         # hexagon chart (the engine draws it: gamut.charts.hexagon_chart)
-        self.chart_view = QLabel("the chart appears once the colour tables are ready")
-        self.chart_view.setAlignment(Qt.AlignmentFlag.AlignCenter)
-        self.chart_view.setMinimumSize(280, 200)
-        self.chart_view.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
+        self.chart_view = FittedImage("the chart appears once the colour tables are ready")
         self.chart_image: QImage | None = None
         self.chart_stats: dict | None = None
         self.chart_status = QLabel("")
@@ -128,19 +187,30 @@ class GamutPage(QWidget):
         cl.addWidget(self.chart_view, 1)
         cl.addWidget(self.chart_status)
 
-        self.side = QTabWidget()
-        self.side.addTab(picker, "Colour picker")
-        self.side.addTab(chart, "Hexagon chart")
-        self.status = QLabel("")
-        self.status.setWordWrap(True)
+        # The footnote of the 3D views in the application's font, under them.
+        self.axes_note = QLabel("CIELAB (D65): a* to the right, b* to the back, L* up; "
+                                "grey = the achromatic axis at a* = b* = 0")
+        self.axes_note.setWordWrap(True)
+        self.axes_note.setContentsMargins(6, 2, 6, 2)
+        solids = QWidget()
+        sl = QVBoxLayout(solids)
+        sl.setContentsMargins(0, 0, 0, 0)
+        sl.setSpacing(0)
+        sl.addWidget(self.view, 1)
+        sl.addWidget(self.axes_note)
+
+        # the large views on the left (3D solids, hexagon chart), the picker on the right
+        self.pages = QTabWidget()
+        self.pages.addTab(solids, "CIELAB gamut")
+        self.pages.addTab(chart, "Hexagon chart")
         right = QWidget()
         rl = QVBoxLayout(right)
-        rl.addWidget(self.side, 1)
-        rl.addWidget(self.status)
+        rl.addWidget(QLabel("<b>Colour picker</b>"))
+        rl.addWidget(picker, 1)
         right.setMinimumWidth(300)
 
         split = QSplitter()
-        split.addWidget(self.view)
+        split.addWidget(self.pages)
         split.addWidget(right)
         split.setStretchFactor(0, 3)
         split.setStretchFactor(1, 1)
@@ -179,10 +249,8 @@ class GamutPage(QWidget):
         self._held.discard("tables")
         if self._hold:
             self._held.add("meshes")
-            self.status.setText("the printable gamut is computed once the preview is ready")
             self.view.set_message("the printable gamut is computed once the preview is ready")
             return
-        self.status.setText("computing the printable gamut ...")
         self.view.set_message("computing the printable gamut ...")
 
         def job(report, cancel):
@@ -192,17 +260,44 @@ class GamutPage(QWidget):
             self._task.cancel()
         task = Task(job, "gamut-mesh")
         task.succeeded.connect(lambda m, p=profile: self._show_meshes(m, p))
-        task.failed.connect(lambda msg, _tb: self.status.setText(
-            f"<span style='color:#e55'>{msg}</span>"))
+        task.failed.connect(lambda msg, _tb: self._failed("The printable gamut", msg))
         self._task = run_task(task)
+
+    def _failed(self, what: str, message: str) -> None:
+        self.view.set_message(f"{what}: not available")
+        self.problem.emit(f"{what} failed: {message}")
 
     def set_tables(self, tables) -> None:
         self.tables = tables
         if self._hold:
             self._held.add("tables")
             return
+        self._show_fraction()
         self._spins_changed()
         self._draw_chart()
+
+    def in_gamut_fraction(self) -> float | None:
+        """Share of the table's sRGB nodes printable within ``IN_GAMUT_DE2000``."""
+        import numpy as np
+
+        from ..engine.gamut.evaluation import IN_GAMUT_DE2000
+
+        if self.tables is None:
+            return None
+        de = np.asarray(self.tables.dE2000, dtype=np.float64).ravel()
+        return float(np.mean(de <= IN_GAMUT_DE2000))
+
+    def _show_fraction(self) -> None:
+        from ..engine.gamut.evaluation import IN_GAMUT_DE2000
+
+        f = self.in_gamut_fraction()
+        if f is None:
+            self.fraction_label.setText("sRGB in gamut: - (colour tables not ready)")
+            return
+        self.fraction_label.setText(
+            f"<b>{100 * f:.0f} %</b> of sRGB is printable (reproduced within dE2000 "
+            f"{IN_GAMUT_DE2000:g}, over the colour table's {self.tables.size}<sup>3</sup> "
+            "nodes); the rest prints as its nearest printable colour")
 
     # 3D view ----------------------------------------------------------------------------------
     def _show_meshes(self, meshes, profile) -> None:
@@ -212,7 +307,6 @@ class GamutPage(QWidget):
         self._drawn = False
         if not self.isVisible():  # drawn when the page is first shown
             self._draw_pending = True
-            self.status.setText("printable gamut computed")
             return
         self._draw()
 
@@ -238,17 +332,17 @@ class GamutPage(QWidget):
                     line_width=1, opacity=0.6, render=False)
         pl.add_text("sRGB gamut, printable as wireframe", font_size=10, name="t1",
                     render=False)
-        for i in (0, 1):
-            pl.subplot(0, i)
-            pl.add_text("a* right, b* back, L* up", position="lower_left", font_size=7,
-                        name=f"axes{i}", render=False)
         pl.subplot(0, 0)
         pl.view_isometric(render=False)
-        pl.renderer.reset_camera(render=False)  # the plotter-level one always renders
+        # The cameras are linked: frame the larger solid (sRGB, which holds most of the
+        # printable one) so that neither view crops its solid.
+        lo = [min(a, b) for a, b in zip(srgb.bounds[::2], printable.bounds[::2], strict=True)]
+        hi = [max(a, b) for a, b in zip(srgb.bounds[1::2], printable.bounds[1::2], strict=True)]
+        bounds = [v for pair in zip(lo, hi, strict=True) for v in pair]
+        pl.renderer.reset_camera(bounds=bounds, render=False)  # the plotter's always renders
         self._drawn = True
         self._mark_pick()
         pl.render()
-        self.status.setText("CIELAB (D65); grey = achromatic axis at a* = b* = 0")
         self.rendered.emit()
 
     def _mark_pick(self) -> None:
@@ -293,12 +387,21 @@ class GamutPage(QWidget):
             return
         try:
             result = pick_colour(self.profile, self.tables, rgb)
-        except Exception as exc:  # noqa: BLE001 - shown inline
-            self.de_label.setText(f"<span style='color:#e55'>{exc}</span>")
+        except Exception as exc:  # noqa: BLE001 - said once, by the window
+            self.de_label.setText("dE2000 - (not available)")
+            self.problem.emit(f"The colour lookup failed: {exc}")
             return
+        from ..engine.gamut.evaluation import IN_GAMUT_DE2000
+
         self.last_pick = result
         self.repro_swatch.setStyleSheet(_swatch_style(result["sRGB"]))
-        self.de_label.setText(f"<b>dE2000 {result['dE2000']:.2f}</b>")
+        de = result["dE2000"]
+        if de <= IN_GAMUT_DE2000:
+            verdict = "<b>in gamut</b>: printed as requested"
+        else:
+            verdict = ("<b style='color:#c33'>out of gamut</b>: printed as the nearest "
+                       "printable colour (right)")
+        self.de_label.setText(f"{verdict}<br>dE2000 {de:.2f} between requested and printed")
         lt, lr = result["target_Lab"], result["Lab"]
         self.lab_label.setText(
             f"target L*a*b* {lt[0]:.1f}, {lt[1]:.1f}, {lt[2]:.1f}<br>"
@@ -329,9 +432,13 @@ class GamutPage(QWidget):
         self.chart_status.setText("drawing the hexagon chart ...")
         task = Task(job, "hexagon-chart")
         task.succeeded.connect(self._show_chart)
-        task.failed.connect(lambda msg, _tb: self.chart_status.setText(
-            f"<span style='color:#e55'>{msg}</span>"))
+        task.failed.connect(lambda msg, _tb: self._chart_failed(msg))
         self._chart_task = run_task(task)
+
+    def _chart_failed(self, message: str) -> None:
+        self.chart_status.setText("")
+        self.chart_view.set_text("no chart")
+        self.problem.emit(f"The hexagon chart failed: {message}")
 
     def _show_chart(self, result) -> None:
         self.chart_stats, self.chart_image = result
@@ -339,19 +446,8 @@ class GamutPage(QWidget):
                  for k, v in self.chart_stats.items()]
         self.chart_status.setText("Target colour vs reproduced colour per cell (paper Fig. 7). "
                                   + "; ".join(parts))
-        self._update_chart_pixmap()
+        self.chart_view.set_image(self.chart_image)
         self.chartReady.emit()
-
-    def _update_chart_pixmap(self) -> None:
-        if self.chart_image is None:
-            return
-        self.chart_view.setPixmap(QPixmap.fromImage(self.chart_image).scaled(
-            self.chart_view.size(), Qt.AspectRatioMode.KeepAspectRatio,
-            Qt.TransformationMode.SmoothTransformation))
-
-    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
-        super().resizeEvent(event)
-        self._update_chart_pixmap()
 
     def shutdown(self) -> None:
         for t in (self._task, self._chart_task):

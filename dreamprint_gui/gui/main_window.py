@@ -9,6 +9,10 @@ volume. Nothing heavy runs on the GUI thread at start: the window shows first, t
 imported on a worker meanwhile (:func:`.volume_view.import_3d`), and the gamut page is held
 until the preview has rendered (or the operator opens that page) so that the two do not compete
 for the cores.
+
+Each problem is shown once, in one place: a dialog for what stopped an action (a file that
+cannot be opened, tables that cannot be built), the status bar for the rest
+(:meth:`MainWindow.note_problem`: a preview, a layer or a chart that failed).
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ import logging
 import os
 from pathlib import Path
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QAction, QDragEnterEvent, QDropEvent, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QFileDialog,
@@ -78,8 +82,9 @@ class MainWindow(QMainWindow):
         self._source_task: Task | None = None
         self._source_request: str | None = None
         self._warm_task: Task | None = None
-        self.interactive = True  # False: no modal message boxes (screenshot runs, tests)
+        self.interactive = True  # False: no message boxes (screenshot runs, tests)
         self.last_error: str | None = None
+        self.problem_box: QMessageBox | None = None  # the dialog of the last stopping problem
 
         self.setWindowTitle("DreamPrint")
         self.setAcceptDrops(True)
@@ -106,7 +111,12 @@ class MainWindow(QMainWindow):
         self.preview.rendered.connect(self.ready)
         self.ready.connect(self._release_gamut)
         self.tabs.currentChanged.connect(self._tab_changed)
-        self.preview.failed.connect(lambda m: self.statusBar().showMessage(m))
+        # Problems that do not stop an action (a preview, a layer, the gamut page) go to the
+        # status bar, once; the pages themselves only say what they are waiting for.
+        self.preview.failed.connect(self.note_problem)
+        self.preview.problem.connect(self.note_problem)
+        if self.gamut is not None:
+            self.gamut.problem.connect(self.note_problem)
         self.preview.set_params(
             height_mm=self.settings.get("preview/height_mm", 40.0, float),
             density_scale=self.settings.get("preview/density_scale", 1.0, float),
@@ -129,9 +139,8 @@ class MainWindow(QMainWindow):
             self.resize(1280, 800)
         if state is not None:
             self.restoreState(state)
-        idx = self.settings.get("window/tab", 0, int)
-        if 0 <= idx < self.tabs.count():
-            self.tabs.setCurrentIndex(idx)
+        # The window starts on the preview (not the last session's page): what was opened
+        # shows first.
 
     def _tab_changed(self, index: int) -> None:
         if self.gamut is not None and self.tabs.widget(index) is self.gamut:
@@ -227,14 +236,17 @@ class MainWindow(QMainWindow):
             self.open_path(path)
 
     def open_path(self, path: str | os.PathLike) -> bool:
-        """Open a volume, an ink profile or a calibration set; problems go to a message box.
+        """Open a volume, an ink profile or a calibration set; a problem goes to one dialog.
 
         A profile opens at once (False if it cannot be read). A volume opens on a worker
-        thread: True means the opening has started; a problem is reported when it is found
-        (message box, status bar and :attr:`openFailed`).
+        thread and the preview page is shown: True means the opening has started; a problem
+        is reported when it is found (a dialog, or the status bar when not interactive, and
+        :attr:`openFailed`).
         """
         path = str(path)
         kind = classify_path(path)
+        if kind == "volume":
+            self.tabs.setCurrentWidget(self.preview)  # the file is what the operator sees next
         try:
             if kind == "profile":
                 from ..engine.profile import load_profile
@@ -257,11 +269,31 @@ class MainWindow(QMainWindow):
         self.settings.add_recent(path)
         self._fill_recent()
 
-    def _file_problem(self, message: str) -> None:
+    def _file_problem(self, message: str, title: str = "cannot open") -> None:
+        """A problem that stopped an action: one dialog (status bar when not interactive)."""
         self.last_error = message
-        self.statusBar().showMessage(message, 15000)
-        if self.isVisible() and self.interactive:
-            QMessageBox.warning(self, "DreamPrint: cannot open", message)
+        if self.statusBar().currentMessage().startswith(("Opening ", "Loading ")):
+            self.statusBar().clearMessage()  # the action it announced has stopped
+        if not (self.isVisible() and self.interactive):
+            self.statusBar().showMessage(message, 15000)
+            return
+        if self.problem_box is not None:
+            self.problem_box.close()
+        box = QMessageBox(QMessageBox.Icon.Warning, f"DreamPrint: {title}", message,
+                          QMessageBox.StandardButton.Ok, self)
+        box.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        box.destroyed.connect(lambda _=None, box=box: self._box_gone(box))
+        self.problem_box = box
+        box.open()  # window-modal but not blocking: workers keep reporting meanwhile
+
+    def _box_gone(self, box) -> None:
+        if self.problem_box is box:
+            self.problem_box = None
+
+    def note_problem(self, message: str) -> None:
+        """A problem that stops nothing (a preview, a layer, a chart): the status bar, once."""
+        self.last_error = message
+        self.statusBar().showMessage(message, 30000)
 
     def set_source(self, path: str) -> Task:
         """Open the volume ``path`` on a worker thread; it becomes the source once open."""
@@ -304,7 +336,7 @@ class MainWindow(QMainWindow):
             return
         self._source_request = self.source_path  # the previous source stays
         if self.source is None:
-            self.preview.show_waiting(f"<span style='color:#e55'>{message}</span>")
+            self.preview.show_waiting("no volume open")
         self._file_problem(message)
         self.openFailed.emit(path, message)
 
@@ -397,7 +429,8 @@ class MainWindow(QMainWindow):
 
     def _tables_failed(self, message: str, _tb: str) -> None:
         self.progress.setVisible(False)
-        self._file_problem(f"Cannot build the colour tables: {message}")
+        self.preview.show_waiting("no colour tables")
+        self._file_problem(f"Cannot build the colour tables: {message}", "no colour tables")
 
     # actions ----------------------------------------------------------------------------------
     def calibration_wizard(self, calibration_set: str | None = None) -> None:
@@ -417,7 +450,7 @@ class MainWindow(QMainWindow):
         dlg = ExportDialog(self, source_path=self.source_path, profile_path=self.profile_path,
                            settings=self.settings, preview_params=self.preview.params(),
                            source_name="demo" if self.source_path == "demo" else None,
-                           table_size=self.table_size)
+                           table_size=self.table_size, context=self.preview.ctx)
         dlg.printerChanged.connect(self.set_printer)
         dlg.open()
         self._export = dlg
@@ -451,9 +484,9 @@ class MainWindow(QMainWindow):
     # state ------------------------------------------------------------------------------------
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
         self.settings.save_window_state(self.saveGeometry(), self.saveState())
-        self.settings.set("window/tab", self.tabs.currentIndex())
         for k, v in self.preview.params().items():
-            self.settings.set(f"preview/{k}", v)
+            if k not in ("content", "sampling"):  # chosen per source: each file starts on auto
+                self.settings.set(f"preview/{k}", v)
         self.settings.sync()
         from .workers import wait_all
 

@@ -14,11 +14,12 @@ is being prepared.
 from __future__ import annotations
 
 import logging
+from html import escape
 from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import Qt, QTimer, Signal
-from PySide6.QtGui import QImage, QPixmap
+from PySide6.QtGui import QImage
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -26,13 +27,14 @@ from PySide6.QtWidgets import (
     QGroupBox,
     QHBoxLayout,
     QLabel,
-    QSizePolicy,
     QSlider,
     QSplitter,
     QVBoxLayout,
     QWidget,
 )
 
+from .layer_view import LayerView, MaterialLegend
+from .names import BACKGROUNDS, CONTENTS, SAMPLINGS, gui_wording, printer_name
 from .preview_data import PreviewData, compute_preview, job_context
 from .volume_view import ViewHost, add_rgba_volume
 from .workers import Task, run_task
@@ -46,8 +48,10 @@ class PreviewPage(QWidget):
     """Source vs predicted print, with the controls that change the print."""
 
     rendered = Signal()  # both views drawn with current data
-    failed = Signal(str)
+    failed = Signal(str)  # the preview could not be computed (the window says it, once)
+    problem = Signal(str)  # something that stops nothing failed (a layer); said by the window
     paramsChanged = Signal()
+    preflightReady = Signal(object)  # the engine's Preflight of the current settings
 
     def __init__(self, parent: QWidget | None = None, table_size: int | None = None) -> None:
         super().__init__(parent)
@@ -62,8 +66,10 @@ class PreviewPage(QWidget):
         self.data: PreviewData | None = None
         self.slice_labels: np.ndarray | None = None
         self.slice_image: QImage | None = None
+        self.shown_layer: int | None = None  # the layer the layer view shows
         self._task: Task | None = None
         self._slice_task: Task | None = None
+        self._preflight_task: Task | None = None
         self._pending = False
         self._slice_pending = False
         self._await_slice = False
@@ -77,34 +83,54 @@ class PreviewPage(QWidget):
                                             value=1.0, singleStep=0.1)
         self.density_scale.setToolTip("Multiplies the source's density (1/mm per source unit)")
         self.background = QComboBox()
-        self.background.addItem("clear resin", "clear")
-        self.background.addItem("empty", "empty")
+        for key, name, tip in BACKGROUNDS:
+            self.background.addItem(name, key)
+            self.background.setItemData(self.background.count() - 1, tip,
+                                        Qt.ItemDataRole.ToolTipRole)
         self.background.setToolTip("What voxels below the density threshold become: Clear "
                                    "resin, or no material at all")
+        self.content = QComboBox()
+        for key, name, tip in CONTENTS:
+            self.content.addItem(name, key)
+            self.content.setItemData(self.content.count() - 1, tip,
+                                     Qt.ItemDataRole.ToolTipRole)
+        self.content.setToolTip("What the source's density means: a fog (as stated) or a "
+                                "solid object (occupied voxels print opaque)")
+        self.content_note = QLabel("")  # what auto picked, and why
+        self.content_note.setWordWrap(True)
+        self.content_note.setObjectName("contentNote")
+        self.sampling = QComboBox()
+        for key, name, tip in SAMPLINGS:
+            self.sampling.addItem(name, key)
+            self.sampling.setItemData(self.sampling.count() - 1, tip,
+                                      Qt.ItemDataRole.ToolTipRole)
+        self.sampling.setToolTip("Voxel models: sharp voxel edges (nearest) or smooth "
+                                 "(trilinear); other sources are always smooth")
+        self.sampling.setEnabled(False)
         self.status = QLabel("no source")
         self.status.setWordWrap(True)
+        # The footnote of the 3D views (preview grid, downsampling) in the application's font,
+        # under the views.
         self.note = QLabel("")
         self.note.setWordWrap(True)
         self.note.setObjectName("downsampleNote")
+        self.note.setContentsMargins(6, 2, 6, 2)
 
         form = QFormLayout()
         form.addRow("Height", self.height_mm)
         form.addRow("Density scale", self.density_scale)
         form.addRow("Background", self.background)
+        form.addRow("Content", self.content)
+        form.addRow("", self.content_note)
+        form.addRow("Voxel edges", self.sampling)
         box = QGroupBox("Print")
         box.setLayout(form)
 
         self.slice_slider = QSlider(Qt.Orientation.Horizontal)
         self.slice_slider.setEnabled(False)
         self.slice_label = QLabel("layer -")
-        self.slice_view = QLabel()
-        self.slice_view.setMinimumSize(220, 160)
-        self.slice_view.setAlignment(Qt.AlignmentFlag.AlignCenter)
-        self.slice_view.setSizePolicy(QSizePolicy.Policy.Expanding,
-                                      QSizePolicy.Policy.Expanding)
-        self.slice_view.setStyleSheet("background: #222;")
-        self.legend = QLabel("")
-        self.legend.setWordWrap(True)
+        self.slice_view = LayerView()
+        self.legend = MaterialLegend()
         sbox = QGroupBox("Halftoned layer (material labels)")
         sl = QVBoxLayout(sbox)
         sl.addWidget(self.slice_slider)
@@ -114,14 +140,32 @@ class PreviewPage(QWidget):
 
         side = QWidget()
         side_l = QVBoxLayout(side)
+        # Pre-flight warnings of the job these settings make (engine.preflight), shown here
+        # only (hidden when there are none).
+        self.warnings = QLabel("")
+        self.warnings.setWordWrap(True)
+        self.warnings.setObjectName("preflightWarnings")
+        self.warnings.setTextFormat(Qt.TextFormat.RichText)
+        self.warnings_box = QGroupBox("Warnings")
+        wl = QVBoxLayout(self.warnings_box)
+        wl.addWidget(self.warnings)
+        self.warnings_box.setVisible(False)
+        self.preflight = None  # the engine's Preflight of the shown settings
         side_l.addWidget(box)
         side_l.addWidget(self.status)
-        side_l.addWidget(self.note)
+        side_l.addWidget(self.warnings_box)
         side_l.addWidget(sbox, 1)
-        side.setMinimumWidth(260)
+        side.setMinimumWidth(280)
+
+        views = QWidget()
+        vl = QVBoxLayout(views)
+        vl.setContentsMargins(0, 0, 0, 0)
+        vl.setSpacing(0)
+        vl.addWidget(self.view, 1)
+        vl.addWidget(self.note)
 
         split = QSplitter()
-        split.addWidget(self.view)
+        split.addWidget(views)
         split.addWidget(side)
         split.setStretchFactor(0, 4)
         split.setStretchFactor(1, 1)
@@ -135,7 +179,8 @@ class PreviewPage(QWidget):
         self._slice_debounce.timeout.connect(self._compute_slice)
         for w in (self.height_mm, self.density_scale):
             w.valueChanged.connect(self._params_changed)
-        self.background.currentIndexChanged.connect(self._params_changed)
+        for w in (self.background, self.content, self.sampling):
+            w.currentIndexChanged.connect(self._params_changed)
         self.slice_slider.valueChanged.connect(lambda _v: self._slice_moved())
 
     @property
@@ -144,27 +189,56 @@ class PreviewPage(QWidget):
         return self.view.plotter
 
     def show_waiting(self, text: str) -> None:
-        """Say what the preview is waiting for (in the view until it has drawn, and below)."""
-        self.status.setText(text)
+        """Say what the preview is waiting for: in the view until it has drawn, then below
+        the controls (one place at a time)."""
         if self.data is None:
             self.view.set_message(text)
+            self.status.setText("")
+        else:
+            self.status.setText(text)
 
     # inputs -----------------------------------------------------------------------------------
     def params(self) -> dict:
         return {"height_mm": float(self.height_mm.value()),
                 "density_scale": float(self.density_scale.value()),
-                "background": str(self.background.currentData())}
+                "background": str(self.background.currentData()),
+                "content": str(self.content.currentData()),
+                "sampling": self.sampling.currentData() if self.sampling.isEnabled() else None}
+
+    _KEEP = object()
 
     def set_params(self, height_mm: float | None = None, density_scale: float | None = None,
-                   background: str | None = None) -> None:
+                   background: str | None = None, content: str | None = None,
+                   sampling=_KEEP) -> None:
         if height_mm is not None:
             self.height_mm.setValue(height_mm)
         if density_scale is not None:
             self.density_scale.setValue(density_scale)
-        if background is not None:
-            i = self.background.findData(background)
+        for combo, value in ((self.background, background), (self.content, content)):
+            if value is not None:
+                i = combo.findData(value)
+                if i >= 0:
+                    combo.setCurrentIndex(i)
+        if sampling is not self._KEEP:
+            i = self.sampling.findData(sampling)
             if i >= 0:
-                self.background.setCurrentIndex(i)
+                self.sampling.setCurrentIndex(i)
+
+    def _new_source(self, path: str) -> None:
+        """A new source starts on auto content and its reader's own sampling; the voxel-edge
+        choice is offered only for sources that have one (voxel models)."""
+        from ..io.volumes.base import reader_options
+
+        try:
+            takes = reader_options(path)
+        except Exception:  # noqa: BLE001 - an unreadable file is reported when opened
+            takes = set()
+        for combo in (self.content, self.sampling):
+            combo.blockSignals(True)
+            combo.setCurrentIndex(0)
+            combo.blockSignals(False)
+        self.sampling.setEnabled("sampling" in takes)
+        self.content_note.setText("")
 
     _UNSET = object()
 
@@ -176,6 +250,8 @@ class PreviewPage(QWidget):
         cached on disk), so the job context below loads them instead of building them twice.
         """
         if source_path is not None:
+            if source_path != self.source_path:
+                self._new_source(source_path)
             self.source_path = source_path
         if profile is not None:
             self.profile = profile
@@ -208,7 +284,8 @@ class PreviewPage(QWidget):
         return convert_settings(self.source_path, self.profile_path, self.printer,
                                 height_mm=p["height_mm"], density_scale=p["density_scale"],
                                 background=p["background"], output=output,
-                                table_size=self.table_size)
+                                table_size=self.table_size, content=p["content"],
+                                sampling=p["sampling"])
 
     def recompute(self) -> None:
         if not self.ready_to_compute():
@@ -247,8 +324,8 @@ class PreviewPage(QWidget):
             self.recompute()
 
     def _failed(self, message: str, _tb: str) -> None:
-        self.show_waiting(f"<span style='color:#e55'>Preview failed: {message}</span>")
-        self.failed.emit(message)
+        self.show_waiting("no preview")  # the message itself: the window's status bar
+        self.failed.emit(f"Preview failed: {message}")
 
     def _show(self, result) -> None:
         if self._pending:
@@ -260,19 +337,20 @@ class PreviewPage(QWidget):
         self._setup_slider(at_once=True)
         pl = self.plotter
         first = not pl.renderers[0].actors
+        # a voxel model sampled nearest is drawn with sharp voxels too (no blending between
+        # the preview's voxels)
+        sharp = getattr(self.ctx.source, "sampling", None) == "nearest"
         for i, (rgb, sigma, title) in enumerate((
                 (data.source_rgb, data.source_sigma, "Source"),
                 (data.print_rgb, data.print_sigma, "Predicted print"))):
             pl.subplot(0, i)
-            add_rgba_volume(pl, rgb, sigma, data.voxel_mm, name=f"volume{i}")
+            add_rgba_volume(pl, rgb, sigma, data.voxel_mm, name=f"volume{i}",
+                            interpolation="nearest" if sharp else "linear")
             box = _box(data.size_mm)
             pl.add_mesh(box, color="#888888", style="wireframe", name=f"box{i}",
                         reset_camera=False, line_width=1, render=False)
             pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}",
                         render=False)
-        pl.subplot(0, 0)
-        pl.add_text(data.downsample_note(), position="lower_left", font_size=7, name="note",
-                    render=False)
         if first:
             pl.subplot(0, 0)
             pl.view_isometric(render=False)
@@ -280,10 +358,46 @@ class PreviewPage(QWidget):
         pl.render()
         sx, sy, sz = data.size_mm
         self.status.setText(f"{Path(str(self.source_path)).name}: print "
-                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {self.printer.name}")
+                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {printer_name(self.printer)}")
         self.note.setText(data.downsample_note())
+        choice = self.ctx.content
+        if choice is None:
+            self.content_note.setText("")
+        elif choice.picked:
+            self.content_note.setText(f"auto: {choice.mode}, {choice.reason}")
+        else:
+            self.content_note.setText(choice.reason)
+        self._start_preflight()
         if not self.slice_slider.isEnabled():
             self._emit_rendered()
+
+    # pre-flight -------------------------------------------------------------------------------
+    def _start_preflight(self) -> None:
+        """The engine's pre-flight of the job these settings make, on a worker; its warnings
+        are shown in the Warnings box (and only there)."""
+        if self._preflight_task is not None and self._preflight_task.outcome is None:
+            self._preflight_task.cancel()  # its result is ignored (ctx check below)
+        ctx = self.ctx
+
+        def job(report, cancel):
+            from ..engine.preflight import preflight
+
+            return ctx, preflight(ctx)
+
+        task = Task(job, "preflight")
+        task.succeeded.connect(self._show_preflight)
+        task.failed.connect(lambda msg, _tb: self.problem.emit(f"Pre-flight failed: {msg}"))
+        self._preflight_task = run_task(task)
+
+    def _show_preflight(self, result) -> None:
+        ctx, pf = result
+        if ctx is not self.ctx:
+            return  # an estimate of earlier settings
+        self.preflight = pf
+        items = "".join(f"<li>{escape(gui_wording(w.message))}</li>" for w in pf.warnings)
+        self.warnings.setText(f"<ul style='margin-left: -20px'>{items}</ul>" if items else "")
+        self.warnings_box.setVisible(bool(pf.warnings))
+        self.preflightReady.emit(pf)
 
     def _emit_rendered(self) -> None:
         self._await_slice = False
@@ -333,7 +447,9 @@ class PreviewPage(QWidget):
         self._slice_task = run_task(task)
 
     def _slice_failed(self, message: str, _tb: str) -> None:
-        self.legend.setText(f"<span style='color:#e55'>{message}</span>")
+        self.legend.clear()
+        self.slice_label.setText(f"layer {self.slice_slider.value()}: not available")
+        self.problem.emit(f"Layer {self.slice_slider.value()} failed: {message}")
         if self._await_slice and not self._slice_pending:
             self._emit_rendered()
 
@@ -358,37 +474,17 @@ class PreviewPage(QWidget):
         # Voxels are anisotropic (e.g. 84 x 28 um): scale to physical proportions.
         vx, vy = (self.printer.voxel_mm[0], self.printer.voxel_mm[1]) if self.printer else (1, 1)
         self.slice_image = img  # rows as in the slice PNG
-        self._slice_aspect = (w * vx, h * vy)
-        self._update_slice_pixmap()
+        self.slice_view.set_layer(img, (vx, vy))
         counts = np.bincount(labels.ravel(), minlength=len(names))
-        total = max(1, labels.size)
-        parts = []
-        for i, name in enumerate(names):
-            if counts[i]:
-                c = colours[i]
-                parts.append(f"<span style='background:rgb({c[0]},{c[1]},{c[2]})'>"
-                             f"&nbsp;&nbsp;&nbsp;</span> {name} {100 * counts[i] / total:.1f}%")
-        self.legend.setText(f"layer {layer}: " + " &nbsp;".join(parts))
+        self.legend.set_counts(colours, names, counts)
+        self.slice_label.setText(f"layer {layer} of {self.slice_slider.maximum() + 1} "
+                                 f"({w} x {h} voxels)")
+        self.shown_layer = layer
         if self._await_slice:
             self._emit_rendered()
 
-    def _update_slice_pixmap(self) -> None:
-        if self.slice_image is None:
-            return
-        box = self.slice_view.size()
-        pw, ph = self._slice_aspect
-        s = min(box.width() / pw, box.height() / ph)
-        w, h = max(1, int(pw * s)), max(1, int(ph * s))
-        self.slice_view.setPixmap(QPixmap.fromImage(self.slice_image).scaled(
-            w, h, Qt.AspectRatioMode.IgnoreAspectRatio,
-            Qt.TransformationMode.FastTransformation))
-
-    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
-        super().resizeEvent(event)
-        self._update_slice_pixmap()
-
     def shutdown(self) -> None:
-        for t in (self._task, self._slice_task):
+        for t in (self._task, self._slice_task, self._preflight_task):
             if t is not None:
                 t.cancel()
         self.view.close_view()

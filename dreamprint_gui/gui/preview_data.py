@@ -78,9 +78,9 @@ def job_context(settings, previous=None):
     """The engine's ``JobContext`` for ``settings`` (``pipeline.prepare_job``).
 
     When only the size, density scale or background changed since ``previous`` (same source,
-    profile, printer, halftoning and seed), the open source, the tables and the background
-    threshold are reused and only the printer grid and the background label are redone, so
-    dragging a control does not reopen a large file.
+    content intent, sampling, profile, printer, halftoning and seed), the open source, the
+    tables and the background threshold are reused and only the printer grid and the
+    background label are redone, so dragging a control does not reopen a large file.
     """
     from dataclasses import replace
 
@@ -91,7 +91,7 @@ def job_context(settings, previous=None):
     from ..io.volumes import grid_for_source
 
     same = ("source", "profile", "printer", "halftone", "seed", "table_size", "objective",
-            "source_options", "density_threshold")
+            "source_options", "density_threshold", "content", "sampling")
     if previous is None or any(getattr(previous.settings, k) != getattr(settings, k)
                                for k in same):
         return prepare_job(settings)

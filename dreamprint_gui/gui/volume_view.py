@@ -87,12 +87,14 @@ def make_plotter(parent, shape: tuple[int, int] = (1, 1), link: bool = True):
 
 
 def add_rgba_volume(plotter, rgb: NDArray, sigma_per_mm: NDArray, voxel_mm: float,
-                    name: str, origin: tuple[float, float, float] = (0.0, 0.0, 0.0)):
+                    name: str, origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                    interpolation: str = "linear"):
     """Render colour (z, y, x, 3) sRGB and density (z, y, x) 1/mm as an emission-absorption
     volume in millimetres. Each voxel's alpha is 1 - exp(-sigma * voxel) and the opacity unit
-    distance is one voxel, so VTK's per-sample correction keeps Beer-Lambert at any step. Not
-    rendered here: the caller renders once when everything is added (each render of a volume
-    takes a visible moment in software OpenGL)."""
+    distance is one voxel, so VTK's per-sample correction keeps Beer-Lambert at any step.
+    ``interpolation`` "linear" blends between voxels (fog), "nearest" keeps each voxel's
+    colour and edges (voxel art). Not rendered here: the caller renders once when everything
+    is added (each render of a volume takes a visible moment in software OpenGL)."""
     import pyvista as pv
     import vtk
 
@@ -110,6 +112,10 @@ def add_rgba_volume(plotter, rgb: NDArray, sigma_per_mm: NDArray, voxel_mm: floa
     opacity.AddPoint(255.0, 1.0)
     actor.prop.SetScalarOpacity(opacity)
     actor.prop.SetScalarOpacityUnitDistance(voxel_mm)
+    if interpolation == "nearest":
+        actor.prop.SetInterpolationTypeToNearest()
+    else:
+        actor.prop.SetInterpolationTypeToLinear()
     return actor, grid
 
 

@@ -63,5 +63,11 @@ def test_gamut_json_chart_and_plot(capsys, tmp_path):
     assert 0 < rep["lab_gamut_volume"] < rep["srgb_lab_volume"]
     assert chart.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    first = rep
     code, out, _ = _run(capsys, "gamut", "--size", "9", "--samples", "50", "--json")
-    assert json.loads(out)["cached"] is True
+    rep = json.loads(out)
+    assert rep["cached"] is True
+    # this run's time and the cached build's time are reported apart, never contradicting
+    assert rep["build_seconds"] is None and rep["seconds"] == rep["load_seconds"] >= 0
+    if not first["cached"]:
+        assert rep["built_seconds_when_cached"] == first["build_seconds"] == first["seconds"]

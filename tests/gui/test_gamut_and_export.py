@@ -77,7 +77,18 @@ def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     assert (tmp_path / "job" / "manifest.json").is_file()
     assert any(p.stage == "converting" for p in seen)
     assert dlg.progress.value() == 1000
-    assert dlg.summary.isVisible() and f"{nz} slices of {nx} x {ny}" in dlg.summary.toPlainText()
+    text = dlg.summary.toPlainText()
+    assert dlg.summary.isVisible() and f"{nz} slices of {nx} x {ny}" in text
+    # the whole summary shows without scrolling on this (1600 x 1000) screen, every material
+    # of the manifest in it, with the printer's and the background's human names
+    qtbot.wait(50)
+    assert dlg.summary.verticalScrollBar().maximum() == 0, dlg.summary.height()
+    assert dlg.summary.horizontalScrollBar().maximum() == 0
+    for lab, info in manifest["labels"].items():
+        assert info["material"] in text, lab
+    assert "Stratasys J850 (paper profile)" in text and "j850-paper" not in text
+    assert "Clear resin" in text
+    assert manifest["printer"]["name"] == "j850-paper"  # the id stays in the file
 
 
 def test_export_cancel_leaves_nothing(qtbot, tmp_path, table_size):
@@ -161,3 +172,89 @@ def test_export_to_a_dask_cluster(qtbot, tmp_path, table_size):
     assert dlg.manifest["execution"]["scheduler"] == cluster.scheduler_address
     nz = dlg.manifest["grid_dimensions"][2]
     assert len(list((tmp_path / "job" / "slices").glob("*.png"))) == nz
+
+
+def test_gamut_page_fits_1280x800(qtbot, gl_display, job_profile, table_size):
+    """At 1280 x 800 the hexagon chart is drawn whole inside its panel, the picker says when a
+    colour is out of gamut and shows what is printed instead, and the in-gamut share of sRGB
+    is on screen."""
+    from PySide6.QtCore import QPoint, QRect
+
+    from dreamprint_gui.engine.gamut.evaluation import IN_GAMUT_DE2000
+    from dreamprint_gui.gui.main_window import MainWindow
+
+    w = MainWindow(table_size=table_size)
+    w.interactive = False
+    qtbot.addWidget(w)
+    w.resize(1280, 800)
+    w.show()
+    qtbot.waitExposed(w)
+    page = w.gamut
+    page.set_hold(False)
+    w.tabs.setCurrentWidget(page)
+    tables = get_tables(job_profile, size=table_size)
+    with qtbot.waitSignal(page.chartReady, timeout=120000):
+        page.set_profile(job_profile)
+        page.set_tables(tables)
+    page.pages.setCurrentIndex(1)
+    qtbot.wait(50)
+    chart = page.chart_view
+    panel = page.pages.currentWidget()
+    assert chart.isVisible() and panel is chart.parentWidget()
+    drawn = chart.image_rect()
+    top_left = chart.mapTo(panel, drawn.topLeft())
+    box = QRect(top_left, drawn.size())
+    assert not drawn.isEmpty()
+    assert panel.rect().contains(box), (box, panel.rect())
+    # and the panel itself is inside the window (not scrolled or clipped away)
+    corner = panel.mapTo(w, QPoint(0, 0))
+    assert w.rect().contains(QRect(corner, panel.size())), (corner, panel.size())
+    # drawn large: the chart fills its panel along one axis
+    assert drawn.width() >= 0.9 * chart.width() or drawn.height() >= 0.9 * chart.height()
+    assert drawn.width() > 600  # readable at 1280 x 800 (the chart is 1320 x 924 pixels)
+
+    # the in-gamut share, as `dreamprint gamut` computes it from the table's nodes
+    expected = float(np.mean(np.asarray(tables.dE2000).ravel() <= IN_GAMUT_DE2000))
+    assert 0 < expected < 1
+    assert page.fraction_label.isVisible()
+    assert f"{100 * expected:.0f} %" in page.fraction_label.text()
+
+    # saturated sRGB red is outside the Vero gamut; a mid grey on a table node is inside
+    page.set_colour((1.0, 0.0, 0.0))
+    assert page.last_pick["dE2000"] > IN_GAMUT_DE2000
+    assert "out of gamut" in page.de_label.text()
+    assert f"{page.last_pick['dE2000']:.2f}" in page.de_label.text()
+    printed = page.last_pick["sRGB"]
+    r, g, b = (int(round(255 * max(0.0, min(1.0, c)))) for c in printed)
+    assert f"rgb({r},{g},{b})" in page.repro_swatch.styleSheet()  # the mapped colour
+    page.set_colour((0.6, 0.6, 0.6))
+    assert "in gamut" in page.de_label.text() and "out of" not in page.de_label.text()
+    w.close()
+
+
+def test_export_shows_the_preflight_before_export(qtbot, tmp_path, table_size):
+    """Before Export the dialog shows the engine's estimate of the job these settings make
+    (grid, slices, disk, time, materials) and its warnings; it follows the settings."""
+    from dreamprint_gui.engine.preflight import preflight
+    from dreamprint_gui.gui.names import gui_wording
+
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    qtbot.waitUntil(lambda: dlg.preflight is not None, timeout=120000)
+    pf = dlg.preflight
+    text = dlg.preflight_view.toPlainText()
+    nx, ny, nz = pf.grid_shape
+    assert f"{nx} x {ny} x {nz} voxels" in text and f"{nz:,} slices" in text
+    assert "disk: about" in text and "materials (estimated" in text
+    for w in pf.warnings:  # every warning of the estimate, once, options named as controls
+        assert text.count(gui_wording(w.message)) == 1, w.message
+        assert "--" not in gui_wording(w.message)
+    assert ("No warnings" in text) == (not pf.warnings)
+    # the same figures as the engine gives for these settings (what `convert` prints)
+    ref = preflight(dlg.settings_for_job())
+    assert ref.grid_shape == pf.grid_shape and ref.fractions == pf.fractions
+    dlg.density_scale.setValue(0.01)  # a nearly empty fog
+    qtbot.waitUntil(lambda: dlg.preflight is not None and dlg.preflight.density_scale == 0.01,
+                    timeout=120000)
+    assert "mostly-clear" in [w.code for w in dlg.preflight.warnings]
+    assert "Clear or empty" in dlg.preflight_view.toPlainText()
+    assert not (tmp_path / "job").exists()  # nothing written by an estimate

@@ -61,9 +61,12 @@ def test_slice_scrubber_shows_halftoned_labels(window, qtbot):
     nx, ny, nz = p.data.print_shape_xyz
     labels = p.slice_labels
     assert labels.shape == (ny, nx) and labels.max() <= EMPTY_LABEL
-    assert p.slice_image is not None and "layer" in p.legend.text()
+    assert p.slice_image is not None and p.legend.rows
+    assert abs(sum(share for _, share in p.legend.rows) - 100) < 0.5
+    # full resolution: one image pixel per printer voxel
+    assert (p.slice_image.width(), p.slice_image.height()) == (nx, ny)
     p.slice_slider.setValue(0)  # the bottom layer of a cloud is mostly background
-    qtbot.waitUntil(lambda: p.legend.text().startswith("layer 0:"), timeout=30000)
+    qtbot.waitUntil(lambda: p.shown_layer == 0, timeout=30000)
 
 
 def test_density_scale_and_background_follow_the_engine(window, qtbot):
@@ -108,3 +111,130 @@ def test_classify_path():
     assert classify_path("a/b.json") == "profile"
     assert classify_path("set.TOML") == "calibration-set"
     assert classify_path("cloud.vdb") == "volume" and classify_path("demo") == "volume"
+
+
+def _texts_showing(fragment: str) -> list[str]:
+    """Every place on screen that shows ``fragment``: visible labels (message boxes included),
+    status bars, and window titles."""
+    from PySide6.QtWidgets import QApplication, QLabel, QMainWindow
+
+    found = []
+    for w in QApplication.allWidgets():
+        if not w.isVisible():
+            continue
+        if isinstance(w, QLabel) and fragment in w.text():
+            found.append(f"label in {type(w.window()).__name__}")
+        if isinstance(w, QMainWindow) and fragment in w.statusBar().currentMessage():
+            found.append("status bar")
+        if w.isWindow() and fragment in w.windowTitle():
+            found.append("window title")
+    return found
+
+
+def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data):
+    """Opening a damaged file: one dialog says it; nothing else repeats it."""
+    from PySide6.QtWidgets import QMessageBox
+
+    knight = shared_data / "voxels" / "magicavoxel_chr_knight.vox"
+    bad = tmp_path / "knight-cut.vox"
+    bad.write_bytes(knight.read_bytes()[:100])  # cut inside a chunk
+    w = MainWindow(with_gamut=False)
+    qtbot.addWidget(w)
+    w.show()
+    qtbot.waitExposed(w)
+    with qtbot.waitSignal(w.openFailed, timeout=30000) as blocker:
+        w.open_path(bad)
+    message = blocker.args[1]
+    assert "knight-cut.vox" in message and "damaged" in message
+    qtbot.waitUntil(lambda: w.problem_box is not None and w.problem_box.isVisible(),
+                    timeout=5000)
+    where = _texts_showing("runs past the end")
+    assert where == ["label in QMessageBox"], where
+    assert not w.statusBar().currentMessage().startswith("Opening")  # no stale promise
+    boxes = [b for b in w.findChildren(QMessageBox) if b.isVisible()]
+    assert len(boxes) == 1
+    # a second problem replaces the first dialog instead of stacking another
+    with qtbot.waitSignal(w.openFailed, timeout=30000):
+        w.open_path(bad)
+    qtbot.waitUntil(lambda: len([b for b in w.findChildren(QMessageBox)
+                                 if b.isVisible()]) == 1, timeout=5000)
+    assert len(_texts_showing("runs past the end")) == 1
+    w.problem_box.close()
+
+
+def test_opening_a_file_shows_the_preview(qtbot, shared_data):
+    """The window starts on the preview whatever page the last session ended on, and opening
+    a volume from another page brings the preview to the front."""
+    from dreamprint_gui.gui.settings import AppSettings
+
+    settings = AppSettings()
+    settings.set("window/tab", 1)  # what older versions restored
+    settings.sync()
+    w = MainWindow(settings=settings)
+    w.interactive = False
+    qtbot.addWidget(w)
+    assert w.tabs.currentWidget() is w.preview
+    w.tabs.setCurrentWidget(w.gamut)
+    assert w.tabs.currentWidget() is w.gamut
+    with qtbot.waitSignal(w.sourceChanged, timeout=30000):
+        w.open_path(shared_data / "voxels" / "magicavoxel_chr_knight.vox")
+    assert w.tabs.currentWidget() is w.preview
+    w.tabs.setCurrentWidget(w.gamut)
+    with qtbot.waitSignal(w.sourceChanged, timeout=30000):
+        w.open_path("demo")
+    assert w.tabs.currentWidget() is w.preview
+
+
+def test_voxel_model_previews_solid_with_its_intent(qtbot, gl_display, table_size, shared_data):
+    """A .vox opens on auto content: the engine picks solid, the preview says so, the source
+    is sampled nearest (sharp) and its occupied voxels are opaque; fog is one choice away."""
+    from dreamprint_gui.engine.content import SOLID_SIGMA
+
+    w = MainWindow(table_size=table_size)
+    w.interactive = False
+    qtbot.addWidget(w)
+    p = w.preview
+    p.set_params(height_mm=4.0)
+    w.show()
+    knight = shared_data / "voxels" / "magicavoxel_chr_knight.vox"
+    with qtbot.waitSignal(p.preflightReady, timeout=180000):
+        w.use_default_profile()
+        w.open_path(knight)
+    assert p.ctx.content.mode == "solid" and p.ctx.content.picked
+    assert "auto: solid" in p.content_note.text() and "voxel model" in p.content_note.text()
+    assert p.sampling.isEnabled() and p.params()["sampling"] is None  # the reader's: nearest
+    assert getattr(p.ctx.source, "sampling", None) == "nearest"
+    occupied = p.data.source_sigma > 0
+    assert 0.01 < occupied.mean() < 0.5
+    assert np.all(p.data.source_sigma[occupied] == SOLID_SIGMA)  # opaque, not a haze
+    # the printed solid is far denser than the fog the same file gives
+    solid_print = float(np.median(p.data.print_sigma[occupied]))
+    with qtbot.waitSignal(p.rendered, timeout=120000):
+        p.set_params(content="fog")
+    assert p.ctx.content.mode == "fog" and not p.ctx.content.picked
+    fog = p.data.source_sigma[p.data.source_sigma > 0]
+    assert fog.max() < 0.1 * SOLID_SIGMA
+    assert float(np.median(p.data.print_sigma[occupied])) < solid_print
+    # the demo cloud offers no voxel-edge choice and goes back to auto
+    with qtbot.waitSignal(p.rendered, timeout=120000):
+        w.open_path("demo")
+    assert not p.sampling.isEnabled() and p.params()["content"] == "auto"
+    assert p.ctx.content.mode == "fog"
+    w.close()
+
+
+def test_preflight_warning_shown_once(window, qtbot):
+    """A nearly empty fog (density scale 0.01): the pre-flight's mostly-clear warning shows in
+    the preview's Warnings box and nowhere else."""
+    p = window.preview
+    with qtbot.waitSignal(p.preflightReady, timeout=120000):
+        p.set_params(density_scale=0.01)
+    codes = [wn.code for wn in p.preflight.warnings]
+    assert "mostly-clear" in codes, codes
+    assert p.warnings_box.isVisible()
+    where = _texts_showing("Clear or empty")
+    assert where == ["label in MainWindow"], where
+    assert "--density-scale" not in p.warnings.text()  # named as the control is
+    with qtbot.waitSignal(p.preflightReady, timeout=120000):
+        p.set_params(density_scale=1.0)
+    assert "mostly-clear" not in [wn.code for wn in p.preflight.warnings]

@@ -113,7 +113,7 @@ def test_held_gamut_page_waits(qtbot, table_size):
     page.set_profile(profile)
     page.set_tables(get_tables(profile, size=table_size))
     assert page._task is None and page._chart_task is None  # nothing started while held
-    assert "once the preview is ready" in page.status.text()
+    assert "once the preview is ready" in page.view.message.text()
     with qtbot.waitSignal(page.chartReady, timeout=120000):
         page.set_hold(False)  # hidden: meshes are computed, not drawn
     qtbot.waitUntil(lambda: page.meshes is not None, timeout=60000)

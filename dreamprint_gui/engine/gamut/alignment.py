@@ -57,7 +57,7 @@ from .tables import (
 __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
            "predicted_appearance", "interpolate_block", "align_rows", "grey_rho_k", "clean_rgb",
            "stage_voxel", "finish_staging", "lookup_align_block", "block_buffers",
-           "kernel_table", "LANES", "ROW_BLOCK", "ROW_STRIDE", "K_TARGET", "K_RHOK"]
+           "kernel_table", "LANES", "ROW_BLOCK", "SOLID_TARGET", "ROW_STRIDE", "K_TARGET", "K_RHOK"]
 
 _I_K = INKS.index("K")
 _I_W = INKS.index("W")
@@ -158,6 +158,8 @@ def align_density(tables: ColourTables, rgb: ArrayLike, conc5: ArrayLike,
     clear = np.zeros((n, len(INKS)))
     clear[:, _I_CL] = 1.0
     s_star = mixture_sigma(profile, c_star)
+    solid = target >= np.float32(SOLID_TARGET)  # solid content: rho = 1 (align_rows)
+    target[solid] = s_star[solid]
     s_clear = np.full(n, tables.sigma_clear)
     out = c_star.copy()
     sigma = s_star.copy()
@@ -214,6 +216,9 @@ K_GREY = K_SIG + len(CLEAR_KNOTS)  # 11: sigma with 10 % grey (1/mm)
 K_TARGET = K_GREY + 1  # 12: the voxel's target sigma (1/mm)
 K_RHOK = K_GREY + 2    # 13: rho_K of the voxel's grey
 ROW_BLOCK = 1024       # voxels per call of align_rows
+# A target at or above this (1/mm) means "solid": the node's own undiluted mixture (rho = 1,
+# no Clear, no grey; engine.content.SOLID_SIGMA). No medium is this dense.
+SOLID_TARGET = 1e30
 # Distance between the rows (one per lane) of a block's working arrays: 4096 bytes would put
 # a voxel's every lane in the same L1 cache set (the interpolation's transposition measured
 # 4.4 -> 0.8 ns per voxel with the padding).
@@ -365,13 +370,15 @@ def align_rows(F, m, sigma_clear, out):
     gmax = np.float32(GREY_MAX)
     sc = np.float32(sigma_clear)
     rl = np.float32(2.0 ** _LK[_NK - 1])
+    solid = np.float32(SOLID_TARGET)
     RS = ROW_STRIDE
     n_low = 0
     n_high = 0
     for k in range(m):
+        s0 = F[(K_SIG + 0) * RS + k]
         t = F[K_TARGET * RS + k]
         t = t if t >= zero else zero
-        s0 = F[(K_SIG + 0) * RS + k]
+        t = s0 if t >= solid else t  # solid content: the colour's undiluted mixture, rho = 1
         s1 = F[(K_SIG + 1) * RS + k]
         s2 = F[(K_SIG + 2) * RS + k]
         s3 = F[(K_SIG + 3) * RS + k]

@@ -94,8 +94,12 @@ def evaluate(tables: ColourTables, profile: InkProfile, samples: int = 2000) -> 
     return {
         "lut_size": tables.size,
         "objective": tables.objective,
-        "build_seconds": round(tables.build_seconds, 3),
+        # this run: loaded from the cache (cached, load_seconds) or built (build_seconds)
         "cached": tables.cached,
+        "seconds": round(tables.load_seconds if tables.cached else tables.build_seconds, 3),
+        "load_seconds": round(tables.load_seconds, 3) if tables.cached else None,
+        "build_seconds": None if tables.cached else round(tables.build_seconds, 3),
+        "built_seconds_when_cached": round(tables.build_seconds, 3) if tables.cached else None,
         "colour_thickness_mm": None if math.isinf(ct) else ct,
         "srgb_in_gamut_fraction": float(np.mean(de_nodes <= IN_GAMUT_DE2000)),
         "in_gamut_threshold_dE2000": IN_GAMUT_DE2000,

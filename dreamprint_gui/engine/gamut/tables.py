@@ -76,8 +76,9 @@ class ColourTables:
     profile_fingerprint: str
     colour_thickness_mm: float
     layer_thickness_mm: float
-    build_seconds: float
-    cached: bool = False
+    build_seconds: float  # the build's time (of an earlier run when ``cached``)
+    cached: bool = False  # loaded from the disk cache
+    load_seconds: float = 0.0  # the time to load it from the cache (0 when built)
     meta: dict = field(default_factory=dict)
 
     @property
@@ -254,8 +255,10 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
     folder = Path(cache) if cache is not None else cache_dir()
     path = folder / f"tables_{_cache_key(profile, objective, size)}.npz"
     fp = profile.fingerprint()
+    t0 = time.perf_counter()
     found = _load(path, fp, objective, size)
     if found is not None:
+        found.load_seconds = time.perf_counter() - t0
         if progress is not None:
             progress(1.0)
         return found

@@ -31,6 +31,31 @@ def _transform(g):
     return {"origin": list(o), "columns": cols, "linear": bool(t.isLinear)}
 
 
+VEC_RANGE_LIMIT = 4_000_000  # active values read one by one (~1.4 us each) for a vector range
+
+
+def _vector_range(g):
+    """Per-component (min, max) and magnitude (min, max) over the active values of a vector grid
+    (a tile counts as its value), or None when it has more than VEC_RANGE_LIMIT active voxels."""
+    if g.activeVoxelCount() > VEC_RANGE_LIMIT or g.activeVoxelCount() == 0:
+        return None
+    lo = [float("inf")] * 3
+    hi = [float("-inf")] * 3
+    mlo, mhi = float("inf"), 0.0
+    for it in g.citerOnValues():
+        v = it["value"]
+        m2 = 0.0
+        for c in range(3):
+            x = float(v[c])
+            lo[c] = min(lo[c], x)
+            hi[c] = max(hi[c], x)
+            m2 += x * x
+        m = m2 ** 0.5
+        mlo = min(mlo, m)
+        mhi = max(mhi, m)
+    return {"component_min": lo, "component_max": hi, "magnitude": [mlo, mhi]}
+
+
 def _grid_info(g):
     empty = g.empty() or g.activeVoxelCount() == 0
     bbox = g.evalActiveVoxelBoundingBox()
@@ -42,7 +67,8 @@ def _grid_info(g):
     for k, v in dict(g.metadata).items():
         if isinstance(v, (int, float, str, bool)):
             meta[k] = v
-    return {"name": g.name, "class": str(g.gridClass), "type": g.valueTypeName,
+    vec = _vector_range(g) if g.valueTypeName.startswith("vec") else None
+    return {"name": g.name, "class": str(g.gridClass), "type": g.valueTypeName, "vector": vec,
             "active_voxels": int(g.activeVoxelCount()), "empty": bool(empty),
             "bbox": [list(bbox[0]), list(bbox[1])], "min": lo, "max": hi,
             "background": g.background, "half": bool(g.saveFloatAsHalf),

@@ -33,7 +33,8 @@ from ...errors import DreamPrintError
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
            "uniform_rgb", "SlabBuffers",
-           "sniff_format", "open_source", "inspect_file", "FORMATS"]
+           "sniff_format", "open_source", "inspect_file", "inspect_source", "reader_options",
+           "FORMATS"]
 
 
 @dataclass(frozen=True)
@@ -238,18 +239,26 @@ def sniff_format(path: Path) -> str:
 def inspect_file(path_or_name: str | os.PathLike) -> dict:
     """The ``inspect`` description of a file, without choosing grids or options (a file whose
     density grid is empty or missing can still be inspected)."""
+    return inspect_source(path_or_name)[0]
+
+
+def inspect_source(path_or_name: str | os.PathLike) -> tuple[dict, VolumeSource | None]:
+    """(the ``inspect`` description, the source opened with default options for it, or None
+    for the formats described without opening a source: OpenVDB, NanoVDB)."""
     import importlib
 
     if str(path_or_name) == "demo":
-        return open_source("demo").info()
+        src = open_source("demo")
+        return src.info(), src
     path = Path(path_or_name)
     if not path.exists():
         raise DreamPrintError("no such file", path)
     key = sniff_format(path)
     module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
     if hasattr(module, "inspect_path"):
-        return module.inspect_path(path)
-    return module.open_path(path, fmt=key).info()
+        return module.inspect_path(path), None
+    src = module.open_path(path, fmt=key)
+    return src.info(), src
 
 
 def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
@@ -269,6 +278,24 @@ def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
     key = sniff_format(path)
     module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
     return module.open_path(path, fmt=key, **_checked_options(module.open_path, options, path))
+
+
+def reader_options(path_or_name: str | os.PathLike) -> set[str]:
+    """The option names the reader of ``path_or_name`` takes (empty for an unknown format)."""
+    import importlib
+    import inspect
+
+    if str(path_or_name) == "demo":
+        from .demo import DemoCloud
+        func = DemoCloud
+    else:
+        path = Path(path_or_name)
+        if not path.exists():
+            return set()
+        module = importlib.import_module(f"{__package__}.{FORMATS[sniff_format(path)][0]}")
+        func = module.open_path
+    return {p.name for p in inspect.signature(func).parameters.values()
+            if p.name not in ("self", "path", "fmt")}
 
 
 OPTION_ALIASES = {"grid": "density_grid", "color": "colour", "colormap": "colormap",

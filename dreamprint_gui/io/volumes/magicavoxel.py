@@ -8,7 +8,9 @@ chunk whose children are ``PACK``, ``SIZE``/``XYZI`` pairs (one per model), ``RG
 colour index i in 1..255 is entry i-1), and the scene graph ``nTRN``/``nGRP``/``nSHP`` that
 places models (translation ``_t``: the model's centre ``floor(size/2)``; rotated instances are
 refused).  Unknown chunks are skipped.  The file's x, y, z are used as is (MagicaVoxel is
-z-up, like the printer).  Voxels are unit cubes and sampled nearest (a voxel model is crisp);
+z-up, like the printer).  Voxels are unit cubes, sampled nearest by default (a voxel model is
+crisp: sharp edges, the palette's colours unmixed) or trilinearly with ``sampling="linear"``
+(``--sampling linear``: smooth edges, colours blended density-weighted as for any dense grid);
 density is ``solid_density`` per source unit in every filled voxel.
 """
 
@@ -200,7 +202,12 @@ def _nearest_kernel(idx, iz, iy, ix, rgb_lut, dens_lut, rgb, sigma):
 class VoxSource:
     """Palette-index voxels (uint8, z y x) over the union of the placed models."""
 
-    def __init__(self, path: Path, models, palette, solid_density: float):
+    def __init__(self, path: Path, models, palette, solid_density: float,
+                 sampling: str = "nearest"):
+        if sampling not in ("nearest", "linear"):
+            raise DreamPrintError(f"sampling must be 'nearest' or 'linear', got {sampling!r}",
+                                  path)
+        self.sampling = sampling
         self.name = str(path)
         self.format = "MagicaVoxel"
         self.colour_encoding = "srgb"
@@ -229,10 +236,24 @@ class VoxSource:
         self.bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
         self.rgb_lut = (palette[:, :3].astype(np.float32) / 255.0)
         self.solid_density = float(solid_density)
+        self._dense = None
+        if sampling == "linear":
+            from .dense import DenseVolume
+
+            filled = (self.index > 0).astype(np.float32)
+            data = np.empty(self.index.shape + (4,), np.float32)
+            data[..., 0] = filled
+            data[..., 1:4] = self.rgb_lut[self.index] * filled[..., None]  # premultiplied
+            # cell-centred unit voxels: sample (i, j, k) sits at lo + (i, j, k) + 1/2
+            self._dense = DenseVolume(data, self.lo + 0.5, (1.0, 1.0, 1.0), cell_centred=True)
 
     def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
                     out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
+        if self._dense is not None:
+            rgb, sigma = self._dense.sample_density(
+                grid, z0, z1, self.solid_density * density_scale / grid.mm_per_unit, out)
+            return rgb, sigma
         idx = []
         for a, rng in ((2, (z0, z1)), (1, (0, None)), (0, (0, None))):
             u = np.floor(voxel_centres(grid, a, *rng) - self.lo[a]).astype(np.int64)
@@ -255,7 +276,9 @@ class VoxSource:
         return {"format": self.format, "grids": self._grids}
 
 
-def open_path(path: Path, fmt: str = "magicavoxel", *, solid_density: float = 1.0) -> VoxSource:
-    """Open a .vox file; every filled voxel has density ``solid_density`` (1/source unit)."""
+def open_path(path: Path, fmt: str = "magicavoxel", *, solid_density: float = 1.0,
+              sampling: str = "nearest") -> VoxSource:
+    """Open a .vox file; every filled voxel has density ``solid_density`` (1/source unit);
+    ``sampling`` "nearest" (default, crisp) or "linear" (smooth)."""
     models, palette = read_vox(path)
-    return VoxSource(path, models, palette, solid_density)
+    return VoxSource(path, models, palette, solid_density, sampling)

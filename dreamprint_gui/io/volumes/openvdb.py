@@ -37,7 +37,7 @@ from ...errors import DreamPrintError
 from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
 from .sampling import SparseBlocks, sample_sparse
 
-__all__ = ["VdbSource", "open_path", "inspect_path", "helper_command"]
+__all__ = ["VdbSource", "open_path", "inspect_path", "helper_command", "check_header"]
 
 HELPER = Path(__file__).with_name("_vdb_helper.py")
 COLOUR_VEC = ("Cd", "color", "colour", "Color", "rgb", "albedo")
@@ -91,6 +91,119 @@ def _run(path: Path, *args: str) -> dict:
     return res
 
 
+_MAGIC = 0x56444220
+_MIN_VERSION = 221          # OPENVDB_FILE_VERSION_FLOAT_FRUSTUM_BBOX: older files are refused
+_MAX_ENTRIES = 1_000_000
+
+
+class _Header:
+    """Bounds-checked little-endian reads of a .vdb's first bytes."""
+
+    def __init__(self, path: Path, data: bytes, size: int) -> None:
+        self.path, self.data, self.size, self.pos = path, data, size, 0
+
+    def fail(self, what: str):
+        raise DreamPrintError(what, self.path)
+
+    def take(self, n: int, what: str) -> bytes:
+        if self.pos + n > len(self.data):
+            if len(self.data) < self.size:  # not read yet: read more of the file
+                with open(self.path, "rb") as f:
+                    f.seek(len(self.data))
+                    self.data += f.read(max(n, 1 << 20))
+            if self.pos + n > len(self.data):
+                self.fail(f"truncated: {what} needs bytes {self.pos:,}..{self.pos + n:,}, the "
+                          f"file has {self.size:,}")
+        out = self.data[self.pos:self.pos + n]
+        self.pos += n
+        return out
+
+    def u32(self, what: str) -> int:
+        return int.from_bytes(self.take(4, what), "little")
+
+    def i32(self, what: str) -> int:
+        return int.from_bytes(self.take(4, what), "little", signed=True)
+
+    def i64(self, what: str) -> int:
+        return int.from_bytes(self.take(8, what), "little", signed=True)
+
+    def string(self, what: str) -> str:
+        n = self.u32(what)
+        if n > self.size:
+            self.fail(f"damaged: {what} claims {n:,} bytes, the file has {self.size:,}")
+        return self.take(n, what).decode("utf-8", "replace")
+
+
+def check_header(path: Path) -> dict:
+    """Check a .vdb's header and grid descriptors (OpenVDB file format, ``io/Archive.cc``
+    ``readHeader`` and ``io/File.cc`` ``readGridDescriptors``) before the helper reads it.
+
+    Layout: int64 magic 0x56444220, uint32 file version, uint32 library major and minor, char
+    "has grid offsets", (char "compressed" for file versions 220-221), a 36-character UUID; then
+    (with grid offsets) the file metadata (int32 count; per entry name, type name, uint32
+    size + value), int32 grid count and per grid a descriptor (unique name, type name, instance
+    parent name from version 216, int64 grid, block and end positions; the next descriptor
+    starts at the end position). Strings are uint32 length + bytes. Raises a
+    :class:`DreamPrintError` for an empty file, a bad magic, an old version, or a file shorter
+    than its header or its descriptors announce; returns the header's fields."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            head = f.read(1 << 16)
+    except OSError as exc:
+        raise DreamPrintError(f"cannot read: {exc.strerror or exc}", path) from None
+    if size == 0:
+        raise DreamPrintError("empty file", path)
+    h = _Header(path, head, size)
+    magic = h.i64("the magic number")
+    if magic != _MAGIC:
+        h.fail(f"not an OpenVDB file (magic {magic & 0xFFFFFFFFFFFFFFFF:#x}, expected "
+               f"{_MAGIC:#x})")
+    version = h.u32("the file version")
+    if version < _MIN_VERSION:
+        h.fail(f"OpenVDB file format version {version} is older than {_MIN_VERSION}, which "
+               "OpenVDB no longer reads")
+    lib = (h.u32("the library version"), h.u32("the library version"))
+    offsets = h.take(1, "the grid-offsets flag") != b"\x00"
+    if 220 <= version < 222:
+        h.take(1, "the compression flag")
+    h.take(36, "the file UUID")
+    out = {"file_version": version, "library_version": list(lib), "grids": []}
+    if not offsets:  # a stream without grid offsets: only the helper can walk it
+        return out
+    n_meta = h.i32("the file metadata count")
+    if not 0 <= n_meta <= _MAX_ENTRIES:
+        h.fail(f"damaged: the header claims {n_meta:,} metadata entries")
+    for _ in range(n_meta):
+        h.string("a metadata name")
+        h.string("a metadata type")
+        n = h.u32("a metadata value")
+        if h.pos + n > size:
+            h.fail(f"truncated: a metadata value needs bytes {h.pos:,}..{h.pos + n:,}, the file "
+                   f"has {size:,}")
+        h.take(n, "a metadata value")
+    n_grids = h.i32("the grid count")
+    if not 0 <= n_grids <= _MAX_ENTRIES:
+        h.fail(f"damaged: the header claims {n_grids:,} grids")
+    for k in range(n_grids):
+        name = h.string(f"grid descriptor {k + 1} of {n_grids}").split("\x1e")[0]
+        gtype = h.string(f"grid {name!r}'s type")
+        if version >= 216:
+            h.string(f"grid {name!r}'s instance parent")
+        grid_pos = h.i64(f"grid {name!r}'s offsets")
+        block_pos = h.i64(f"grid {name!r}'s offsets")
+        end_pos = h.i64(f"grid {name!r}'s offsets")
+        if not (0 < grid_pos <= block_pos <= end_pos):
+            h.fail(f"damaged: grid {name!r} has inconsistent offsets {grid_pos}, {block_pos}, "
+                   f"{end_pos}")
+        if end_pos > size:
+            h.fail(f"truncated: grid {name!r} ends at byte {end_pos:,}, the file has "
+                   f"{size:,}")
+        out["grids"].append({"name": name, "type": gtype, "end": end_pos})
+        h.pos = end_pos
+    return out
+
+
 def _affine(t: dict, name: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     cols = np.asarray(t["columns"], float)      # rows: world offset of one index step along i/j/k
     if not t.get("linear", True) or not np.allclose(cols - np.diag(np.diag(cols)), 0,
@@ -123,17 +236,24 @@ def _info_entry(g: dict, path: Path) -> dict:
     shape = [int(v) for v in (hi_i - lo_i + 1)] if not g["empty"] else [0, 0, 0]
     dtype = g["type"] + (" (half on disk)" if g.get("half") else "")
     lo, hi = g["min"], g["max"]
+    out = {}
     if isinstance(lo, (list, tuple)):
         # OpenVDB's evalMinMax orders vectors lexicographically, which is no range at all: the
-        # per-component range would need every value, so vector grids report none.
+        # helper reads the active values for per-component and magnitude ranges instead.
         lo = hi = None
+        vec = g.get("vector")
+        if vec:
+            lo, hi = vec["component_min"], vec["component_max"]
+            out["magnitude"] = vec["magnitude"]
+    index = None if g["empty"] else [[int(v) for v in lo_i], [int(v) for v in hi_i]]
     return {"name": g["name"], "class": _class_name(g), "shape": shape,
             "active_voxels": g["active_voxels"], "min": lo, "max": hi,
-            "dtype": dtype, "bounds": bounds}
+            "dtype": dtype, "bounds": bounds, "index_bounds": index, **out}
 
 
 def inspect_path(path: Path) -> dict:
     """Per-grid description of a .vdb file (the ``inspect`` JSON)."""
+    check_header(path)
     res = _run(path, "info", str(path))
     return {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}
 
@@ -224,6 +344,7 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
     "solid" (with ``solid_density`` per source unit)."""
     if level_set not in ("refuse", "solid"):
         raise DreamPrintError(f"level_set must be 'refuse' or 'solid', got {level_set!r}", path)
+    check_header(path)
     res = _run(path, "info", str(path))
     grids = {g["name"]: g for g in res["grids"]}
     info = {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}

@@ -1,0 +1,68 @@
+"""What the GUI calls things: human names for the ids the files and the command line use.
+
+Defines :data:`BACKGROUNDS` (``--background`` ids -> names), :data:`CONTENTS` (``--content``),
+:data:`SAMPLINGS` (``--sampling`` of voxel models), :func:`background_name` and
+:func:`printer_name` (a printer's title, e.g. "Stratasys J850 (paper profile)", for the id
+``j850-paper``). The ids stay in the files (manifest, settings); only the screen uses these
+names, the same on every page.
+"""
+
+from __future__ import annotations
+
+__all__ = ["BACKGROUNDS", "CONTENTS", "SAMPLINGS", "background_name", "printer_name",
+           "gui_wording"]
+
+# The command line's options as the GUI's controls are labelled (engine messages name options)
+_OPTIONS = {"--content": "Content", "--density-scale": "Density scale",
+            "--background": "Background", "--sampling": "Voxel edges"}
+
+# (id, name, what it means) in the order the combo boxes offer them
+BACKGROUNDS = (
+    ("clear", "Clear resin", "Voxels below the density threshold are printed in Clear resin"),
+    ("empty", "Nothing (empty)", "Voxels below the density threshold get no material"),
+)
+
+
+# ``--content`` ids: what the source's density means
+CONTENTS = (
+    ("auto", "Auto", "Solid for voxel models, level sets and binary masks; fog for smoke, "
+     "clouds, radiance fields and splats"),
+    ("fog", "Fog", "The source's density as it states it (smoke, clouds): density x scale"),
+    ("solid", "Solid", "Occupied voxels print opaque in their colour; the rest is background"),
+)
+# ``--sampling`` of voxel models: None is the reader's own (nearest: sharp voxel edges)
+SAMPLINGS = (
+    (None, "Sharp", "Each voxel keeps its colour and its edges (nearest neighbour)"),
+    ("linear", "Smooth", "Colours and edges blended between voxels (trilinear)"),
+)
+
+
+def background_name(background_id: str) -> str:
+    for key, name, _ in BACKGROUNDS:
+        if key == background_id:
+            return name
+    return background_id
+
+
+def printer_name(printer) -> str:
+    """A printer's human name from a ``PrinterProfile`` or a built-in id (else the id)."""
+    if printer is None:
+        return ""
+    if isinstance(printer, str):
+        from ..engine.printer import builtin_printers, load_printer
+        from ..errors import DreamPrintError
+
+        if printer not in builtin_printers():
+            return printer
+        try:
+            printer = load_printer(printer)
+        except DreamPrintError:
+            return str(printer)
+    return getattr(printer, "display_name", None) or printer.name
+
+
+def gui_wording(message: str) -> str:
+    """An engine message with command-line options named as the GUI's controls."""
+    for flag, control in _OPTIONS.items():
+        message = message.replace(flag, control)
+    return message
