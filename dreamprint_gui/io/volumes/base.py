@@ -192,6 +192,7 @@ FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
     "radiance-exr": ("radiance", (".exr",)),
     "splats": ("splats", (".ply", ".spz")),
     "magicavoxel": ("magicavoxel", (".vox",)),
+    "instant-ngp": ("ingp", (".ingp", ".msgpack")),
 }
 
 
