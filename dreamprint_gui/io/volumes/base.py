@@ -193,13 +193,15 @@ FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
     "splats": ("splats", (".ply", ".spz")),
     "magicavoxel": ("magicavoxel", (".vox",)),
     "instant-ngp": ("ingp", (".ingp", ".msgpack")),
+    "ingp-volume": ("ingp_volume", (".bin", ".png")),
 }
 
 
 def sniff_format(path: Path) -> str:
     """Format key of ``path`` from its extension, falling back to its first bytes."""
     if path.is_dir():
-        return "radiance-exr"
+        from .ingp_volume import is_ingp_volume_dir
+        return "ingp-volume" if is_ingp_volume_dir(path) else "radiance-exr"
     suffix = path.suffix.lower()
     for key, (_mod, exts) in FORMATS.items():
         if suffix in exts:
@@ -227,7 +229,8 @@ def sniff_format(path: Path) -> str:
             or head.startswith(b"ObjectType"):
         return "vtk"
     raise DreamPrintError("not a volume format DreamPrint reads (OpenVDB, NanoVDB, VTK image, "
-                          "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ, MagicaVoxel)",
+                          "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ, MagicaVoxel, "
+                          "InstantNGP snapshot or volume export)",
                           path)
 
 

@@ -40,8 +40,8 @@ __all__ = ["ACT", "sample_rows", "encode_batch", "mlp_forward"]
 ACT = {"none": 0, "relu": 1, "leakyrelu": 2, "exponential": 3, "sigmoid": 4, "tanh": 5}
 
 BATCH = 128
-HASH_P1 = np.uint32(2654435761)
-HASH_P2 = np.uint32(805459861)
+HASH_P1 = np.uint64(2654435761)
+HASH_P2 = np.uint64(805459861)
 MASK32 = np.uint64(0xFFFFFFFF)
 
 
@@ -108,66 +108,100 @@ def mlp_forward(mats, shapes, act_hidden, act_out, n_out_used, x, buf_a, buf_b, 
     return src
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _entry(h, size, mask):
+    """Table row of a corner's index ``h`` (uint32 value): ``h % size`` (a mask when size is a
+    power of two, as every hashed level's is)."""
+    if mask != 0:
+        return h & mask
+    return h % size
+
+
 @njit(cache=True, nogil=True, fastmath=True)
 def encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc):
     """Multiresolution hash encoding of relative positions ``u`` (nb, 3) into ``enc``
     (levels * n_feat (+ zero padding), nb): step 2 of the module docstring.
-    ``interp``: 0 linear, 1 smoothstep, 2 nearest."""
+    ``interp``: 0 linear, 1 smoothstep, 2 nearest.  The 8 corners' indices are combined from
+    per-axis terms: ``x ^ y P1 ^ z P2`` (hashed) or ``x + y r + z r^2`` (dense), uint32."""
     n_levels = scales.shape[0]
-    gx = np.empty(3, np.uint64)
-    fw = np.empty(3, np.float32)
+    m32 = np.uint64(0xFFFFFFFF)
+    one = np.uint64(1)
     for lvl in range(n_levels):
         s = scales[lvl]
         r = np.uint64(res[lvl])
         size = np.uint64(offsets[lvl + 1] - offsets[lvl])
-        base = offsets[lvl]
-        hsh = hashed[lvl]
+        mask = size - one if (size & (size - one)) == 0 else np.uint64(0)
+        tab = table[offsets[lvl]:offsets[lvl + 1]]
+        hsh = hashed[lvl] != 0
+        row = lvl * n_feat
         for b in range(nb):
-            for d in range(3):
-                pos = np.float32(s * u[b, d] + np.float32(0.5))
-                fl = math.floor(pos)
-                gx[d] = np.uint64(np.uint32(np.int64(fl)))
-                w = np.float32(pos - fl)
-                if interp == 1:
-                    w = w * w * (np.float32(3.0) - np.float32(2.0) * w)
-                fw[d] = w
-            for f in range(n_feat):
-                enc[lvl * n_feat + f, b] = 0.0
+            px = np.float32(s * u[b, 0] + np.float32(0.5))
+            py = np.float32(s * u[b, 1] + np.float32(0.5))
+            pz = np.float32(s * u[b, 2] + np.float32(0.5))
+            fx = math.floor(px)
+            fy = math.floor(py)
+            fz = math.floor(pz)
+            wx = np.float32(px - fx)
+            wy = np.float32(py - fy)
+            wz = np.float32(pz - fz)
+            gx = np.uint64(np.int64(fx)) & m32
+            gy = np.uint64(np.int64(fy)) & m32
+            gz = np.uint64(np.int64(fz)) & m32
             if interp == 2:
-                corners = 1
-            else:
-                corners = 8
-            for c in range(corners):
-                wt = np.float32(1.0)
-                cx = gx[0]
-                cy = gx[1]
-                cz = gx[2]
-                if interp == 2:
-                    pass
-                else:
-                    if c & 1:
-                        wt *= fw[0]
-                        cx += np.uint64(1)
-                    else:
-                        wt *= np.float32(1.0) - fw[0]
-                    if c & 2:
-                        wt *= fw[1]
-                        cy += np.uint64(1)
-                    else:
-                        wt *= np.float32(1.0) - fw[1]
-                    if c & 4:
-                        wt *= fw[2]
-                        cz += np.uint64(1)
-                    else:
-                        wt *= np.float32(1.0) - fw[2]
                 if hsh:
-                    idx = ((cx & MASK32) ^ ((cy * np.uint64(HASH_P1)) & MASK32)
-                           ^ ((cz * np.uint64(HASH_P2)) & MASK32))
+                    h = gx ^ ((gy * HASH_P1) & m32) ^ ((gz * HASH_P2) & m32)
                 else:
-                    idx = (cx + cy * r + cz * r * r) & MASK32
-                e = base + np.int64(idx % size)
+                    h = (gx + gy * r + gz * r * r) & m32
+                e = _entry(h, size, mask)
                 for f in range(n_feat):
-                    enc[lvl * n_feat + f, b] += wt * table[e, f]
+                    enc[row + f, b] = tab[e, f]
+                continue
+            if interp == 1:
+                wx = wx * wx * (np.float32(3.0) - np.float32(2.0) * wx)
+                wy = wy * wy * (np.float32(3.0) - np.float32(2.0) * wy)
+                wz = wz * wz * (np.float32(3.0) - np.float32(2.0) * wz)
+            if hsh:
+                x0 = gx
+                x1 = (gx + one) & m32
+                y0 = (gy * HASH_P1) & m32
+                y1 = ((gy + one) * HASH_P1) & m32
+                z0 = (gz * HASH_P2) & m32
+                z1 = ((gz + one) * HASH_P2) & m32
+                e000 = _entry(x0 ^ y0 ^ z0, size, mask)
+                e100 = _entry(x1 ^ y0 ^ z0, size, mask)
+                e010 = _entry(x0 ^ y1 ^ z0, size, mask)
+                e110 = _entry(x1 ^ y1 ^ z0, size, mask)
+                e001 = _entry(x0 ^ y0 ^ z1, size, mask)
+                e101 = _entry(x1 ^ y0 ^ z1, size, mask)
+                e011 = _entry(x0 ^ y1 ^ z1, size, mask)
+                e111 = _entry(x1 ^ y1 ^ z1, size, mask)
+            else:
+                x0 = gx
+                x1 = gx + one
+                y0 = gy * r
+                y1 = (gy + one) * r
+                z0 = gz * r * r
+                z1 = (gz + one) * r * r
+                e000 = _entry((x0 + y0 + z0) & m32, size, mask)
+                e100 = _entry((x1 + y0 + z0) & m32, size, mask)
+                e010 = _entry((x0 + y1 + z0) & m32, size, mask)
+                e110 = _entry((x1 + y1 + z0) & m32, size, mask)
+                e001 = _entry((x0 + y0 + z1) & m32, size, mask)
+                e101 = _entry((x1 + y0 + z1) & m32, size, mask)
+                e011 = _entry((x0 + y1 + z1) & m32, size, mask)
+                e111 = _entry((x1 + y1 + z1) & m32, size, mask)
+            ux = np.float32(1.0) - wx
+            uy = np.float32(1.0) - wy
+            uz = np.float32(1.0) - wz
+            w00 = uy * uz
+            w10 = wy * uz
+            w01 = uy * wz
+            w11 = wy * wz
+            for f in range(n_feat):
+                enc[row + f, b] = (ux * w00 * tab[e000, f] + wx * w00 * tab[e100, f]
+                                   + ux * w10 * tab[e010, f] + wx * w10 * tab[e110, f]
+                                   + ux * w01 * tab[e001, f] + wx * w01 * tab[e101, f]
+                                   + ux * w11 * tab[e011, f] + wx * w11 * tab[e111, f])
 
 
 @njit(cache=True, nogil=True)
