@@ -193,15 +193,18 @@ FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
     "splats": ("splats", (".ply", ".spz")),
     "magicavoxel": ("magicavoxel", (".vox",)),
     "instant-ngp": ("ingp", (".ingp", ".msgpack")),
-    "ingp-volume": ("ingp_volume", (".bin", ".png")),
+    "ingp-volume": ("ingp_volume", ()),     # told by name: NNNN_WxH.png, WxHxD_C.bin
 }
 
 
 def sniff_format(path: Path) -> str:
     """Format key of ``path`` from its extension, falling back to its first bytes."""
+    from .ingp_volume import is_ingp_volume_dir, is_ingp_volume_name
+
     if path.is_dir():
-        from .ingp_volume import is_ingp_volume_dir
         return "ingp-volume" if is_ingp_volume_dir(path) else "radiance-exr"
+    if is_ingp_volume_name(path.name):
+        return "ingp-volume"
     suffix = path.suffix.lower()
     for key, (_mod, exts) in FORMATS.items():
         if suffix in exts:

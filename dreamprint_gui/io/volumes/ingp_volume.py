@@ -35,8 +35,8 @@ import numpy as np
 from ...errors import DreamPrintError
 from .dense import DenseSource, DenseVolume, check_claimed_size
 
-__all__ = ["open_path", "is_ingp_volume_dir", "read_png_slices", "read_raw_volume",
-           "PNG_NAME", "RAW_NAME", "PNG_DEPTH"]
+__all__ = ["open_path", "is_ingp_volume_dir", "is_ingp_volume_name", "read_png_slices",
+           "read_raw_volume", "PNG_NAME", "RAW_NAME", "PNG_DEPTH"]
 
 PNG_NAME = re.compile(r"^(\d+)_(\d+)x(\d+)\.png$", re.IGNORECASE)
 RAW_NAME = re.compile(r"^(\d+)x(\d+)x(\d+)_(\d+)\.bin$", re.IGNORECASE)
@@ -55,6 +55,11 @@ def _pngs(folder: Path) -> list[tuple[int, int, int, Path]]:
 def _raws(folder: Path) -> list[tuple[int, Path]]:
     return sorted((int(m.group(4)), p) for p in folder.iterdir()
                   if (m := RAW_NAME.match(p.name)))
+
+
+def is_ingp_volume_name(name: str) -> bool:
+    """A file named like one of instant-ngp's PNG slices or raw volumes."""
+    return bool(PNG_NAME.match(name) or RAW_NAME.match(name))
 
 
 def is_ingp_volume_dir(folder: Path) -> bool:

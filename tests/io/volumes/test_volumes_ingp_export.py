@@ -104,9 +104,9 @@ def test_raw_volume_size_mismatch(tmp_path, capsys):
     assert main(["inspect", str(p)]) == 2
     err = capsys.readouterr().err.strip()
     assert "needs 1,024 bytes, the file has 40" in err and "\n" not in err
-    q = tmp_path / "density.bin"
+    q = tmp_path / "density.bin"                   # any other .bin is not claimed
     np.zeros(10, np.float32).tofile(q)
-    with pytest.raises(DreamPrintError, match="WxHxD_CASCADE.bin"):
+    with pytest.raises(DreamPrintError, match="not a volume format"):
         open_source(q)
 
 
