@@ -111,7 +111,9 @@ def format_info(path: str, info: dict, height_mm: float | None = None,
         s = _size_line(bounds, height_mm, size_mm)
         if s:
             lines.append(s)
-    if not info.get("grids") and "gaussians" not in info:
+    if "density_network" in info:
+        lines.extend(_ingp_lines(info))
+    elif not info.get("grids") and "gaussians" not in info:
         lines.append("  (no grids)")
     return "\n".join(lines)
 
@@ -124,6 +126,30 @@ def describe(file: str) -> dict:
     info, src = inspect_source(file)
     mode, reason = choose_content(src) if src is not None else content_of_info(info)
     return {**info, "content": {"mode": mode, "reason": reason}}
+
+
+def _ingp_lines(info: dict) -> list[str]:
+    """The InstantNGP snapshot part of ``format_info``."""
+    e, d, c = info["encoding"], info["density_network"], info["colour_network"]
+    occ = info.get("occupancy_grid")
+    return [
+        f"  {info['kind']}",
+        f"  encoding: {e['type']} grid, {e['levels']} levels x {e['features_per_level']} "
+        f"features, 2^{e['log2_hashmap_size']} table, resolution {e['base_resolution']}.."
+        f"{e['finest_resolution']} ({e['hashed_levels']} levels hashed)",
+        f"  density network: {d['type']} {d['neurons']} wide, {d['hidden_layers']} hidden; "
+        f"colour network: {c['type']} {c['neurons']} wide, {c['hidden_layers']} hidden; "
+        f"{info['direction_encoding']}",
+        f"  {info['parameters']:,} parameters ({info['params_type']}), aabb "
+        f"{_fmt_bounds(info['aabb'])}, render box {_fmt_bounds(info['render_aabb'])}",
+        "  occupancy grid: " + ("none (every cell evaluated)" if not occ else
+                                f"{occ['cascades']} cascade(s), occupied "
+                                + ", ".join(f"{100 * f:.1f} %" for f in occ["occupied_fraction"])
+                                + ("" if occ["used"] else " (not used)")),
+        f"  colour: {info['colour']}",
+        f"  samples: density ({info['density_units']}) and colour within bounds "
+        f"{_fmt_bounds(info['bounds'])}",
+    ]
 
 
 @cli.command()

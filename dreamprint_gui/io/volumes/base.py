@@ -193,6 +193,8 @@ FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
     "radiance-exr": ("radiance", (".exr",)),
     "splats": ("splats", (".ply", ".spz", ".splat", ".ksplat", ".sog")),
     "magicavoxel": ("magicavoxel", (".vox",)),
+    "instant-ngp": ("ingp", (".ingp", ".msgpack")),
+    "ingp-volume": ("ingp_volume", ()),     # told by name: NNNN_WxH.png, WxHxD_C.bin
 }
 
 
@@ -203,8 +205,12 @@ def sniff_format(path: Path) -> str:
 
         if is_sog(path):
             return "splats"
+    from .ingp_volume import is_ingp_volume_dir, is_ingp_volume_name
+
     if path.is_dir():
-        return "radiance-exr"
+        return "ingp-volume" if is_ingp_volume_dir(path) else "radiance-exr"
+    if is_ingp_volume_name(path.name):
+        return "ingp-volume"
     suffix = path.suffix.lower()
     for key, (_mod, exts) in FORMATS.items():
         if suffix in exts:
@@ -233,7 +239,7 @@ def sniff_format(path: Path) -> str:
         return "vtk"
     raise DreamPrintError("not a volume format DreamPrint reads (OpenVDB, NanoVDB, VTK image, "
                           "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ/.splat/"
-                          ".ksplat/SOG, MagicaVoxel)", path)
+                          ".ksplat/SOG, MagicaVoxel, InstantNGP snapshot or volume export)", path)
 
 
 def inspect_file(path_or_name: str | os.PathLike) -> dict:

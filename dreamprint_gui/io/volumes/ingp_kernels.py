@@ -1,0 +1,338 @@
+"""Compiled CPU evaluation of an InstantNGP NeRF: hash encoding, density and colour MLPs.
+
+Defines :func:`sample_rows` (one call per group of printer rows; releases the GIL) and the
+activation codes :data:`ACT`.  The layout it evaluates is the one
+:mod:`.ingp` reads from a snapshot; the equations, step by step (tiny-cuda-nn
+``encodings/grid.h`` and ``common_device.h``, instant-ngp ``nerf_network.h`` and
+``nerf_device.cuh``):
+
+1. Position.  A printer voxel centre ``p`` (source units) goes to instant-ngp's space,
+   ``q = A p + t`` (the dataset's ``scale``/``offset`` and axis cycle), is kept only inside
+   the training ``aabb`` and the render box (``R q`` in ``render_aabb``), and only where the
+   occupancy grid marks its cell: mip ``m = clamp(e + 1, 0, max_cascade)`` with
+   ``max|q - 0.5| = f 2^e``, ``f`` in [0.5, 1); cell ``floor(((q - 0.5) 2^-m + 0.5) 128)``;
+   occupied when its density exceeds ``min(0.01, mean of the mip-0 densities)``.
+2. Encoding.  ``u = (q - aabb.min) / (aabb.max - aabb.min)``; level ``l`` has
+   ``s_l = 2^(l log2 b) N_min - 1``, resolution ``ceil(s_l) + 1``; ``x = s_l u + 0.5``,
+   corner ``floor(x)``, weight ``w = x - floor(x)`` (smoothstep ``w^2 (3 - 2 w)`` if asked);
+   a corner's entry is ``x + y r + z r^2`` (dense levels) or
+   ``x * 1 ^ y * 2654435761 ^ z * 805459861`` (uint32, hashed levels), modulo the level's
+   table size; the level's ``F`` features are the trilinear blend of its 8 corners.
+3. Density MLP (no biases): ``h_1 = g(W_0 e)``, ..., ``o = g_out(W_L h_L)`` (16 outputs);
+   ``sigma = exp(o_0)`` (instant-ngp's density activation).
+4. Colour MLP: input ``[o, SH_4(d)]`` (16 + 16); its first layer is split as
+   ``W_0 [o; SH(d)] = W_0a o + c_d`` with ``c_d = W_0b SH(d)`` precomputed per direction;
+   ``rgb = sigmoid(out_0..2)`` (LDR) or ``exp(clamp(out, -10, 10))`` (HDR), averaged over the
+   chosen directions.
+All in float32 (instant-ngp runs the networks in float16: expect ~1e-3 relative differences).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["ACT", "sample_rows", "encode_batch", "mlp_forward"]
+
+# hidden/output activation codes (tiny-cuda-nn names)
+ACT = {"none": 0, "relu": 1, "leakyrelu": 2, "exponential": 3, "sigmoid": 4, "tanh": 5}
+
+BATCH = 128
+HASH_P1 = np.uint64(2654435761)
+HASH_P2 = np.uint64(805459861)
+MASK32 = np.uint64(0xFFFFFFFF)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _act(v, code):
+    if code == 1:
+        return v if v > 0.0 else np.float32(0.0)
+    if code == 0:
+        return v
+    if code == 2:
+        return v if v > 0.0 else np.float32(0.01) * v
+    if code == 3:
+        return np.float32(math.exp(v))
+    if code == 4:
+        return np.float32(1.0 / (1.0 + math.exp(-v)))
+    return np.float32(math.tanh(v))
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def _matmul(w, x, y, n_out, n_in, nb):
+    """``y[o, :nb] = sum_i w[o, i] x[i, :nb]`` for ``o < n_out`` (w is (out, in) row-major, as
+    tiny-cuda-nn stores its layers; the batch runs along the contiguous last axis)."""
+    for o in range(n_out):
+        yo = y[o]
+        for b in range(nb):
+            yo[b] = 0.0
+        for i in range(n_in):
+            wi = w[o, i]
+            if wi == 0.0:
+                continue
+            xi = x[i]
+            for b in range(nb):
+                yo[b] += wi * xi[b]
+
+
+@njit(cache=True, nogil=True)
+def _activate(y, n_rows, nb, code):
+    if code == 0:
+        return
+    for o in range(n_rows):
+        yo = y[o]
+        for b in range(nb):
+            yo[b] = _act(yo[b], code)
+
+
+@njit(cache=True, nogil=True)
+def mlp_forward(mats, shapes, act_hidden, act_out, n_out_used, x, buf_a, buf_b, nb):
+    """Run an MLP given as ``mats`` (flat float32) with layer ``shapes`` ((n_layers, 2) out, in)
+    on ``x`` (in, nb); returns the buffer holding the output rows (first ``n_out_used``)."""
+    n_layers = shapes.shape[0]
+    src = x
+    off = 0
+    for k in range(n_layers):
+        n_o = shapes[k, 0]
+        n_i = shapes[k, 1]
+        w = mats[off:off + n_o * n_i].reshape((n_o, n_i))
+        off += n_o * n_i
+        dst = buf_a if k % 2 == 0 else buf_b
+        last = k == n_layers - 1
+        rows = n_out_used if last else n_o
+        _matmul(w, src, dst, rows, n_i, nb)
+        _activate(dst, rows, nb, act_out if last else act_hidden)
+        src = dst
+    return src
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _entry(h, size, mask):
+    """Table row of a corner's index ``h`` (uint32 value): ``h % size`` (a mask when size is a
+    power of two, as every hashed level's is)."""
+    if mask != 0:
+        return h & mask
+    return h % size
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc):
+    """Multiresolution hash encoding of relative positions ``u`` (nb, 3) into ``enc``
+    (levels * n_feat (+ zero padding), nb): step 2 of the module docstring.
+    ``interp``: 0 linear, 1 smoothstep, 2 nearest.  The 8 corners' indices are combined from
+    per-axis terms: ``x ^ y P1 ^ z P2`` (hashed) or ``x + y r + z r^2`` (dense), uint32."""
+    n_levels = scales.shape[0]
+    m32 = np.uint64(0xFFFFFFFF)
+    one = np.uint64(1)
+    for lvl in range(n_levels):
+        s = scales[lvl]
+        r = np.uint64(res[lvl])
+        size = np.uint64(offsets[lvl + 1] - offsets[lvl])
+        mask = size - one if (size & (size - one)) == 0 else np.uint64(0)
+        tab = table[offsets[lvl]:offsets[lvl + 1]]
+        hsh = hashed[lvl] != 0
+        row = lvl * n_feat
+        for b in range(nb):
+            px = np.float32(s * u[b, 0] + np.float32(0.5))
+            py = np.float32(s * u[b, 1] + np.float32(0.5))
+            pz = np.float32(s * u[b, 2] + np.float32(0.5))
+            fx = math.floor(px)
+            fy = math.floor(py)
+            fz = math.floor(pz)
+            wx = np.float32(px - fx)
+            wy = np.float32(py - fy)
+            wz = np.float32(pz - fz)
+            gx = np.uint64(np.int64(fx)) & m32
+            gy = np.uint64(np.int64(fy)) & m32
+            gz = np.uint64(np.int64(fz)) & m32
+            if interp == 2:
+                if hsh:
+                    h = gx ^ ((gy * HASH_P1) & m32) ^ ((gz * HASH_P2) & m32)
+                else:
+                    h = (gx + gy * r + gz * r * r) & m32
+                e = _entry(h, size, mask)
+                for f in range(n_feat):
+                    enc[row + f, b] = tab[e, f]
+                continue
+            if interp == 1:
+                wx = wx * wx * (np.float32(3.0) - np.float32(2.0) * wx)
+                wy = wy * wy * (np.float32(3.0) - np.float32(2.0) * wy)
+                wz = wz * wz * (np.float32(3.0) - np.float32(2.0) * wz)
+            if hsh:
+                x0 = gx
+                x1 = (gx + one) & m32
+                y0 = (gy * HASH_P1) & m32
+                y1 = ((gy + one) * HASH_P1) & m32
+                z0 = (gz * HASH_P2) & m32
+                z1 = ((gz + one) * HASH_P2) & m32
+                e000 = _entry(x0 ^ y0 ^ z0, size, mask)
+                e100 = _entry(x1 ^ y0 ^ z0, size, mask)
+                e010 = _entry(x0 ^ y1 ^ z0, size, mask)
+                e110 = _entry(x1 ^ y1 ^ z0, size, mask)
+                e001 = _entry(x0 ^ y0 ^ z1, size, mask)
+                e101 = _entry(x1 ^ y0 ^ z1, size, mask)
+                e011 = _entry(x0 ^ y1 ^ z1, size, mask)
+                e111 = _entry(x1 ^ y1 ^ z1, size, mask)
+            else:
+                x0 = gx
+                x1 = gx + one
+                y0 = gy * r
+                y1 = (gy + one) * r
+                z0 = gz * r * r
+                z1 = (gz + one) * r * r
+                e000 = _entry((x0 + y0 + z0) & m32, size, mask)
+                e100 = _entry((x1 + y0 + z0) & m32, size, mask)
+                e010 = _entry((x0 + y1 + z0) & m32, size, mask)
+                e110 = _entry((x1 + y1 + z0) & m32, size, mask)
+                e001 = _entry((x0 + y0 + z1) & m32, size, mask)
+                e101 = _entry((x1 + y0 + z1) & m32, size, mask)
+                e011 = _entry((x0 + y1 + z1) & m32, size, mask)
+                e111 = _entry((x1 + y1 + z1) & m32, size, mask)
+            ux = np.float32(1.0) - wx
+            uy = np.float32(1.0) - wy
+            uz = np.float32(1.0) - wz
+            w00 = uy * uz
+            w10 = wy * uz
+            w01 = uy * wz
+            w11 = wy * wz
+            for f in range(n_feat):
+                enc[row + f, b] = (ux * w00 * tab[e000, f] + wx * w00 * tab[e100, f]
+                                   + ux * w10 * tab[e010, f] + wx * w10 * tab[e110, f]
+                                   + ux * w01 * tab[e001, f] + wx * w01 * tab[e101, f]
+                                   + ux * w11 * tab[e011, f] + wx * w11 * tab[e111, f])
+
+
+@njit(cache=True, nogil=True)
+def _occupied(q, occ, max_cascade):
+    m = 0.0
+    for d in range(3):
+        a = abs(q[d] - 0.5)
+        if a > m:
+            m = a
+    e = math.frexp(m)[1]
+    mip = min(max(e + 1, 0), max_cascade)
+    sc = 2.0 ** (-mip)
+    n = occ.shape[1]
+    ix = int(((q[0] - 0.5) * sc + 0.5) * n)
+    iy = int(((q[1] - 0.5) * sc + 0.5) * n)
+    iz = int(((q[2] - 0.5) * sc + 0.5) * n)
+    if ix < 0 or iy < 0 or iz < 0 or ix >= n or iy >= n or iz >= n:
+        return False
+    return occ[mip, iz, iy, ix] != 0
+
+
+@njit(cache=True, nogil=True)
+def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_hi,
+                occ, use_occ, max_cascade,
+                table, n_feat, offsets, scales, res, hashed, interp, enc_width,
+                d_mats, d_shapes, d_act, d_out_act,
+                r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
+                rgb_act, sigma_factor, sigma, rgb):
+    """Evaluate rows ``r0..r1-1`` of a slab (row r = layer r // ny, y r % ny) into ``sigma``
+    (nz, ny, nx) and ``rgb`` (nz, ny, nx, 3): steps 1-4 of the module docstring; voxels left
+    out by step 1 get density 0 and colour 0.  ``sigma_factor`` turns instant-ngp's density
+    (per its unit) into the caller's units; ``rgb_act``: 0 sigmoid, 1 exp(clamp(., -10, 10))."""
+    ny = ys.shape[0]
+    nx = xs.shape[0]
+    d_w = d_shapes[0, 0]
+    n_d_out = d_shapes[d_shapes.shape[0] - 1, 0]
+    r_w = r_shapes[0, 0]
+    n_dirs = dir_consts.shape[0]
+    width = max(max(d_w, r_w), max(n_d_out, enc_width))
+    enc = np.zeros((enc_width, BATCH), np.float32)
+    buf_a = np.empty((width, BATCH), np.float32)
+    buf_b = np.empty((width, BATCH), np.float32)
+    dens = np.empty((n_d_out, BATCH), np.float32)
+    pre = np.empty((r_w, BATCH), np.float32)
+    h1 = np.empty((r_w, BATCH), np.float32)
+    acc = np.empty((3, BATCH), np.float32)
+    u = np.empty((BATCH, 3), np.float32)
+    where = np.empty(BATCH, np.int64)
+    q = np.empty(3, np.float64)
+    ext = aabb_hi - aabb_lo
+    n_r = r_shapes.shape[0]
+    # the colour MLP without its first layer
+    r_rest_off = r_shapes[0, 0] * r_shapes[0, 1]
+    r_rest = r_mats[r_rest_off:]
+    r_rest_shapes = r_shapes[1:]
+    inv_dirs = np.float32(1.0 / n_dirs)
+    fs = sigma.reshape(-1)
+    fr = rgb.reshape(-1, 3)
+    nb = 0
+    total = (r1 - r0) * nx
+    for k in range(total + 1):
+        if k < total:
+            row = r0 + k // nx
+            i = k % nx
+            lz = row // ny
+            j = row % ny
+            flat = (lz * ny + j) * nx + i
+            fs[flat] = 0.0
+            fr[flat, 0] = 0.0
+            fr[flat, 1] = 0.0
+            fr[flat, 2] = 0.0
+            p0 = xs[i]
+            p1 = ys[j]
+            p2 = zs[lz]
+            inside = True
+            for d in range(3):
+                q[d] = A[d, 0] * p0 + A[d, 1] * p1 + A[d, 2] * p2 + t[d]
+                if q[d] < aabb_lo[d] or q[d] > aabb_hi[d]:
+                    inside = False
+            if not inside:
+                continue
+            for d in range(3):
+                v = box_R[d, 0] * q[0] + box_R[d, 1] * q[1] + box_R[d, 2] * q[2]
+                if v < box_lo[d] or v > box_hi[d]:
+                    inside = False
+            if not inside:
+                continue
+            if use_occ and not _occupied(q, occ, max_cascade):
+                continue
+            for d in range(3):
+                u[nb, d] = np.float32((q[d] - aabb_lo[d]) / ext[d])
+            where[nb] = flat
+            nb += 1
+            if nb < BATCH:
+                continue
+        if nb == 0:
+            continue
+        # --- evaluate the batch
+        encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc)
+        out = mlp_forward(d_mats, d_shapes, d_act, d_out_act, n_d_out, enc, buf_a, buf_b, nb)
+        for o in range(n_d_out):
+            for b in range(nb):
+                dens[o, b] = out[o, b]
+        _matmul(r_first_a, dens, pre, r_w, n_d_out, nb)
+        for c in range(3):
+            for b in range(nb):
+                acc[c, b] = 0.0
+        for kd in range(n_dirs):
+            for o in range(r_w):
+                cst = dir_consts[kd, o]
+                for b in range(nb):
+                    v = pre[o, b] + cst
+                    h1[o, b] = _act(v, r_act) if n_r > 1 else v
+            if n_r > 1:
+                res_out = mlp_forward(r_rest, r_rest_shapes, r_act, r_out_act, 3, h1,
+                                      buf_a, buf_b, nb)
+            else:
+                _activate(h1, 3, nb, r_out_act)
+                res_out = h1
+            for c in range(3):
+                for b in range(nb):
+                    v = res_out[c, b]
+                    if rgb_act == 0:
+                        v = np.float32(1.0 / (1.0 + math.exp(-v)))
+                    else:
+                        v = np.float32(math.exp(min(max(v, -10.0), 10.0)))
+                    acc[c, b] += v
+        for b in range(nb):
+            flat = where[b]
+            fs[flat] = np.float32(math.exp(dens[0, b]) * sigma_factor)
+            fr[flat, 0] = acc[0, b] * inv_dirs
+            fr[flat, 1] = acc[1, b] * inv_dirs
+            fr[flat, 2] = acc[2, b] * inv_dirs
+        nb = 0
