@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DreamPrintError
-from .dense_job import dense_slab_labels
+from .dense_job import dense_slab_labels, window_slab_labels
 from .halftone import HALFTONE_METHODS, Halftoner
 from .layer_kernel import slab_labels
 from .leaf_grid_job import leaf_grid_slab_labels
@@ -58,7 +58,8 @@ __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "run_conversion",
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 # A source's ``layer_kind`` -> the compiled call that samples and labels its layers (the
 # arguments: the source's ``layer_plan``, one layer's rgb and density arrays, z0, the kernel's).
-_LAYER_KERNELS = {"dense": dense_slab_labels, "leaf_grid": leaf_grid_slab_labels}
+_LAYER_KERNELS = {"dense": dense_slab_labels, "leaf_grid": leaf_grid_slab_labels,
+                  "window": window_slab_labels}
 _LABELS = (*INKS, "empty")
 
 
