@@ -25,6 +25,24 @@ line under a job says when the probe found the disk in that state.
     python benchmarks/bench_convert.py                 # 1e7, 1e8 (best of 3) and 1 -> 2 workers
     python benchmarks/bench_convert.py --sizes 1e7,1e8,1e9
     python benchmarks/bench_convert.py --one 1e8 --workers 2 --out /tmp/job   # one child run
+    python benchmarks/bench_convert.py --source openvdb --sizes 1e8,1e9 --repeat 1 --no-speedup
+    python benchmarks/bench_convert.py --source all --sizes 1e8,1e9 --repeat 1 --no-speedup
+    python benchmarks/bench_convert.py --scale-out --source demo     # 1e9: LocalCluster 1 -> 2
+
+``--source`` takes a source kind of :mod:`bench_sources` (demo, openvdb, openvdb-manta,
+nanovdb, vtk, vtk-legacy, metaimage, nrrd, radiance, radiance-linear, inria, inria-sample,
+compressed-ply, spz, vox; ``all`` for every one; generated files are made on first use), or a
+file. The job's height is chosen from the source's bounds so that the job has about the asked
+number of voxels. Per job the benchmark prints, besides the line above, the stages in ns per
+voxel (worker-seconds / voxels): "load" the source's one-time opening (reading, the OpenVDB
+helper's transfer, the Gaussians' set-up) in the converting process, "prepare" the rest of
+the preparation (tables, mask, compiled kernels), then sample, label (lookup + alignment +
+halftone), sample+label (the fused layer-at-a-time path, one figure for both), encode (PNG) and
+write; and "end to end" voxels per second over the whole conversion including load and
+preparation. ``--scale-out`` converts one job (``--scale-size``, default 1e9 voxels) through a
+``dask.distributed`` LocalCluster of 1 and then 2 worker processes (one thread each), passed to
+the conversion as ``--scheduler tcp://...`` exactly as a cluster of machines would be, and
+prints the speed-up.
 
 Before the first job the benchmark waits (at most 7 minutes, saying so) until creating a file
 where the jobs go is fast again (:func:`wait_for_disk`); ``--no-wait`` starts at once.
@@ -52,15 +70,29 @@ def height_for(n_voxels: float) -> float:
 
 
 def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
-        source: str = "demo") -> dict:
+        source: str = "demo", height: float | None = None) -> dict:
+    from dreamprint_gui.engine import pipeline
     from dreamprint_gui.engine.pipeline import ConvertSettings, run_conversion
 
-    s = ConvertSettings(source=source, output=out, height_mm=height_for(n), workers=workers,
+    s = ConvertSettings(source=source, output=out,
+                        height_mm=height if height else height_for(n), workers=workers,
                         halftone=halftone, scheduler=scheduler, overwrite=True)
     # Preparation (source, tables and mask from their caches, compiled kernels from numba's
-    # cache) is timed on its own: it is per job, not per voxel.
+    # cache) is timed on its own: it is per job, not per voxel. The source's opening (its
+    # one-time load) is timed inside it.
     from dreamprint_gui.engine.pipeline import prepare_job
 
+    opened = pipeline._open_source
+    load_s = [0.0]
+
+    def timed_open(spec, options):
+        t = time.perf_counter()
+        try:
+            return opened(spec, options)
+        finally:
+            load_s[0] += time.perf_counter() - t
+
+    pipeline._open_source = timed_open
     tp = time.perf_counter()
     ctx = prepare_job(s)
     prep = time.perf_counter() - tp
@@ -82,7 +114,7 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
             "voxels_per_s": nx * ny * nz / wall,
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
             "stages_s": m["timings_s"]["worker_stage_sum"], "cpu_s": cpu, "load_before": load,
-            "prepare_s": prep,
+            "prepare_s": prep, "load_s": load_s[0],
             "job_mb": sum(f.stat().st_size for f in Path(out, "slices").iterdir()) / 1e6}
 
 
@@ -141,14 +173,38 @@ def child(n: float, workers: int, halftone: str, scheduler: str | None, source: 
     tmp = tempfile.mkdtemp(prefix="dp-bench-", dir=jobs_dir())
     _KEEP.append(tmp)
     probe = file_probe()
+    path = source_file(source)
     cmd = [sys.executable, __file__, "--one", str(n), "--workers", str(workers),
-           "--out", os.path.join(tmp, "JOB"), "--halftone", halftone, "--source", source]
+           "--out", os.path.join(tmp, "JOB"), "--halftone", halftone, "--source", path]
+    if path != "demo":
+        cmd += ["--height", repr(height_of(path, n))]
     if scheduler:
         cmd += ["--scheduler", scheduler]
     res = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    if res.returncode:
-        raise SystemExit(res.stderr)
+    try:
+        shutil.rmtree(os.path.join(tmp, "JOB"), ignore_errors=True)  # keep the disk's use flat
+    finally:
+        if res.returncode:
+            raise SystemExit(res.stderr)
     return {**json.loads(res.stdout.strip().splitlines()[-1]), "file_us": probe}
+
+
+def source_file(kind: str) -> str:
+    """The file (or ``demo``) of a source kind of :mod:`bench_sources`, or ``kind`` itself."""
+    if kind == "demo" or os.path.exists(kind):
+        return kind
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from bench_sources import source_path
+
+    return source_path(kind)
+
+
+def height_of(path: str, n: float) -> float:
+    """The height (mm) giving a job of about ``n`` voxels for this source's bounds."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from job_hashes import height_for as by_bounds
+
+    return by_bounds(path, n)
 
 
 def main() -> None:
@@ -166,9 +222,31 @@ def main() -> None:
                     "the job size assumes equal extents)")
     ap.add_argument("--no-wait", action="store_true", help="start at once even when creating a "
                     "file is slow where the jobs go (see wait_for_disk)")
+    ap.add_argument("--height", type=float, help=argparse.SUPPRESS)
+    ap.add_argument("--scale-out", action="store_true", help="the --scale-size job on a "
+                    "dask.distributed LocalCluster of 1, then 2 worker processes")
+    ap.add_argument("--scale-size", type=float, default=1e9)
     a = ap.parse_args()
     if a.one:
-        print(json.dumps(one(a.one, a.workers, a.out, a.halftone, a.scheduler, a.source)))
+        print(json.dumps(one(a.one, a.workers, a.out, a.halftone, a.scheduler, a.source,
+                             a.height)))
+        return
+    if a.source == "all":
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from bench_sources import KINDS
+
+        kinds = list(KINDS)
+    else:
+        kinds = a.source.split(",")
+    if a.scale_out:
+        try:
+            if not a.no_wait:
+                wait_for_disk()
+            for kind in kinds:
+                scale_out(kind, a.scale_size, a.halftone)
+        finally:
+            for d in _KEEP:
+                shutil.rmtree(d, ignore_errors=True)
         return
     print(f"machine: {os.cpu_count()} cores; source {a.source} on j850-paper; "
           f"halftone {a.halftone}")
@@ -178,15 +256,18 @@ def main() -> None:
     try:
         if not a.no_wait:
             wait_for_disk()
-        _run(a)
+        for kind in kinds:
+            if len(kinds) > 1 or kind != "demo":
+                print(f"-- {kind}: {source_file(kind)}", flush=True)
+            _run(a, kind)
     finally:
         for d in _KEEP:
             shutil.rmtree(d, ignore_errors=True)
 
 
-def _run(a: argparse.Namespace) -> None:
+def _run(a: argparse.Namespace, source: str) -> None:
     for n in (float(x) for x in a.sizes.split(",")):
-        runs = sorted((child(n, a.workers, a.halftone, a.scheduler, a.source)
+        runs = sorted((child(n, a.workers, a.halftone, a.scheduler, source)
                        for _ in range(max(1, a.repeat))), key=lambda r: -r["voxels_per_s"])
         r = runs[0]
         print(f"{r['voxels']:>12,} {str(tuple(r['grid'])):>20} {a.workers:>7} "
@@ -208,14 +289,55 @@ def _run(a: argparse.Namespace) -> None:
               f"Mvox/s of the {len(runs)} runs: {', '.join(rates)} (median "
               f"{runs[len(runs) // 2]['voxels_per_s'] / 1e6:.1f}); peak RSS max "
               f"{max(x['peak_rss_mb'] for x in runs):.0f} MB", flush=True)
+        print(f"{'':>12} {stage_line(r)}", flush=True)
     if not a.no_speedup:
-        r1 = child(1e8, 1, a.halftone, a.scheduler, a.source)
-        r2 = child(1e8, 2, a.halftone, a.scheduler, a.source)
+        r1 = child(1e8, 1, a.halftone, a.scheduler, source)
+        r2 = child(1e8, 2, a.halftone, a.scheduler, source)
         print(f"1 -> 2 workers on {r1['voxels']:,} voxels: {r1['voxels_per_s'] / 1e6:.1f} -> "
               f"{r2['voxels_per_s'] / 1e6:.1f} Mvox/s, speed-up "
               f"{r2['voxels_per_s'] / r1['voxels_per_s']:.2f}x; cores busy "
               f"{r1['cpu_s'] / r1['wall_s']:.2f} -> {r2['cpu_s'] / r2['wall_s']:.2f} "
               f"(1-min load before: {r1['load_before']:.1f}, {r2['load_before']:.1f})")
+
+
+def stage_line(r: dict) -> str:
+    """ns per voxel per stage and the end-to-end rate (load and preparation included)."""
+    v = r["voxels"]
+    st = r["stages_s"]
+    parts = [("load", r["load_s"]), ("prepare", r["prepare_s"] - r["load_s"]),
+             ("sample", st.get("sample", 0.0)), ("label", st.get("lookup_halftone", 0.0)),
+             ("sample+label", st.get("sample_lookup_halftone", 0.0)),
+             ("encode", st.get("png", 0.0)), ("write", st.get("write", 0.0))]
+    text = ", ".join(f"{k} {s / v * 1e9:.1f}" for k, s in parts if s > 0)
+    end = v / (r["wall_s"] + r["prepare_s"])
+    return f"ns/voxel: {text}; end to end (load included) {end / 1e6:.1f} Mvox/s"
+
+
+def _peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def scale_out(kind: str, n: float, halftone: str) -> None:
+    """The same job through a LocalCluster of 1 and of 2 worker processes (one thread each),
+    given to the conversion as its ``--scheduler`` address; prints both rates and the
+    speed-up. The workers open the source and write the slices themselves, as on a cluster of
+    machines sharing the job folder (docs/print-jobs.md)."""
+    from distributed import Client, LocalCluster
+
+    rates = []
+    for n_workers in (1, 2):
+        with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            r = child(n, n_workers, halftone, cluster.scheduler_address, kind)
+            worker_mb = max(client.run(_peak_rss_mb).values())
+        rates.append(r["voxels_per_s"])
+        print(f"{kind}: {r['voxels']:,} voxels on a LocalCluster of {n_workers} worker "
+              f"process(es) via --scheduler {cluster.scheduler_address}: "
+              f"{r['wall_s']:.1f} s, {r['voxels_per_s'] / 1e6:.1f} Mvox/s, peak RSS client "
+              f"{r['peak_rss_mb']:.0f} MB, worker {worker_mb:.0f} MB; 1-min load before "
+              f"{r['load_before']:.1f}; cores busy (client) {r['cpu_s'] / r['wall_s']:.2f}",
+              flush=True)
+    print(f"{kind}: speed-up 1 -> 2 worker processes {rates[1] / rates[0]:.2f}x", flush=True)
 
 
 if __name__ == "__main__":

@@ -152,6 +152,9 @@ class SolidSource:
     job takes the general path (sample the slab, then label it).
     """
 
+    # Not forwarded to ``inner`` (whose fused layer plan would sample its own density).
+    layer_plan = None
+
     def __init__(self, inner, level: float | None, threshold: float) -> None:
         self.inner = inner
         self.level = level

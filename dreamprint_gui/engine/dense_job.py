@@ -1,6 +1,8 @@
 """The print job's fused path for dense grids: sample a layer, label it, next layer.
 
-Defines :func:`dense_slab_labels`: for each layer of a slab, the dense grid's trilinear samples
+Defines :func:`dense_slab_labels` (density and colour grids) and :func:`window_slab_labels`
+(scalar images through a window and a colour table: VTK, MetaImage, NRRD). For each layer of
+a slab, the dense grid's trilinear samples
 (:func:`..io.volumes.dense_sampler.dense_layer`) go into one layer's colour and density arrays,
 which :func:`.layer_kernel.layer_labels` turns into labels straight away, in one compiled call
 (nogil). The general path samples the whole slab first (16 bytes per voxel written to memory,
@@ -12,12 +14,14 @@ sums and clamp report are those of sampling the slab and calling
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
-from ..io.volumes.dense_sampler import COLOUR, COLOUR_WHERE_DENSE, DENSITY, dense_layer
+from ..io.volumes.dense import _window_kernel
+from ..io.volumes.dense_sampler import COLOUR, COLOUR_WHERE_DENSE, DENSITY, RAW, dense_layer
 from .layer_kernel import layer_labels
 
-__all__ = ["dense_slab_labels"]
+__all__ = ["dense_slab_labels", "window_slab_labels"]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -44,5 +48,34 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                     srows, planes, planes_nz, plane_layer, row, cpl, rgb_flat, rgb_flat, dens,
                     mode, scale)
+        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
+                       srows, planes, planes_nz, plane_layer, row, cpl, low, inv_width, lut,
+                       density, use_outside, outside_z, outside_y, outside_x, values, rgb, dens,
+                       z0, threshold, bg_label, flat, n, rho_k, sigma_clear, method, mask, ox,
+                       oy, oz, seed, order, labels, counts, sums, stats):
+    """Labels (L, ny, nx) of layers ``z0 .. z0 + L - 1`` of a scalar image (``vol`` one
+    channel): per layer, the trilinear samples (:func:`..io.volumes.dense_sampler.dense_layer`)
+    into ``values`` (ny * nx), the window ``t = clip((v - low) * inv_width, 0, 1)`` -> density
+    ``t * density`` and colour ``lut[t]`` (:func:`..io.volumes.dense._window_kernel`; the
+    paper's sec. 4.1 maps a scalar field to extinction and albedo), density 0 at voxels outside
+    the image (``outside_z[k] | outside_y[j] | outside_x[i]``, if ``use_outside``: a window
+    below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.layer_labels`.
+    The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s."""
+    ny, nx = labels.shape[1:]
+    for k in range(labels.shape[0]):
+        dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
+                    srows, planes, planes_nz, plane_layer, row, cpl, values, values, dens, RAW,
+                    np.float32(1.0))
+        _window_kernel(values, low, inv_width, lut, density, rgb, dens)
+        if use_outside:
+            for j in range(ny):
+                for i in range(nx):
+                    if outside_z[k] or outside_y[j] or outside_x[i]:
+                        dens[j * nx + i] = 0.0
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)

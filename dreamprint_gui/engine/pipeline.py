@@ -18,7 +18,8 @@ volume source's rule) into the worker thread's reused buffers; then one compiled
 (Clear, K/W grey; the code of ``lookup_and_align_into``) -> halftone (the rule of
 ``halftone.pick_label``) -> label. A dense grid (a source with a ``layer_plan``) is sampled a
 layer at a time into one layer's buffers, each labelled at once by the same kernel, in one
-compiled call (:mod:`.dense_job`). Then each layer goes to PNG (:mod:`..io.png_slices`). Only a
+compiled call (:mod:`.dense_job`; OpenVDB/NanoVDB fog volumes densified over their leaves:
+:mod:`.leaf_grid_job`). Then each layer goes to PNG (:mod:`..io.png_slices`). Only a
 slab is ever in memory per worker. Slabs run through Dask: the threaded scheduler (default, all
 cores), the multiprocessing scheduler (``scheduler="processes"``), or a ``dask.distributed``
 cluster (``scheduler="tcp://host:8786"``) whose workers write the slices into the job's
@@ -45,9 +46,10 @@ import numpy as np
 
 from ..errors import DreamPrintError
 from .content import CONTENT_MODES, apply_content
-from .dense_job import dense_slab_labels
+from .dense_job import dense_slab_labels, window_slab_labels
 from .halftone import HALFTONE_METHODS, Halftoner
 from .layer_kernel import slab_labels
+from .leaf_grid_job import leaf_grid_slab_labels
 from .printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from .profile import INKS
 
@@ -55,6 +57,10 @@ __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "run_conversion",
            "halftone_layer", "JobCancelled", "DEFAULT_SLAB_VOXELS"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
+# A source's ``layer_kind`` -> the compiled call that samples and labels its layers (the
+# arguments: the source's ``layer_plan``, one layer's rgb and density arrays, z0, the kernel's).
+_LAYER_KERNELS = {"dense": dense_slab_labels, "leaf_grid": leaf_grid_slab_labels,
+                  "window": window_slab_labels}
 _LABELS = (*INKS, "empty")
 
 
@@ -312,8 +318,9 @@ def _slab_into(ctx: JobContext, grid: Any, z0: int, z1: int, labels: np.ndarray,
     plan = planner(grid, z0, z1, density_scale=scale) if planner is not None else None
     if plan is not None:
         rgb, dens = _WORKSPACE.samples.take((1, ny, nx))
-        dense_slab_labels(*plan, rgb.reshape(-1, 3), dens.reshape(-1), z0, *ctx.kernel_args(),
-                          labels, counts, sums, stats)
+        kernel = _LAYER_KERNELS[getattr(source, "layer_kind", "dense")]
+        kernel(*plan, rgb.reshape(-1, 3), dens.reshape(-1), z0, *ctx.kernel_args(), labels,
+               counts, sums, stats)
         return {"sample_lookup_halftone": time.perf_counter() - t0}
     # The kernel reads colour only where the density reaches a positive threshold: the
     # sampler may then leave the colour of empty rows stale instead of zeroing it.

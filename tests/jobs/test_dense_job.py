@@ -100,3 +100,50 @@ def test_linear_colour_takes_the_general_path(tmp_path):
 def _grid(tmp_path):
     return prepare_job(ConvertSettings(source="demo", output=tmp_path / "G", height_mm=0.5,
                                        table_size=17)).grid
+
+
+@pytest.mark.parametrize("window, colormap", [((2.0, 40.0), None), ((-3.0, 25.0), "viridis")])
+def test_scalar_image_fused_path_equals_sample_then_label(tmp_path, window, colormap):
+    """A scalar image (VTK, MetaImage, NRRD) through its window and colour table: the fused path
+    (``window_slab_labels``) writes what sample_slab + slab_labels write, for any partition,
+    including the zeroed density outside the image when the window starts below 0."""
+    from dreamprint_gui.engine.dense_job import window_slab_labels
+    from dreamprint_gui.io.volumes.dense import colormap_lut
+    from dreamprint_gui.io.volumes.vtkimage import ImageSource
+
+    ctx = prepare_job(ConvertSettings(source="demo", output=tmp_path / "J", height_mm=0.5,
+                                      table_size=17, seed=2, density_threshold=0.0,
+                                      density_scale=0.7))
+    vol = _cloud((12, 9, 10), 1)
+    vol.data[np.isnan(vol.data)] = 0.0                       # the reader's nan_to_num
+    # the image covers only part of the job's grid, so some voxels lie outside it
+    vol = DenseVolume(vol.data, (0.2, 0.1, 0.15), (0.05, 0.08, 0.06), cell_centred=False)
+    source = ImageSource("img", "test", vol, window, 3.0, colormap_lut(colormap, None), [])
+    ctx.source = source
+    ctx.grid = _grid_over(ctx, source)
+    nx, ny, nz = ctx.shape_xyz
+    whole = _general(ctx, source, 0, nz, 0.0)
+    assert len(np.unique(whole[0])) > 2
+
+    def fused(z0, z1):
+        plan = source.layer_plan(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale)
+        out = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
+               np.zeros((z1 - z0, 7)), np.zeros(4))
+        window_slab_labels(*plan, np.full((ny * nx, 3), np.nan, np.float32),
+                           np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *out)
+        return out
+
+    _assert_same(fused(0, nz), whole)
+    parts = [fused(a, b) for a, b in ((0, 3), (3, 4), (4, nz))]
+    np.testing.assert_array_equal(np.concatenate([p[0] for p in parts]), whole[0])
+
+
+def _grid_over(ctx, source):
+    """A grid 1.3x the image's size, centred on it (voxels outside the image on every side)."""
+    from dreamprint_gui.io.volumes.base import PrintGrid
+
+    lo, hi = np.array(source.bounds[0]), np.array(source.bounds[1])
+    c, ext = (lo + hi) / 2, (hi - lo) * 1.3
+    vox = (0.02, 0.015, 0.025)
+    shape = tuple(int(np.ceil(e / v)) for e, v in zip(ext, vox, strict=True))
+    return PrintGrid(shape, vox, tuple(c - ext / 2), 1.0)

@@ -179,9 +179,11 @@ class VolumeSource(Protocol):
         """The ``dreamprint inspect --json`` description of the file."""
         ...
 
-    # Optional: ``layer_plan(grid, z0, z1, *, density_scale=1.0)`` -> the arguments of
-    # ``engine.dense_job.dense_slab_labels`` up to its layer arrays, or None. A dense grid
-    # offers it so that a print job samples and labels one layer at a time (DenseSource).
+    # Optional: ``layer_plan(grid, z0, z1, *, density_scale=1.0)`` -> the arguments of the
+    # compiled call named by the source's ``layer_kind`` (default "dense":
+    # ``engine.dense_job.dense_slab_labels``; "leaf_grid": ``engine.leaf_grid_job``) up to its
+    # layer arrays, or None. A source offers it so that a print job samples and labels one
+    # layer at a time (DenseSource, VdbSource, NanoVdbSource).
 
 
 # format key -> (module, extensions)

@@ -15,8 +15,8 @@ from ...errors import DreamPrintError
 from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
 from .dense_sampler import DenseLayers, rows_with_data, sample_dense, sample_dense_density
 
-__all__ = ["DenseVolume", "DenseSource", "colormap_lut", "check_claimed_size", "apply_window",
-           "bounds_list"]
+__all__ = ["DenseVolume", "DenseSource", "DenseLayers", "colormap_lut", "check_claimed_size",
+           "apply_window", "bounds_list"]
 
 # zlib/gzip cannot expand data by more than ~1032:1; allow headroom for the other codecs.
 MAX_EXPANSION = 1100

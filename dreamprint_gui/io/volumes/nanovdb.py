@@ -28,6 +28,7 @@ import numpy as np
 from ...errors import DreamPrintError
 from .base import PrintGrid, SlabBuffers, check_slab, uniform_rgb, voxel_centres
 from .dense import MAX_EXPANSION
+from .leaf_grid import LeafGridPlan
 from .sampling import SparseBlocks, sample_sparse
 
 __all__ = ["read_nvdb", "inspect_path", "open_path", "NanoVdbSource"]
@@ -249,6 +250,17 @@ class NanoVdbSource:
         hi = np.asarray(m["index_bbox"][3:], float)
         self.bounds = (tuple(float(v) for v in self.origin + (lo - 0.5) * self.scale),
                        tuple(float(v) for v in self.origin + (hi + 0.5) * self.scale))
+        self._leaf_plan = LeafGridPlan(self.blocks, self.origin, self.scale)
+
+    layer_kind = "leaf_grid"  # as openvdb.VdbSource
+
+    def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
+                   ) -> tuple | None:
+        """As :meth:`.openvdb.VdbSource.layer_plan` (None for a level set)."""
+        check_slab(grid, z0, z1)
+        if self.is_level_set:
+            return None
+        return self._leaf_plan.args(grid, z0, z1, density_scale, self.uniform_colour)
 
     def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
                     out: SlabBuffers | None = None):

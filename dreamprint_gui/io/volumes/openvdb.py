@@ -35,6 +35,7 @@ import numpy as np
 
 from ...errors import DreamPrintError
 from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
+from .leaf_grid import LeafGridPlan
 from .sampling import SparseBlocks, sample_sparse
 
 __all__ = ["VdbSource", "open_path", "inspect_path", "helper_command", "check_header"]
@@ -307,6 +308,21 @@ class VdbSource:
         self.bounds = (tuple(float(v) for v in o + (lo_i - 0.5) * s),
                        tuple(float(v) for v in o + (hi_i + 0.5) * s))
         self.voxel_size = float(np.min(s))
+        self._leaf_plan = LeafGridPlan(self.density.blocks, o, s)
+
+    # A fog volume with one uniform colour is sampled and labelled a layer at a time from a
+    # dense copy of its leaves (engine.leaf_grid_job), bit-identical to sample_slab.
+    layer_kind = "leaf_grid"
+
+    def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
+                   ) -> tuple | None:
+        """The arguments of :func:`...engine.leaf_grid_job.leaf_grid_slab_labels` before its
+        layer arrays (:class:`.leaf_grid.LeafGridPlan`), or None: a level set, colour grids or a
+        grid too large to densify take :meth:`sample_slab`."""
+        check_slab(grid, z0, z1)
+        if self.is_level_set or self.colour_grids:
+            return None
+        return self._leaf_plan.args(grid, z0, z1, density_scale, self.uniform_colour)
 
     def close(self) -> None:
         """Delete the extracted blocks now (otherwise when the source is collected)."""

@@ -39,6 +39,7 @@ class SparseBlocks:
 
     def __init__(self, origins: np.ndarray, values: np.ndarray, background, name: str = ""):
         origins = np.asarray(origins, np.int64).reshape(-1, 3)
+        self.origins = origins
         self.values = values
         self.nc = values.shape[-1]
         self.background = np.broadcast_to(np.asarray(background, np.float32), (self.nc,)).copy()

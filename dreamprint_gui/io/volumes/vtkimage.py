@@ -25,6 +25,7 @@ import numpy as np
 from ...errors import DreamPrintError
 from .base import PrintGrid, SlabBuffers, check_slab
 from .dense import (
+    DenseLayers,
     DenseSource,
     DenseVolume,
     apply_window,
@@ -201,12 +202,30 @@ class ImageSource:
                 sigma[out] = 0.0
         return rgb, sigma
 
+    layer_kind = "window"  # engine.dense_job.window_slab_labels
+
+    def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
+                   ) -> tuple:
+        """The arguments of :func:`...engine.dense_job.window_slab_labels` before its layer
+        arrays, for layers z0..z1-1: :meth:`sample_slab`'s samples and window, a layer at a
+        time, plus one layer's sample buffer."""
+        check_slab(grid, z0, z1)
+        vol = self.volume
+        u = vol._indices(grid, z0, z1)
+        plan = DenseLayers(vol.data, u[2], u[1], u[0], vol.pad)
+        lo, hi = self.window
+        masks = _outside_axes(vol, grid, z0, z1)
+        return (vol.data, vol.rows_with_data(), *plan.args(), np.float32(lo),
+                np.float32(1.0 / (hi - lo)), np.ascontiguousarray(self.lut, np.float32),
+                np.float32(self.density * density_scale / grid.mm_per_unit), bool(lo < 0), *masks,
+                np.empty(len(u[1]) * len(u[0]), np.float32))
+
     def info(self) -> dict:
         return {"format": self.format, "grids": self._grids_info}
 
 
-def _outside(volume: DenseVolume, grid: PrintGrid, z0: int, z1: int):
-    """Mask (Z, Y, X) of printer voxels outside the image's bounds, or None if none are."""
+def _outside_axes(volume: DenseVolume, grid: PrintGrid, z0: int, z1: int):
+    """Per axis (z, y, x), which printer voxel centres lie outside the image's bounds."""
     from .base import voxel_centres
 
     masks = []
@@ -214,6 +233,12 @@ def _outside(volume: DenseVolume, grid: PrintGrid, z0: int, z1: int):
         c = voxel_centres(grid, a, *rng)
         eps = 1e-9 * volume.spacing[a]
         masks.append((c < volume.bounds[0][a] - eps) | (c > volume.bounds[1][a] + eps))
+    return masks
+
+
+def _outside(volume: DenseVolume, grid: PrintGrid, z0: int, z1: int):
+    """Mask (Z, Y, X) of printer voxels outside the image's bounds, or None if none are."""
+    masks = _outside_axes(volume, grid, z0, z1)
     if not any(m.any() for m in masks):
         return None
     mz, my, mx = masks

@@ -1,0 +1,35 @@
+"""The print job's fused path for sparse VDB grids: sample a layer, label it, next layer.
+
+Defines :func:`leaf_grid_slab_labels`: for each layer of a slab, the densities of an OpenVDB or
+NanoVDB fog volume densified over its leaves (:func:`..io.volumes.leaf_grid.leaf_grid_layer`,
+the reconstruction step of the paper's sec. 4.1, bit-identical to the sparse sampler) go into
+one layer's density array, which :func:`.layer_kernel.layer_labels` turns into labels straight
+away (background test -> lookup -> alignment -> halftone, paper Fig. 2), in one compiled call
+(nogil), as :mod:`.dense_job` does for dense grids. Colour is the source's one uniform colour.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from ..io.volumes.leaf_grid import leaf_grid_layer
+from .layer_kernel import layer_labels
+
+__all__ = ["leaf_grid_slab_labels"]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def leaf_grid_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, uniform, rgb,
+                          dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear, method,
+                          mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
+    """Labels (L, ny, nx) of layers ``z0 .. z0 + L - 1`` of a densified leaf grid: the slab's
+    plan (``dense, rows_nz, k0, wk`` per layer, ``j0, wj, i0, wi``, ``plane`` scratch, density
+    ``scale`` (1/mm per source unit), ``uniform`` colour (3,)), one layer's working arrays
+    ``rgb`` (ny * nx, 3) and ``dens`` (ny * nx,), then the arguments of
+    :func:`.layer_kernel.slab_labels` after ``z0``."""
+    for c in range(3):
+        rgb[:, c] = uniform[c]
+    for k in range(labels.shape[0]):
+        leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens)
+        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)

@@ -1,0 +1,120 @@
+"""Sparse VDB grids densified over their leaves (``io.volumes.leaf_grid``) give the sparse
+sampler's densities bit for bit, and the fused print-job path (``engine.leaf_grid_job``)
+writes what the general path writes (sample the slab, then ``slab_labels``)."""
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.engine.leaf_grid_job import leaf_grid_slab_labels
+from dreamprint_gui.engine.pipeline import ConvertSettings, _labels_of_slab, prepare_job
+from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.io.volumes.base import SlabBuffers
+from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, leaf_grid_layer
+from dreamprint_gui.io.volumes.sampling import SparseBlocks
+
+
+def _random_blocks(seed=3, bg=0.0):
+    """Leaves of random values (negative ones, -0.0 and NaN among them) with gaps between."""
+    rng = np.random.default_rng(seed)
+    origins = np.array([(i, j, k) for i in range(-16, 24, 8) for j in range(0, 32, 8)
+                        for k in range(8, 40, 8) if rng.random() < 0.6], np.int64)
+    values = rng.uniform(-1.0, 4.0, (len(origins), 8, 8, 8, 1)).astype(np.float32)
+    values[rng.random(values.shape) < 0.3] = 0.0
+    flat = values.reshape(-1)
+    flat[rng.integers(0, flat.size, 4)] = -0.0
+    flat[rng.integers(0, flat.size, 2)] = np.nan
+    return SparseBlocks(origins, values, np.float32(bg))
+
+
+class _Blocks:
+    """A minimal VDB-like source around SparseBlocks (unit voxels, index = world)."""
+
+    layer_kind = "leaf_grid"
+
+    def __init__(self, blocks):
+        from dreamprint_gui.io.volumes.openvdb import VdbSource
+
+        self.blocks = blocks
+        self.density = type("G", (), {})()
+        self.density.blocks = blocks
+        self.density.origin = np.array([0.3, -0.2, 0.1])
+        self.density.scale = np.array([0.5, 0.5, 0.5])
+        self.density.sample = lambda grid, z0, z1: self._sample(grid, z0, z1)
+        self.colour_grids = []
+        self.is_level_set = False
+        self.colour_encoding = "linear"
+        self.uniform_colour = np.array([0.9, 0.4, 0.2], np.float32)
+        lo = (-20.0, -4.0, 4.0)
+        self.bounds = (lo, (14.0, 18.0, 22.0))
+        self._leaf_plan = LeafGridPlan(blocks, self.density.origin, self.density.scale)
+        self.sample_slab = VdbSource.sample_slab.__get__(self)
+        self.layer_plan = VdbSource.layer_plan.__get__(self)
+
+    def _sample(self, grid, z0, z1):
+        from dreamprint_gui.io.volumes.base import voxel_centres
+        from dreamprint_gui.io.volumes.sampling import sample_sparse
+
+        g = self.density
+        u = [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None))) - g.origin[a])
+             / g.scale[a] for a in range(3)]
+        return sample_sparse(self.blocks, u[2], u[1], u[0])
+
+
+@pytest.mark.parametrize("voxel", [(0.13, 0.07, 0.11), (1.3, 0.9, 0.6)])
+def test_densified_layers_equal_the_sparse_sampler(voxel):
+    src = _Blocks(_random_blocks())
+    grid = grid_for_source(src, voxel, size_mm=(20, 20, 20))
+    _, ref = src.sample_slab(grid, 0, grid.shape_xyz[2], density_scale=1.7)
+    assert np.isnan(ref).any() and (ref > 0).any()
+    plan = src.layer_plan(grid, 0, grid.shape_xyz[2], density_scale=1.7)
+    dense, rows, k0, wk, j0, wj, i0, wi, plane, scale, _ = plan
+    out = np.full(ref.shape, 5.0, np.float32)
+    for k in range(len(k0)):
+        leaf_grid_layer(dense, rows, k0[k], wk[k], j0, wj, i0, wi, plane, scale,
+                        out[k].reshape(-1))
+    np.testing.assert_array_equal(out.view(np.uint32), ref.view(np.uint32))
+
+
+def test_densify_refuses_what_it_cannot_reproduce():
+    b = _random_blocks(bg=0.5)
+    assert densify(b.origins, b.values, b.background) is None      # background not 0
+    b = _random_blocks(bg=-0.0)
+    assert densify(b.origins, b.values, b.background) is None
+    far = SparseBlocks(np.array([[0, 0, 0], [8 * 4096, 8 * 4096, 0]]),
+                       np.ones((2, 8, 8, 8, 1), np.float32), np.float32(0))
+    assert densify(far.origins, far.values, far.background) is None  # too large
+
+
+@pytest.mark.parametrize("threshold", [None, 0.0])
+def test_fused_path_writes_what_the_general_path_writes(tmp_path, monkeypatch, threshold):
+    src = _Blocks(_random_blocks(seed=8))
+    from dreamprint_gui.engine import pipeline
+
+    monkeypatch.setattr(pipeline, "_open_source", lambda spec, options: src)
+    s = ConvertSettings(source="vdb-like", output=tmp_path / "j", size_mm=(6, 6, 6),
+                        density_threshold=threshold)
+    ctx = prepare_job(s)
+    nx, ny, nz = ctx.shape_xyz
+    for z0, z1 in ((0, nz), (3, 4), (nz // 2, nz)):
+        buf = SlabBuffers(colour_where_dense=ctx.kernel_args()[0] > 0)
+        rgb, dens = src.sample_slab(ctx.grid, z0, z1, out=buf)
+        a = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
+             np.zeros((z1 - z0, 7)), np.zeros(4))
+        _labels_of_slab(ctx, rgb, dens, z0, *a)
+        b = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
+             np.zeros((z1 - z0, 7)), np.zeros(4))
+        leaf_grid_slab_labels(*src.layer_plan(ctx.grid, z0, z1), np.full((ny * nx, 3), np.nan,
+                                                                         np.float32),
+                              np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *b)
+        for x, y in zip(a, b, strict=True):
+            np.testing.assert_array_equal(x.view(np.uint8), y.view(np.uint8))
+        assert a[1][:6].sum() > 0                                  # some foreground labelled
+
+
+def test_vdb_files_take_the_fused_path_unless_coloured(vdbs):
+    g = None
+    for name, fused in (("ramp", True), ("bigtile", True), ("box_half_cd", False),
+                        ("far", True)):
+        s = open_source(vdbs / f"{name}.vdb")
+        g = grid_for_source(s, (0.13, 0.07, 0.11), size_mm=(5, 5, 5))
+        assert (s.layer_plan(g, 0, 1) is not None) == fused, name
