@@ -90,7 +90,7 @@ def test_fused_path_writes_what_the_general_path_writes(tmp_path, monkeypatch, t
     src = _Blocks(_random_blocks(seed=8))
     from dreamprint_gui.engine import pipeline
 
-    monkeypatch.setattr(pipeline, "_open_source", lambda spec, options: src)
+    monkeypatch.setattr(pipeline, "_open_source", lambda spec, options, *_: src)
     s = ConvertSettings(source="vdb-like", output=tmp_path / "j", size_mm=(6, 6, 6),
                         density_threshold=threshold)
     ctx = prepare_job(s)
