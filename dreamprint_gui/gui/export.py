@@ -116,6 +116,13 @@ def format_duration(seconds: float | None) -> str:
     return f"{h} h {m:02d} min" if h else (f"{m} min {s:02d} s" if m else f"{s} s")
 
 
+def _manifest_printer_name(printer: dict) -> str:
+    from ..engine.printer import PRINTER_NAMES
+
+    name = str(printer.get("name", ""))
+    return str(printer.get("title") or PRINTER_NAMES.get(name, name))
+
+
 def _num(v, fmt: str = ",.0f") -> str:
     return format(v, fmt) if isinstance(v, int | float) else str(v)
 
@@ -179,7 +186,7 @@ def manifest_summary(manifest: dict, target: str) -> str:
         "<table cellspacing=3>"
         f"<tr><td><b>Source</b></td><td>{escape(str(src.get('path', '')))}, density scale "
         f"{_num(src.get('density_scale', 1.0), 'g')}{content_text}</td></tr>"
-        f"<tr><td><b>Printer</b></td><td>{escape(pr.get('title') or pr.get('name', ''))} "
+        f"<tr><td><b>Printer</b></td><td>{escape(_manifest_printer_name(pr))} "
         f"(voxel {vx:.0f} x {vy:.0f} x {vz:.0f} um, {escape(str(pr.get('png_mode', '')))} "
         "PNG)</td></tr>"
         f"<tr><td><b>Size</b></td><td>{sx:.2f} x {sy:.2f} x {sz:.2f} mm: {nz} slices of "

@@ -1,14 +1,20 @@
 """The preview page: the source and the predicted print side by side, cameras linked.
 
 Defines :class:`PreviewPage`. Left: the source sampled on a downsampled grid at the operator's
-physical size; right: each voxel's colour and density as the engine predicts them after table
-lookup and density alignment (``gamut.predicted_appearance``), so washed-out or too-opaque
-regions show before printing. Controls: physical height, density scale, background (clear or
-empty), and a slice scrubber showing the halftoned material labels of any printer layer
-(``pipeline.halftone_layer``) in the profile's ink colours. Sampling, prediction and
-halftoning run on worker threads (:mod:`.workers`); the page only draws. Its 3D view is created
-when there is first something to draw (:class:`.volume_view.ViewHost`); until then it says what
-is being prepared.
+physical size (a voxel model sampled and drawn nearest, so its voxels stay sharp); right: each
+voxel's colour and density as the engine predicts them after table lookup and density alignment
+(``gamut.predicted_appearance``), so washed-out or too-opaque regions show before printing; the
+footnote under them says how the preview grid relates to the print's. Controls: physical height,
+density scale, background (Clear resin or nothing), content intent (auto, fog or solid:
+``engine.content``, with what auto picked and why), voxel edges of voxel models (sharp or
+smooth), and a slice scrubber showing the halftoned material labels of any printer layer
+(``pipeline.halftone_layer``) at full resolution with zoom and pan (:mod:`.layer_view`), in the
+slice PNGs' own colour codes (:mod:`.materials`). The engine's pre-flight of the job
+(``engine.preflight``) runs after each preview; its warnings show in the Warnings box. Sampling,
+prediction, halftoning and the pre-flight run on worker threads (:mod:`.workers`); the page
+only draws. Problems go to the main window (signals :attr:`PreviewPage.failed` and
+:attr:`PreviewPage.problem`), which says each once. Its 3D view is created when there is first
+something to draw (:class:`.volume_view.ViewHost`); until then it says what is being prepared.
 """
 
 from __future__ import annotations
@@ -465,7 +471,7 @@ class PreviewPage(QWidget):
             return  # a layer of earlier settings; the current one is on its way
         from .materials import label_colours
 
-        colours, names = label_colours(self.profile_eff, self.printer)
+        colours, names = label_colours(self.printer)
         self.slice_labels = labels
         rgb = colours[np.clip(labels, 0, len(colours) - 1)]
         h, w = labels.shape

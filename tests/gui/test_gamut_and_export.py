@@ -8,7 +8,7 @@ import pytest
 
 from dreamprint_gui.engine.gamut import get_tables
 from dreamprint_gui.engine.mixture import predict
-from dreamprint_gui.engine.printer import load_printer
+from dreamprint_gui.engine.printer import PRINTER_NAMES, load_printer
 from dreamprint_gui.engine.profile import INKS, default_profile
 from dreamprint_gui.gui.export import ExportDialog
 from dreamprint_gui.gui.gamut_view import GamutPage
@@ -86,7 +86,7 @@ def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     assert dlg.summary.horizontalScrollBar().maximum() == 0
     for lab, info in manifest["labels"].items():
         assert info["material"] in text, lab
-    assert "Stratasys J850 (paper profile)" in text and "j850-paper" not in text
+    assert PRINTER_NAMES["j850-paper"] in text and "j850-paper" not in text
     assert "Clear resin" in text
     assert manifest["printer"]["name"] == "j850-paper"  # the id stays in the file
 

@@ -13,6 +13,7 @@ from PySide6.QtGui import QDropEvent
 from dreamprint_gui.engine.printer import EMPTY_LABEL
 from dreamprint_gui.engine.profile import default_profile
 from dreamprint_gui.gui.main_window import MainWindow, classify_path
+from dreamprint_gui.gui.materials import label_colours
 from dreamprint_gui.gui.volume_view import frame_statistics
 
 
@@ -63,8 +64,24 @@ def test_slice_scrubber_shows_halftoned_labels(window, qtbot):
     assert labels.shape == (ny, nx) and labels.max() <= EMPTY_LABEL
     assert p.slice_image is not None and p.legend.rows
     assert abs(sum(share for _, share in p.legend.rows) - 100) < 0.5
-    # full resolution: one image pixel per printer voxel
-    assert (p.slice_image.width(), p.slice_image.height()) == (nx, ny)
+    # full resolution: one image pixel per printer voxel, in the slice PNGs' colour codes
+    img = p.slice_image
+    assert (img.width(), img.height()) == (nx, ny)
+    rows = np.frombuffer(img.constBits(), np.uint8).reshape(ny, img.bytesPerLine())
+    shown = rows[:, : 3 * nx].reshape(ny, nx, 3)
+    np.testing.assert_array_equal(shown, window.printer.palette()[labels])
+    colours, names = label_colours(window.printer)
+    np.testing.assert_array_equal(colours, window.printer.palette())
+    assert [n for n, _ in p.legend.rows] == [names[i] for i in np.unique(labels)]
+    # zoom and pan: the wheel zooms in, Fit shows the whole layer again
+    view = p.slice_view
+    whole = view.visible_voxels()
+    assert whole.width() >= nx - 1 and whole.height() >= ny - 1
+    view.canvas.zoom_by(8.0)
+    part = view.visible_voxels()
+    assert part.width() < whole.width() / 2 or part.height() < whole.height() / 2
+    view.fit_button.click()
+    assert view.visible_voxels().width() >= nx - 1
     p.slice_slider.setValue(0)  # the bottom layer of a cloud is mostly background
     qtbot.waitUntil(lambda: p.shown_layer == 0, timeout=30000)
 
