@@ -166,6 +166,8 @@ def manifest_summary(manifest: dict, target: str) -> str:
             "n_clamped_low", "n_clamped_high", "max_shortfall_low", "max_shortfall_high")}
         if other:
             clamp_text += "; " + ", ".join(f"{k} {_num(v, '.4g')}" for k, v in other.items())
+        if not (low or high):
+            clamp_text = "none"
     else:
         clamp_text = "none"
     t = manifest.get("timings_s", {})
@@ -462,6 +464,7 @@ class ExportDialog(QDialog):
             return
         self.preflight = pf
         self.preflight_view.setHtml(preflight_html(pf))
+        self._fit_text(self.preflight_view, 150)
 
     # choices ----------------------------------------------------------------------------------
     def _printer_chosen(self, index: int) -> None:
@@ -588,23 +591,23 @@ class ExportDialog(QDialog):
         self.form_box.setVisible(False)
         self.preflight_box.setVisible(False)
         self.summary.setVisible(True)
-        self._fit_summary()
+        self._fit_text(self.summary, 120)
         self.start_button.setVisible(False)
         self.cancel_button.setVisible(False)
         self.close_button.setVisible(True)
         self._finish_run()
         self.finished_job.emit(manifest)
 
-    def _fit_summary(self) -> None:
-        """Make the dialog tall enough for the whole summary (within the screen; the box
-        scrolls beyond that)."""
-        doc = self.summary.document()
-        doc.setTextWidth(self.summary.viewport().width())
-        need = int(doc.size().height()) + 2 * self.summary.frameWidth() + 8
+    def _fit_text(self, box: QTextBrowser, least: int) -> None:
+        """Make the dialog tall enough for the whole text of ``box`` (within the screen; the
+        box scrolls beyond that)."""
+        doc = box.document()
+        doc.setTextWidth(box.viewport().width())
+        need = int(doc.size().height()) + 2 * box.frameWidth() + 8
         screen = self.screen().availableGeometry() if self.screen() else None
-        limit = int(0.85 * screen.height()) if screen is not None else 900
-        other = self.sizeHint().height() - self.summary.sizeHint().height()
-        self.summary.setMinimumHeight(max(120, min(need, limit - other)))
+        limit = int(0.9 * screen.height()) if screen is not None else 900
+        other = self.sizeHint().height() - max(box.sizeHint().height(), box.minimumHeight())
+        box.setMinimumHeight(max(least, min(need, limit - other)))
         self.adjustSize()
 
     def _failed(self, message: str, _tb: str) -> None:

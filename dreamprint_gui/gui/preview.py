@@ -35,6 +35,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QSlider,
     QSplitter,
+    QTabWidget,
     QVBoxLayout,
     QWidget,
 )
@@ -76,6 +77,7 @@ class PreviewPage(QWidget):
         self._task: Task | None = None
         self._slice_task: Task | None = None
         self._preflight_task: Task | None = None
+        self._framing = None  # (source, size) the 3D camera was last framed for
         self._pending = False
         self._slice_pending = False
         self._await_slice = False
@@ -129,6 +131,8 @@ class PreviewPage(QWidget):
         form.addRow("Content", self.content)
         form.addRow("", self.content_note)
         form.addRow("Voxel edges", self.sampling)
+        form.setRowVisible(self.sampling, False)  # shown for sources that offer the choice
+        self.form = form
         box = QGroupBox("Print")
         box.setLayout(form)
 
@@ -137,12 +141,24 @@ class PreviewPage(QWidget):
         self.slice_label = QLabel("layer -")
         self.slice_view = LayerView()
         self.legend = MaterialLegend()
-        sbox = QGroupBox("Halftoned layer (material labels)")
-        sl = QVBoxLayout(sbox)
-        sl.addWidget(self.slice_slider)
-        sl.addWidget(self.slice_label)
-        sl.addWidget(self.slice_view, 1)
-        sl.addWidget(self.legend)
+        # The printer's layers at full resolution: scrubber on top, the layer with zoom and
+        # pan, its materials listed beside it (one per line: the legend never wraps).
+        layers = QWidget()
+        ll = QVBoxLayout(layers)
+        top = QHBoxLayout()
+        top.addWidget(QLabel("Layer"))
+        top.addWidget(self.slice_slider, 1)
+        top.addWidget(self.slice_label)
+        ll.addLayout(top)
+        body = QHBoxLayout()
+        body.addWidget(self.slice_view, 1)
+        legend_col = QVBoxLayout()
+        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(colours as in the "
+                                    "slice files)"))
+        legend_col.addWidget(self.legend)
+        legend_col.addStretch(1)
+        body.addLayout(legend_col)
+        ll.addLayout(body, 1)
 
         side = QWidget()
         side_l = QVBoxLayout(side)
@@ -160,7 +176,7 @@ class PreviewPage(QWidget):
         side_l.addWidget(box)
         side_l.addWidget(self.status)
         side_l.addWidget(self.warnings_box)
-        side_l.addWidget(sbox, 1)
+        side_l.addStretch(1)
         side.setMinimumWidth(280)
 
         views = QWidget()
@@ -170,8 +186,12 @@ class PreviewPage(QWidget):
         vl.addWidget(self.view, 1)
         vl.addWidget(self.note)
 
+        self.pages = QTabWidget()
+        self.pages.addTab(views, "Source and predicted print (3D)")
+        self.pages.addTab(layers, "Printer layers (halftoned, full resolution)")
+
         split = QSplitter()
-        split.addWidget(views)
+        split.addWidget(self.pages)
         split.addWidget(side)
         split.setStretchFactor(0, 4)
         split.setStretchFactor(1, 1)
@@ -244,6 +264,7 @@ class PreviewPage(QWidget):
             combo.setCurrentIndex(0)
             combo.blockSignals(False)
         self.sampling.setEnabled("sampling" in takes)
+        self.form.setRowVisible(self.sampling, "sampling" in takes)
         self.content_note.setText("")
 
     _UNSET = object()
@@ -357,10 +378,12 @@ class PreviewPage(QWidget):
                         reset_camera=False, line_width=1, render=False)
             pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}",
                         render=False)
-        if first:
+        framing = (self.source_path, tuple(round(v, 3) for v in data.size_mm))
+        if first or framing != self._framing:  # a new source or size: frame it whole
             pl.subplot(0, 0)
             pl.view_isometric(render=False)
             pl.renderer.reset_camera(render=False)  # the plotter-level one always renders
+        self._framing = framing
         pl.render()
         sx, sy, sz = data.size_mm
         self.status.setText(f"{Path(str(self.source_path)).name}: print "

@@ -75,6 +75,9 @@ def test_slice_scrubber_shows_halftoned_labels(window, qtbot):
     assert [n for n, _ in p.legend.rows] == [names[i] for i in np.unique(labels)]
     # zoom and pan: the wheel zooms in, Fit shows the whole layer again
     view = p.slice_view
+    p.pages.setCurrentIndex(1)  # the layers tab
+    qtbot.waitUntil(lambda: view.canvas.isVisible(), timeout=5000)
+    assert view.canvas.viewport().width() > 300  # a full-size view, not a thumbnail
     whole = view.visible_voxels()
     assert whole.width() >= nx - 1 and whole.height() >= ny - 1
     view.canvas.zoom_by(8.0)
