@@ -628,6 +628,9 @@ class ExportDialog(QDialog):
             self.reject()
 
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        self._preflight_debounce.stop()
+        if self._preflight_task is not None:
+            self._preflight_task.cancel()  # an estimate nobody will read
         if self.task is not None and self.task.outcome is None:
             self.task.cancel()
             if self.task.thread is not None:
