@@ -226,14 +226,18 @@ def _node_fields(tables, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c = np.clip(np.nan_to_num(rgb.astype(np.float64)), 0.0, 1.0) * (n - 1)
     i0 = np.minimum(c.astype(np.int64), n - 2)
     f = c - i0
-    reach = np.zeros(len(rgb))
+    s0 = np.zeros(len(rgb))
+    sg = np.zeros(len(rgb))
     for dx in (0, 1):
         for dy in (0, 1):
             for dz in (0, 1):
                 w = ((f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1])
                      * (f[:, 2] if dz else 1 - f[:, 2]))
                 node = p[i0[:, 0] + dx, i0[:, 1] + dy, i0[:, 2] + dz]
-                reach += w * np.maximum(node[:, F_SIGMA], node[:, F_GREY])
+                s0 += w * node[:, F_SIGMA]
+                sg += w * node[:, F_GREY]
+    # as align_rows: the grey raises the density up to sg, unless it is no denser than s0
+    reach = np.maximum(s0, sg)
     near = np.rint(c).astype(np.int64)
     de = np.asarray(tables.dE2000)[near[:, 0], near[:, 1], near[:, 2]].astype(np.float64)
     return reach, de
