@@ -26,7 +26,7 @@ How each figure is estimated
   each sampled printed voxel's colour; out of gamut means dE2000 > ``IN_GAMUT_DE2000``.
 - Disk: up to three full layers (evenly spaced) labelled and PNG-encoded exactly as the job
   does; their mean size times the layer count, plus the manifest.
-- Time: voxels / rate + the preparation measured here. The rate is the median
+- Time of the conversion (after the preparation): voxels / rate. The rate is the median
   ``voxels_per_second`` of the last jobs this machine ran (:func:`measured_rate`), or, before
   any, :data:`BENCHMARK_RATE` (docs/print-jobs.md, ``benchmarks/bench_convert.py``); the
   summary says which.
@@ -86,7 +86,7 @@ class Preflight:
     safe_density_scale: float | None          # the scale that avoids clamping (None: no clamp)
     out_of_gamut_fraction: float              # of the printed (non-background) voxels
     worst_dE2000: float
-    seconds: float                            # estimated wall time of the conversion
+    seconds: float                            # estimated conversion time (after preparing)
     rate_voxels_per_s: float
     rate_source: str                          # "measured (...)" or "benchmark constant"
     content: dict[str, Any]
@@ -98,6 +98,13 @@ class Preflight:
     @property
     def ink_fraction(self) -> float:
         return sum(self.fractions.get(k, 0.0) for k in INKS if k != "Cl")
+
+    def short_line(self) -> str:
+        """One line: the job's size, disk and time estimates and the number of warnings."""
+        n = len(self.warnings)
+        return (f"pre-flight: {self.total_voxels:,} voxels in {self.slices:,} slices, about "
+                f"{_human_bytes(self.disk_bytes)}, about {_human_seconds(self.seconds)}; "
+                + (f"{n} warning{'s' if n != 1 else ''}" if n else "no warnings"))
 
     def summary_lines(self) -> list[str]:
         """The human-readable summary: one line per figure, then one per warning."""
@@ -308,7 +315,6 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
                    halftone=halftone, source_options=source_options, sampling=sampling,
                    height_mm=height_mm, size_mm=size_mm, objective=objective,
                    table_size=table_size, seed=seed)
-    t_prepare = time.perf_counter() - t0
     s = ctx.settings
     src, tables = ctx.resources()
     nx, ny, nz = ctx.shape_xyz
@@ -356,7 +362,7 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
         total_voxels=total, disk_bytes=disk, fractions=fractions, sampled_voxels=n,
         clamped_fraction=clamped_frac, clamped_voxels=int(round(clamped_frac * total)),
         safe_density_scale=safe, out_of_gamut_fraction=oog, worst_dE2000=worst,
-        seconds=t_prepare + total / rate, rate_voxels_per_s=rate, rate_source=rate_source,
+        seconds=total / rate, rate_voxels_per_s=rate, rate_source=rate_source,
         content=content_json, density_scale=s.density_scale, background=s.background)
     pf.warnings = _warnings(pf)
     pf.estimate_seconds = time.perf_counter() - t0
