@@ -373,9 +373,13 @@ def _warnings(pf: Preflight) -> list[PreflightWarning]:
     out = []
     clear = pf.fractions.get("Cl", 0.0) + pf.fractions.get("empty", 0.0)
     if clear > MOSTLY_CLEAR:
-        hint = ("the source prints as a faint haze: try --content solid, or a larger "
-                "--density-scale" if pf.content.get("mode") == "fog" else
-                "little of the grid is occupied: check the source and its bounds")
+        if pf.content.get("mode") != "fog":
+            hint = "little of the grid is occupied: check the source and its bounds"
+        elif pf.clamped_voxels > 0:  # a larger scale would clamp more: only solid helps
+            hint = "the source prints as a faint haze around clamped cores: try --content solid"
+        else:
+            hint = ("the source prints as a faint haze: try --content solid, or a larger "
+                    "--density-scale")
         out.append(PreflightWarning(
             "mostly-clear", f"the job would be {100 * clear:.1f} % Clear or empty "
             f"(ink {100 * pf.ink_fraction:.2f} %): {hint}",
