@@ -24,8 +24,8 @@ How each figure is estimated
   interpolated in the table like the kernel does).
 - Out of gamut: the tables' per-node dE2000 (reproduction vs target) at the nearest node of
   each sampled printed voxel's colour; out of gamut means dE2000 > ``IN_GAMUT_DE2000``.
-- Disk: up to three full layers (evenly spaced) labelled and PNG-encoded exactly as the job
-  does; their mean size times the layer count, plus the manifest.
+- Disk: up to 16 full layers (evenly spaced, at most ~8e6 voxels) labelled and PNG-encoded
+  exactly as the job does; their mean size times the layer count, plus the manifest.
 - Time of the conversion (after the preparation): voxels / rate. The rate is the median
   ``voxels_per_second`` of the last jobs this machine ran (:func:`measured_rate`), or, before
   any, :data:`BENCHMARK_RATE` (docs/print-jobs.md, ``benchmarks/bench_convert.py``); the
@@ -251,12 +251,13 @@ def _node_fields(tables, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _disk_estimate(ctx, nz: int) -> int:
-    """Mean PNG size of up to three full layers, labelled and encoded as the job does, x nz."""
+    """Mean PNG size of up to 16 evenly spaced full layers (at most ~8e6 voxels in all),
+    labelled and encoded as the job does, times nz."""
     from ..io.png_slices import encode_labels_pngs
     from .pipeline import _oriented, _slab_into
 
     nx, ny, _ = ctx.shape_xyz
-    n_layers = 1 if nx * ny > 4_000_000 else min(3, nz)
+    n_layers = max(1, min(16, nz, 8_000_000 // max(1, nx * ny)))  # ~8e6 voxels at most
     zs = sorted({int(round(v)) for v in np.linspace(0, nz - 1, n_layers + 2)[1:-1]} or {0})
     total = 0
     for z in zs:
