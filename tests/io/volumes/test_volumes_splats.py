@@ -116,7 +116,8 @@ def test_inria_sample_file(shared_data, capsys):
     assert info["gaussians"] == 9080 and info["sh_degree"] == 3
     assert main(["inspect", "--json", str(f)]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"format", "gaussians", "sh_degree", "bounds"}
+    assert set(out) == {"format", "gaussians", "sh_degree", "bounds", "content"}
+    assert out["content"] == {"mode": "fog", "reason": "Gaussian splats"}
 
 
 @pytest.mark.parametrize("n_rest, degree, double", [(0, 0, False), (9, 1, True), (45, 3, False)])
