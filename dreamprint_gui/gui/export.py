@@ -100,11 +100,24 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            overwrite=overwrite, **extra)
 
 
-def export_job(settings):
-    """A worker job running the conversion: progress items are ``ConvertProgress``."""
+def export_job(settings, preflight=True):
+    """A worker job running the conversion: progress items are ``ConvertProgress``.
+    ``preflight``: an estimate already made for these settings (recorded in the manifest as
+    is), or True to make it first (``pipeline.run_conversion``)."""
     from ..engine.pipeline import run_conversion
 
-    return generator_job(lambda cancel: run_conversion(settings, cancel))
+    return generator_job(lambda cancel: run_conversion(settings, cancel, preflight=preflight))
+
+
+def _same_job(a, b) -> bool:
+    """Whether two ``ConvertSettings`` describe the same job (where it goes and who runs it
+    aside): a pre-flight of one is the pre-flight of the other."""
+    from dataclasses import replace
+
+    if a is None or b is None:
+        return False
+    where = {"output": None, "overwrite": False, "workers": None, "scheduler": None}
+    return replace(a, **where) == replace(b, **where)
 
 
 def format_duration(seconds: float | None) -> str:
@@ -182,6 +195,11 @@ def manifest_summary(manifest: dict, target: str) -> str:
                         + (f" ({escape(str(content['reason']))})" if content.get("reason")
                            else ""))
     threshold = bg.get("density_threshold_per_mm") if isinstance(bg, dict) else None
+    pf = manifest.get("preflight") or {}
+    warnings = [w.get("message", "") for w in pf.get("warnings", []) if isinstance(w, dict)]
+    warn_html = ("<p><b>Pre-flight warnings</b></p><ul style='margin-left: -20px'>"
+                 + "".join(f"<li>{escape(gui_wording(m))}</li>" for m in warnings) + "</ul>"
+                 if warnings else "")
     sl = manifest.get("slices", {})
     return (
         f"<p><b>Job complete</b>: {escape(target)}</p>"
@@ -209,7 +227,7 @@ def manifest_summary(manifest: dict, target: str) -> str:
         + run_on + "</td></tr></table>"
         "<p><b>Materials</b></p>"
         "<table cellspacing=4><tr><th></th><th>label</th><th>material</th><th>voxels</th>"
-        f"<th>share</th><th>mean conc.</th></tr>{''.join(rows)}</table>")
+        f"<th>share</th><th>mean conc.</th></tr>{''.join(rows)}</table>" + warn_html)
 
 
 def preflight_html(pf) -> str:
@@ -260,6 +278,7 @@ class ExportDialog(QDialog):
         self.context = context  # the preview's JobContext: reused when the job's source matches
         self.sampling_choice = pp.get("sampling")  # the preview's voxel-edge choice
         self.preflight = None  # the engine's Preflight of the current settings
+        self._preflight_settings = None  # the settings it estimated
         self._preflight_task: Task | None = None
         self._preflight_pending = False
 
@@ -442,7 +461,7 @@ class ExportDialog(QDialog):
             from ..engine.preflight import preflight
             from .preview_data import job_context
 
-            return settings, preflight(job_context(settings, previous))
+            return settings, preflight(job_context(settings, previous), seed=settings.seed)
 
         self.preflight_view.setPlainText("estimating the job ...")
         task = Task(job, "export-preflight")
@@ -459,10 +478,11 @@ class ExportDialog(QDialog):
             self.update_preflight()
 
     def _show_preflight(self, result) -> None:
-        _settings, pf = result
+        settings, pf = result
         if self._preflight_pending:
             return
         self.preflight = pf
+        self._preflight_settings = settings
         self.preflight_view.setHtml(preflight_html(pf))
         self._fit_text(self.preflight_view, 150)
 
@@ -561,7 +581,8 @@ class ExportDialog(QDialog):
         self.start_button.setEnabled(False)
         self.progress.setValue(0)
         self.remaining.setText("preparing ...")
-        task = Task(export_job(settings), "export")
+        same = _same_job(settings, self._preflight_settings) and self.preflight is not None
+        task = Task(export_job(settings, self.preflight if same else True), "export")
         task.progress.connect(self._progress)
         task.succeeded.connect(self._succeeded)
         task.failed.connect(self._failed)

@@ -411,7 +411,7 @@ class PreviewPage(QWidget):
         def job(report, cancel):
             from ..engine.preflight import preflight
 
-            return ctx, preflight(ctx)
+            return ctx, preflight(ctx, seed=ctx.settings.seed)  # as the export's
 
         task = Task(job, "preflight")
         task.succeeded.connect(self._show_preflight)
