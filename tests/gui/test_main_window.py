@@ -151,13 +151,20 @@ def _texts_showing(fragment: str) -> list[str]:
     return found
 
 
-def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data):
+@pytest.mark.parametrize("kind", ["cut .vox", "empty .vdb"])
+def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data, kind):
     """Opening a damaged file: one dialog says it; nothing else repeats it."""
     from PySide6.QtWidgets import QMessageBox
 
-    knight = shared_data / "voxels" / "magicavoxel_chr_knight.vox"
-    bad = tmp_path / "knight-cut.vox"
-    bad.write_bytes(knight.read_bytes()[:100])  # cut inside a chunk
+    if kind == "cut .vox":
+        knight = shared_data / "voxels" / "magicavoxel_chr_knight.vox"
+        bad = tmp_path / "knight-cut.vox"
+        bad.write_bytes(knight.read_bytes()[:100])  # cut inside a chunk
+        problem = "runs past the end"
+    else:
+        bad = tmp_path / "cloud.vdb"
+        bad.write_bytes(b"")
+        problem = "empty file"
     w = MainWindow(with_gamut=False)
     qtbot.addWidget(w)
     w.show()
@@ -165,10 +172,10 @@ def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data):
     with qtbot.waitSignal(w.openFailed, timeout=30000) as blocker:
         w.open_path(bad)
     message = blocker.args[1]
-    assert "knight-cut.vox" in message and "damaged" in message
+    assert bad.name in message and problem in message
     qtbot.waitUntil(lambda: w.problem_box is not None and w.problem_box.isVisible(),
                     timeout=5000)
-    where = _texts_showing("runs past the end")
+    where = _texts_showing(problem)
     assert where == ["label in QMessageBox"], where
     assert not w.statusBar().currentMessage().startswith("Opening")  # no stale promise
     boxes = [b for b in w.findChildren(QMessageBox) if b.isVisible()]
@@ -178,7 +185,7 @@ def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data):
         w.open_path(bad)
     qtbot.waitUntil(lambda: len([b for b in w.findChildren(QMessageBox)
                                  if b.isVisible()]) == 1, timeout=5000)
-    assert len(_texts_showing("runs past the end")) == 1
+    assert len(_texts_showing(problem)) == 1
     w.problem_box.close()
 
 
