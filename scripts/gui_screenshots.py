@@ -4,19 +4,22 @@ Run under a virtual screen:  xvfb-run -a -s "-screen 0 1280x800x24" \
     .venv/bin/python scripts/gui_screenshots.py [--table-size 100]
 
 Drives the application as an operator would: the main window on the default profile and the demo
-volume (preview), the gamut page with a picked colour and the hexagon chart, and the calibration
-wizard fitting ink measurements (generated from the default profile with the forward model and
-written as instrument files, so the wizard has something real to read).
+volume (preview), the gamut page with a picked colour and the hexagon chart, a voxel model (the
+sample .vox: preview, export dialog with its pre-flight, the finished job's summary), and the
+calibration wizard fitting ink measurements (generated from the default profile with the forward
+model and written as instrument files, so the wizard has something real to read).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+DATA = Path(os.environ.get("DREAMPRINT_SAMPLE_DATA") or ROOT.parent / "shared" / "data")
 sys.path.insert(0, str(ROOT))
 
 
@@ -24,12 +27,16 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=str(ROOT / "docs" / "screenshots"))
     ap.add_argument("--table-size", type=int, default=None)
+    ap.add_argument("--voxel-model", default=str(DATA / "voxels" / "magicavoxel_chr_knight.vox"),
+                    help="a .vox for the voxel-model preview and the export dialog")
     ap.add_argument("--size", default="1280x800", help="window size WxH (default 1280x800, a "
                     "laptop screen)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
+    # the screenshots start from default settings, and leave the operator's own untouched
+    os.environ["DREAMPRINT_SETTINGS"] = str(Path(tempfile.mkdtemp()) / "settings.ini")
     from PySide6.QtCore import QEventLoop, QTimer
     from PySide6.QtWidgets import QApplication
 
@@ -52,14 +59,23 @@ def main() -> int:
         QTimer.singleShot(ms, loop.quit)
         loop.exec()
 
+    def wait_until(condition, timeout_s=900) -> None:
+        for _ in range(int(timeout_s * 5)):
+            if condition():
+                return
+            settle(200)
+
     w = MainWindow(table_size=args.table_size)
     w.interactive = False
     w.resize(*(int(v) for v in args.size.split("x")))
     w.move(0, 0)
     w.show()
+    w.preview.set_params(height_mm=40.0, density_scale=1.0, background="clear")
     w.use_default_profile()
     w.open_path("demo")
     wait(w.ready)
+    if w.preview.preflight is None:  # its warnings show in the side panel
+        wait(w.preview.preflightReady)
     settle()
     grab_window(w, str(out / "preview.png"))
 
@@ -75,6 +91,41 @@ def main() -> int:
     w.gamut.pages.setCurrentIndex(1)
     settle(600)
     grab_window(w, str(out / "gamut-chart.png"))
+
+    voxel = Path(args.voxel_model)
+    if voxel.is_file():
+        # a voxel model: solid on auto, sharp voxels; then its export, before and after
+        w.tabs.setCurrentWidget(w.preview)
+        w.preview.set_params(height_mm=20.0)
+        w.open_path(str(voxel))
+        wait(w.preview.preflightReady)
+        settle(1500)
+        grab_window(w, str(out / "preview-voxel.png"))
+        w.preview.pages.setCurrentIndex(1)  # the printer's layers, through the knight's body
+        w.preview.slice_slider.setValue(w.preview.slice_slider.maximum() * 11 // 20)
+        wait_until(lambda: w.preview.shown_layer == w.preview.slice_slider.value())
+        settle(600)
+        w.preview.slice_view.canvas.fit()
+        settle(600)
+        grab_window(w, str(out / "preview-layer.png"))
+        w.preview.pages.setCurrentIndex(0)
+
+        w.preview.set_params(height_mm=8.0)  # a job that exports in seconds
+        wait(w.preview.preflightReady)
+        w.export_dialog()
+        dlg = w._export
+        dlg.folder.setText(tempfile.mkdtemp())
+        dlg.move(60, 40)
+        wait_until(lambda: dlg.preflight is not None)
+        settle()
+        grab_window(dlg, str(out / "export.png"))
+        dlg.start()
+        wait_until(lambda: dlg.task.outcome is not None)
+        settle()
+        grab_window(dlg, str(out / "export-summary.png"))
+        dlg.close()
+    else:
+        print(f"no voxel model at {voxel}: preview-voxel.png and export*.png not taken")
 
     import numpy as np
 

@@ -637,7 +637,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
         pf = preflight
     if pf is not None:
         yield ConvertProgress("preflight", 0, 0, 0, 0, time.perf_counter() - started, None,
-                              "\n".join(pf.summary_lines()), preflight=pf)
+                              pf.short_line(), preflight=pf)
     t_prep = time.perf_counter() - started
     kind = _scheduler_kind(settings)
     workers = settings.workers or os.cpu_count() or 1

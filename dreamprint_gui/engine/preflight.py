@@ -24,9 +24,9 @@ How each figure is estimated
   interpolated in the table like the kernel does).
 - Out of gamut: the tables' per-node dE2000 (reproduction vs target) at the nearest node of
   each sampled printed voxel's colour; out of gamut means dE2000 > ``IN_GAMUT_DE2000``.
-- Disk: up to three full layers (evenly spaced) labelled and PNG-encoded exactly as the job
-  does; their mean size times the layer count, plus the manifest.
-- Time: voxels / rate + the preparation measured here. The rate is the median
+- Disk: up to 16 full layers (evenly spaced, at most ~8e6 voxels) labelled and PNG-encoded
+  exactly as the job does; their mean size times the layer count, plus the manifest.
+- Time of the conversion (after the preparation): voxels / rate. The rate is the median
   ``voxels_per_second`` of the last jobs this machine ran (:func:`measured_rate`), or, before
   any, :data:`BENCHMARK_RATE` (docs/print-jobs.md, ``benchmarks/bench_convert.py``); the
   summary says which.
@@ -86,7 +86,7 @@ class Preflight:
     safe_density_scale: float | None          # the scale that avoids clamping (None: no clamp)
     out_of_gamut_fraction: float              # of the printed (non-background) voxels
     worst_dE2000: float
-    seconds: float                            # estimated wall time of the conversion
+    seconds: float                            # estimated conversion time (after preparing)
     rate_voxels_per_s: float
     rate_source: str                          # "measured (...)" or "benchmark constant"
     content: dict[str, Any]
@@ -98,6 +98,13 @@ class Preflight:
     @property
     def ink_fraction(self) -> float:
         return sum(self.fractions.get(k, 0.0) for k in INKS if k != "Cl")
+
+    def short_line(self) -> str:
+        """One line: the job's size, disk and time estimates and the number of warnings."""
+        n = len(self.warnings)
+        return (f"pre-flight: {self.total_voxels:,} voxels in {self.slices:,} slices, about "
+                f"{_human_bytes(self.disk_bytes)}, about {_human_seconds(self.seconds)}; "
+                + (f"{n} warning{'s' if n != 1 else ''}" if n else "no warnings"))
 
     def summary_lines(self) -> list[str]:
         """The human-readable summary: one line per figure, then one per warning."""
@@ -226,26 +233,31 @@ def _node_fields(tables, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c = np.clip(np.nan_to_num(rgb.astype(np.float64)), 0.0, 1.0) * (n - 1)
     i0 = np.minimum(c.astype(np.int64), n - 2)
     f = c - i0
-    reach = np.zeros(len(rgb))
+    s0 = np.zeros(len(rgb))
+    sg = np.zeros(len(rgb))
     for dx in (0, 1):
         for dy in (0, 1):
             for dz in (0, 1):
                 w = ((f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1])
                      * (f[:, 2] if dz else 1 - f[:, 2]))
                 node = p[i0[:, 0] + dx, i0[:, 1] + dy, i0[:, 2] + dz]
-                reach += w * np.maximum(node[:, F_SIGMA], node[:, F_GREY])
+                s0 += w * node[:, F_SIGMA]
+                sg += w * node[:, F_GREY]
+    # as align_rows: the grey raises the density up to sg, unless it is no denser than s0
+    reach = np.maximum(s0, sg)
     near = np.rint(c).astype(np.int64)
     de = np.asarray(tables.dE2000)[near[:, 0], near[:, 1], near[:, 2]].astype(np.float64)
     return reach, de
 
 
 def _disk_estimate(ctx, nz: int) -> int:
-    """Mean PNG size of up to three full layers, labelled and encoded as the job does, x nz."""
+    """Mean PNG size of up to 16 evenly spaced full layers (at most ~8e6 voxels in all),
+    labelled and encoded as the job does, times nz."""
     from ..io.png_slices import encode_labels_pngs
     from .pipeline import _oriented, _slab_into
 
     nx, ny, _ = ctx.shape_xyz
-    n_layers = 1 if nx * ny > 4_000_000 else min(3, nz)
+    n_layers = max(1, min(16, nz, 8_000_000 // max(1, nx * ny)))  # ~8e6 voxels at most
     zs = sorted({int(round(v)) for v in np.linspace(0, nz - 1, n_layers + 2)[1:-1]} or {0})
     total = 0
     for z in zs:
@@ -304,7 +316,6 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
                    halftone=halftone, source_options=source_options, sampling=sampling,
                    height_mm=height_mm, size_mm=size_mm, objective=objective,
                    table_size=table_size, seed=seed)
-    t_prepare = time.perf_counter() - t0
     s = ctx.settings
     src, tables = ctx.resources()
     nx, ny, nz = ctx.shape_xyz
@@ -352,7 +363,7 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
         total_voxels=total, disk_bytes=disk, fractions=fractions, sampled_voxels=n,
         clamped_fraction=clamped_frac, clamped_voxels=int(round(clamped_frac * total)),
         safe_density_scale=safe, out_of_gamut_fraction=oog, worst_dE2000=worst,
-        seconds=t_prepare + total / rate, rate_voxels_per_s=rate, rate_source=rate_source,
+        seconds=total / rate, rate_voxels_per_s=rate, rate_source=rate_source,
         content=content_json, density_scale=s.density_scale, background=s.background)
     pf.warnings = _warnings(pf)
     pf.estimate_seconds = time.perf_counter() - t0
@@ -363,9 +374,13 @@ def _warnings(pf: Preflight) -> list[PreflightWarning]:
     out = []
     clear = pf.fractions.get("Cl", 0.0) + pf.fractions.get("empty", 0.0)
     if clear > MOSTLY_CLEAR:
-        hint = ("the source prints as a faint haze: try --content solid, or a larger "
-                "--density-scale" if pf.content.get("mode") == "fog" else
-                "little of the grid is occupied: check the source and its bounds")
+        if pf.content.get("mode") != "fog":
+            hint = "little of the grid is occupied: check the source and its bounds"
+        elif pf.clamped_voxels > 0:  # a larger scale would clamp more: only solid helps
+            hint = "the source prints as a faint haze around clamped cores: try --content solid"
+        else:
+            hint = ("the source prints as a faint haze: try --content solid, or a larger "
+                    "--density-scale")
         out.append(PreflightWarning(
             "mostly-clear", f"the job would be {100 * clear:.1f} % Clear or empty "
             f"(ink {100 * pf.ink_fraction:.2f} %): {hint}",

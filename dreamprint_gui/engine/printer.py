@@ -63,12 +63,13 @@ class PrinterProfile:
     description: str = ""
     source: str = ""
     path: str | None = None
-    title: str = ""  # the name people use ("Stratasys J850 (paper profile)"); ``name`` is the id
+    title: str = ""  # a printer file's human name (optional ``title``); ``name`` is the id
 
     @property
     def display_name(self) -> str:
-        """The printer as an operator names it: its title, else its id."""
-        return self.title or self.name
+        """The printer as an operator names it: its file's ``title``, else the built-in
+        printer's name (:data:`PRINTER_NAMES`), else its id."""
+        return self.title or PRINTER_NAMES.get(self.name, self.name)
 
     @property
     def layer_thickness_mm(self) -> float:

@@ -100,11 +100,24 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            overwrite=overwrite, **extra)
 
 
-def export_job(settings):
-    """A worker job running the conversion: progress items are ``ConvertProgress``."""
+def export_job(settings, preflight=True):
+    """A worker job running the conversion: progress items are ``ConvertProgress``.
+    ``preflight``: an estimate already made for these settings (recorded in the manifest as
+    is), or True to make it first (``pipeline.run_conversion``)."""
     from ..engine.pipeline import run_conversion
 
-    return generator_job(lambda cancel: run_conversion(settings, cancel))
+    return generator_job(lambda cancel: run_conversion(settings, cancel, preflight=preflight))
+
+
+def _same_job(a, b) -> bool:
+    """Whether two ``ConvertSettings`` describe the same job (where it goes and who runs it
+    aside): a pre-flight of one is the pre-flight of the other."""
+    from dataclasses import replace
+
+    if a is None or b is None:
+        return False
+    where = {"output": None, "overwrite": False, "workers": None, "scheduler": None}
+    return replace(a, **where) == replace(b, **where)
 
 
 def format_duration(seconds: float | None) -> str:
@@ -114,6 +127,13 @@ def format_duration(seconds: float | None) -> str:
     h, rem = divmod(seconds, 3600)
     m, s = divmod(rem, 60)
     return f"{h} h {m:02d} min" if h else (f"{m} min {s:02d} s" if m else f"{s} s")
+
+
+def _manifest_printer_name(printer: dict) -> str:
+    from ..engine.printer import PRINTER_NAMES
+
+    name = str(printer.get("name", ""))
+    return str(printer.get("title") or PRINTER_NAMES.get(name, name))
 
 
 def _num(v, fmt: str = ",.0f") -> str:
@@ -159,6 +179,8 @@ def manifest_summary(manifest: dict, target: str) -> str:
             "n_clamped_low", "n_clamped_high", "max_shortfall_low", "max_shortfall_high")}
         if other:
             clamp_text += "; " + ", ".join(f"{k} {_num(v, '.4g')}" for k, v in other.items())
+        if not (low or high):
+            clamp_text = "none"
     else:
         clamp_text = "none"
     t = manifest.get("timings_s", {})
@@ -173,13 +195,18 @@ def manifest_summary(manifest: dict, target: str) -> str:
                         + (f" ({escape(str(content['reason']))})" if content.get("reason")
                            else ""))
     threshold = bg.get("density_threshold_per_mm") if isinstance(bg, dict) else None
+    pf = manifest.get("preflight") or {}
+    warnings = [w.get("message", "") for w in pf.get("warnings", []) if isinstance(w, dict)]
+    warn_html = ("<p><b>Pre-flight warnings</b></p><ul style='margin-left: -20px'>"
+                 + "".join(f"<li>{escape(gui_wording(m))}</li>" for m in warnings) + "</ul>"
+                 if warnings else "")
     sl = manifest.get("slices", {})
     return (
         f"<p><b>Job complete</b>: {escape(target)}</p>"
         "<table cellspacing=3>"
         f"<tr><td><b>Source</b></td><td>{escape(str(src.get('path', '')))}, density scale "
         f"{_num(src.get('density_scale', 1.0), 'g')}{content_text}</td></tr>"
-        f"<tr><td><b>Printer</b></td><td>{escape(pr.get('title') or pr.get('name', ''))} "
+        f"<tr><td><b>Printer</b></td><td>{escape(_manifest_printer_name(pr))} "
         f"(voxel {vx:.0f} x {vy:.0f} x {vz:.0f} um, {escape(str(pr.get('png_mode', '')))} "
         "PNG)</td></tr>"
         f"<tr><td><b>Size</b></td><td>{sx:.2f} x {sy:.2f} x {sz:.2f} mm: {nz} slices of "
@@ -200,7 +227,7 @@ def manifest_summary(manifest: dict, target: str) -> str:
         + run_on + "</td></tr></table>"
         "<p><b>Materials</b></p>"
         "<table cellspacing=4><tr><th></th><th>label</th><th>material</th><th>voxels</th>"
-        f"<th>share</th><th>mean conc.</th></tr>{''.join(rows)}</table>")
+        f"<th>share</th><th>mean conc.</th></tr>{''.join(rows)}</table>" + warn_html)
 
 
 def preflight_html(pf) -> str:
@@ -251,6 +278,7 @@ class ExportDialog(QDialog):
         self.context = context  # the preview's JobContext: reused when the job's source matches
         self.sampling_choice = pp.get("sampling")  # the preview's voxel-edge choice
         self.preflight = None  # the engine's Preflight of the current settings
+        self._preflight_settings = None  # the settings it estimated
         self._preflight_task: Task | None = None
         self._preflight_pending = False
 
@@ -433,7 +461,7 @@ class ExportDialog(QDialog):
             from ..engine.preflight import preflight
             from .preview_data import job_context
 
-            return settings, preflight(job_context(settings, previous))
+            return settings, preflight(job_context(settings, previous), seed=settings.seed)
 
         self.preflight_view.setPlainText("estimating the job ...")
         task = Task(job, "export-preflight")
@@ -450,11 +478,13 @@ class ExportDialog(QDialog):
             self.update_preflight()
 
     def _show_preflight(self, result) -> None:
-        _settings, pf = result
+        settings, pf = result
         if self._preflight_pending:
             return
         self.preflight = pf
+        self._preflight_settings = settings
         self.preflight_view.setHtml(preflight_html(pf))
+        self._fit_text(self.preflight_view, 150)
 
     # choices ----------------------------------------------------------------------------------
     def _printer_chosen(self, index: int) -> None:
@@ -551,7 +581,8 @@ class ExportDialog(QDialog):
         self.start_button.setEnabled(False)
         self.progress.setValue(0)
         self.remaining.setText("preparing ...")
-        task = Task(export_job(settings), "export")
+        same = _same_job(settings, self._preflight_settings) and self.preflight is not None
+        task = Task(export_job(settings, self.preflight if same else True), "export")
         task.progress.connect(self._progress)
         task.succeeded.connect(self._succeeded)
         task.failed.connect(self._failed)
@@ -581,23 +612,23 @@ class ExportDialog(QDialog):
         self.form_box.setVisible(False)
         self.preflight_box.setVisible(False)
         self.summary.setVisible(True)
-        self._fit_summary()
+        self._fit_text(self.summary, 120)
         self.start_button.setVisible(False)
         self.cancel_button.setVisible(False)
         self.close_button.setVisible(True)
         self._finish_run()
         self.finished_job.emit(manifest)
 
-    def _fit_summary(self) -> None:
-        """Make the dialog tall enough for the whole summary (within the screen; the box
-        scrolls beyond that)."""
-        doc = self.summary.document()
-        doc.setTextWidth(self.summary.viewport().width())
-        need = int(doc.size().height()) + 2 * self.summary.frameWidth() + 8
+    def _fit_text(self, box: QTextBrowser, least: int) -> None:
+        """Make the dialog tall enough for the whole text of ``box`` (within the screen; the
+        box scrolls beyond that)."""
+        doc = box.document()
+        doc.setTextWidth(box.viewport().width())
+        need = int(doc.size().height()) + 2 * box.frameWidth() + 8
         screen = self.screen().availableGeometry() if self.screen() else None
-        limit = int(0.85 * screen.height()) if screen is not None else 900
-        other = self.sizeHint().height() - self.summary.sizeHint().height()
-        self.summary.setMinimumHeight(max(120, min(need, limit - other)))
+        limit = int(0.9 * screen.height()) if screen is not None else 900
+        other = self.sizeHint().height() - max(box.sizeHint().height(), box.minimumHeight())
+        box.setMinimumHeight(max(least, min(need, limit - other)))
         self.adjustSize()
 
     def _failed(self, message: str, _tb: str) -> None:
@@ -618,6 +649,9 @@ class ExportDialog(QDialog):
             self.reject()
 
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        self._preflight_debounce.stop()
+        if self._preflight_task is not None:
+            self._preflight_task.cancel()  # an estimate nobody will read
         if self.task is not None and self.task.outcome is None:
             self.task.cancel()
             if self.task.thread is not None:

@@ -301,9 +301,7 @@ class MainWindow(QMainWindow):
         self._source_request = path
         if self._source_task is not None and self._source_task.outcome is None:
             self._source_task.cancel()  # its result is ignored (see _source_opened)
-        self.statusBar().showMessage(f"Opening {name} ...")
-        if self.source is None:
-            self.preview.show_waiting(f"opening {name} ...")
+        self._say_waiting(f"opening {name} ...")
 
         def job(report, cancel):
             from ..io.volumes import open_source
@@ -315,6 +313,14 @@ class MainWindow(QMainWindow):
         task.failed.connect(lambda msg, _tb, path=path: self._source_failed(path, msg))
         self._source_task = run_task(task)
         return task
+
+    def _say_waiting(self, text: str) -> None:
+        """What is being waited for, in one place: the preview's view while it has nothing to
+        show, else the status bar."""
+        if self.preview.data is None:
+            self.preview.show_waiting(text)
+        else:
+            self.statusBar().showMessage(text[:1].upper() + text[1:])
 
     def _source_opened(self, path: str, source) -> None:
         if path != self._source_request:
@@ -402,8 +408,7 @@ class MainWindow(QMainWindow):
         task.failed.connect(self._tables_failed)
         self.progress.setVisible(True)
         self.progress.setValue(0)
-        self.statusBar().showMessage("Loading the colour tables of the profile ...")
-        self.preview.show_waiting("loading the colour tables of the profile ...")
+        self._say_waiting("loading the colour tables of the profile ...")
         self._tables_task = run_task(task)
 
     def _tables_progress(self, fraction: float) -> None:
@@ -411,8 +416,7 @@ class MainWindow(QMainWindow):
         if fraction < 1.0:  # reported during a build only (a cached table loads in one go)
             text = (f"building the colour tables of the profile: {100 * fraction:.0f}% "
                     "(first start with this profile only; they are cached afterwards)")
-            self.statusBar().showMessage(text)
-            self.preview.show_waiting(text)
+            self._say_waiting(text)
 
     def _tables_done(self, tables, fingerprint: str) -> None:
         if fingerprint != self._tables_for:

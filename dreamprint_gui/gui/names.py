@@ -2,7 +2,7 @@
 
 Defines :data:`BACKGROUNDS` (``--background`` ids -> names), :data:`CONTENTS` (``--content``),
 :data:`SAMPLINGS` (``--sampling`` of voxel models), :func:`background_name` and
-:func:`printer_name` (a printer's title, e.g. "Stratasys J850 (paper profile)", for the id
+:func:`printer_name` (a printer's human name, ``PrinterProfile.display_name``, for the id
 ``j850-paper``). The ids stay in the files (manifest, settings); only the screen uses these
 names, the same on every page.
 """

@@ -1,14 +1,20 @@
 """The preview page: the source and the predicted print side by side, cameras linked.
 
 Defines :class:`PreviewPage`. Left: the source sampled on a downsampled grid at the operator's
-physical size; right: each voxel's colour and density as the engine predicts them after table
-lookup and density alignment (``gamut.predicted_appearance``), so washed-out or too-opaque
-regions show before printing. Controls: physical height, density scale, background (clear or
-empty), and a slice scrubber showing the halftoned material labels of any printer layer
-(``pipeline.halftone_layer``) in the profile's ink colours. Sampling, prediction and
-halftoning run on worker threads (:mod:`.workers`); the page only draws. Its 3D view is created
-when there is first something to draw (:class:`.volume_view.ViewHost`); until then it says what
-is being prepared.
+physical size (a voxel model sampled and drawn nearest, so its voxels stay sharp); right: each
+voxel's colour and density as the engine predicts them after table lookup and density alignment
+(``gamut.predicted_appearance``), so washed-out or too-opaque regions show before printing; the
+footnote under them says how the preview grid relates to the print's. Controls: physical height,
+density scale, background (Clear resin or nothing), content intent (auto, fog or solid:
+``engine.content``, with what auto picked and why), voxel edges of voxel models (sharp or
+smooth), and a slice scrubber showing the halftoned material labels of any printer layer
+(``pipeline.halftone_layer``) at full resolution with zoom and pan (:mod:`.layer_view`), in the
+slice PNGs' own colour codes (:mod:`.materials`). The engine's pre-flight of the job
+(``engine.preflight``) runs after each preview; its warnings show in the Warnings box. Sampling,
+prediction, halftoning and the pre-flight run on worker threads (:mod:`.workers`); the page
+only draws. Problems go to the main window (signals :attr:`PreviewPage.failed` and
+:attr:`PreviewPage.problem`), which says each once. Its 3D view is created when there is first
+something to draw (:class:`.volume_view.ViewHost`); until then it says what is being prepared.
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QSlider,
     QSplitter,
+    QTabWidget,
     QVBoxLayout,
     QWidget,
 )
@@ -70,6 +77,7 @@ class PreviewPage(QWidget):
         self._task: Task | None = None
         self._slice_task: Task | None = None
         self._preflight_task: Task | None = None
+        self._framing = None  # (source, size) the 3D camera was last framed for
         self._pending = False
         self._slice_pending = False
         self._await_slice = False
@@ -123,6 +131,8 @@ class PreviewPage(QWidget):
         form.addRow("Content", self.content)
         form.addRow("", self.content_note)
         form.addRow("Voxel edges", self.sampling)
+        form.setRowVisible(self.sampling, False)  # shown for sources that offer the choice
+        self.form = form
         box = QGroupBox("Print")
         box.setLayout(form)
 
@@ -131,12 +141,24 @@ class PreviewPage(QWidget):
         self.slice_label = QLabel("layer -")
         self.slice_view = LayerView()
         self.legend = MaterialLegend()
-        sbox = QGroupBox("Halftoned layer (material labels)")
-        sl = QVBoxLayout(sbox)
-        sl.addWidget(self.slice_slider)
-        sl.addWidget(self.slice_label)
-        sl.addWidget(self.slice_view, 1)
-        sl.addWidget(self.legend)
+        # The printer's layers at full resolution: scrubber on top, the layer with zoom and
+        # pan, its materials listed beside it (one per line: the legend never wraps).
+        layers = QWidget()
+        ll = QVBoxLayout(layers)
+        top = QHBoxLayout()
+        top.addWidget(QLabel("Layer"))
+        top.addWidget(self.slice_slider, 1)
+        top.addWidget(self.slice_label)
+        ll.addLayout(top)
+        body = QHBoxLayout()
+        body.addWidget(self.slice_view, 1)
+        legend_col = QVBoxLayout()
+        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(colours as in the "
+                                    "slice files)"))
+        legend_col.addWidget(self.legend)
+        legend_col.addStretch(1)
+        body.addLayout(legend_col)
+        ll.addLayout(body, 1)
 
         side = QWidget()
         side_l = QVBoxLayout(side)
@@ -154,7 +176,7 @@ class PreviewPage(QWidget):
         side_l.addWidget(box)
         side_l.addWidget(self.status)
         side_l.addWidget(self.warnings_box)
-        side_l.addWidget(sbox, 1)
+        side_l.addStretch(1)
         side.setMinimumWidth(280)
 
         views = QWidget()
@@ -164,8 +186,12 @@ class PreviewPage(QWidget):
         vl.addWidget(self.view, 1)
         vl.addWidget(self.note)
 
+        self.pages = QTabWidget()
+        self.pages.addTab(views, "Source and predicted print (3D)")
+        self.pages.addTab(layers, "Printer layers (halftoned, full resolution)")
+
         split = QSplitter()
-        split.addWidget(views)
+        split.addWidget(self.pages)
         split.addWidget(side)
         split.setStretchFactor(0, 4)
         split.setStretchFactor(1, 1)
@@ -238,6 +264,7 @@ class PreviewPage(QWidget):
             combo.setCurrentIndex(0)
             combo.blockSignals(False)
         self.sampling.setEnabled("sampling" in takes)
+        self.form.setRowVisible(self.sampling, "sampling" in takes)
         self.content_note.setText("")
 
     _UNSET = object()
@@ -351,10 +378,12 @@ class PreviewPage(QWidget):
                         reset_camera=False, line_width=1, render=False)
             pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}",
                         render=False)
-        if first:
+        framing = (self.source_path, tuple(round(v, 3) for v in data.size_mm))
+        if first or framing != self._framing:  # a new source or size: frame it whole
             pl.subplot(0, 0)
             pl.view_isometric(render=False)
             pl.renderer.reset_camera(render=False)  # the plotter-level one always renders
+        self._framing = framing
         pl.render()
         sx, sy, sz = data.size_mm
         self.status.setText(f"{Path(str(self.source_path)).name}: print "
@@ -382,7 +411,7 @@ class PreviewPage(QWidget):
         def job(report, cancel):
             from ..engine.preflight import preflight
 
-            return ctx, preflight(ctx)
+            return ctx, preflight(ctx, seed=ctx.settings.seed)  # as the export's
 
         task = Task(job, "preflight")
         task.succeeded.connect(self._show_preflight)
@@ -465,7 +494,7 @@ class PreviewPage(QWidget):
             return  # a layer of earlier settings; the current one is on its way
         from .materials import label_colours
 
-        colours, names = label_colours(self.profile_eff, self.printer)
+        colours, names = label_colours(self.printer)
         self.slice_labels = labels
         rgb = colours[np.clip(labels, 0, len(colours) - 1)]
         h, w = labels.shape

@@ -8,7 +8,7 @@ import pytest
 
 from dreamprint_gui.engine.gamut import get_tables
 from dreamprint_gui.engine.mixture import predict
-from dreamprint_gui.engine.printer import load_printer
+from dreamprint_gui.engine.printer import PRINTER_NAMES, load_printer
 from dreamprint_gui.engine.profile import INKS, default_profile
 from dreamprint_gui.gui.export import ExportDialog
 from dreamprint_gui.gui.gamut_view import GamutPage
@@ -63,7 +63,10 @@ def _dialog(qtbot, tmp_path, table_size, height_mm):
 
 
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
+    from dreamprint_gui.gui.names import gui_wording
+
     dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    qtbot.waitUntil(lambda: dlg.preflight is not None, timeout=120000)
     seen = []
     dlg.start()
     dlg.task.progress.connect(seen.append)
@@ -86,9 +89,13 @@ def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     assert dlg.summary.horizontalScrollBar().maximum() == 0
     for lab, info in manifest["labels"].items():
         assert info["material"] in text, lab
-    assert "Stratasys J850 (paper profile)" in text and "j850-paper" not in text
+    assert PRINTER_NAMES["j850-paper"] in text and "j850-paper" not in text
     assert "Clear resin" in text
     assert manifest["printer"]["name"] == "j850-paper"  # the id stays in the file
+    # the pre-flight the dialog showed is the one the manifest records, warnings in the summary
+    assert manifest["preflight"]["material_fractions"] == dlg.preflight.fractions
+    for w in manifest["preflight"]["warnings"]:
+        assert gui_wording(w["message"]) in text
 
 
 def test_export_cancel_leaves_nothing(qtbot, tmp_path, table_size):

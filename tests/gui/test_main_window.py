@@ -13,6 +13,7 @@ from PySide6.QtGui import QDropEvent
 from dreamprint_gui.engine.printer import EMPTY_LABEL
 from dreamprint_gui.engine.profile import default_profile
 from dreamprint_gui.gui.main_window import MainWindow, classify_path
+from dreamprint_gui.gui.materials import label_colours
 from dreamprint_gui.gui.volume_view import frame_statistics
 
 
@@ -63,8 +64,27 @@ def test_slice_scrubber_shows_halftoned_labels(window, qtbot):
     assert labels.shape == (ny, nx) and labels.max() <= EMPTY_LABEL
     assert p.slice_image is not None and p.legend.rows
     assert abs(sum(share for _, share in p.legend.rows) - 100) < 0.5
-    # full resolution: one image pixel per printer voxel
-    assert (p.slice_image.width(), p.slice_image.height()) == (nx, ny)
+    # full resolution: one image pixel per printer voxel, in the slice PNGs' colour codes
+    img = p.slice_image
+    assert (img.width(), img.height()) == (nx, ny)
+    rows = np.frombuffer(img.constBits(), np.uint8).reshape(ny, img.bytesPerLine())
+    shown = rows[:, : 3 * nx].reshape(ny, nx, 3)
+    np.testing.assert_array_equal(shown, window.printer.palette()[labels])
+    colours, names = label_colours(window.printer)
+    np.testing.assert_array_equal(colours, window.printer.palette())
+    assert [n for n, _ in p.legend.rows] == [names[i] for i in np.unique(labels)]
+    # zoom and pan: the wheel zooms in, Fit shows the whole layer again
+    view = p.slice_view
+    p.pages.setCurrentIndex(1)  # the layers tab
+    qtbot.waitUntil(lambda: view.canvas.isVisible(), timeout=5000)
+    assert view.canvas.viewport().width() > 300  # a full-size view, not a thumbnail
+    whole = view.visible_voxels()
+    assert whole.width() >= nx - 1 and whole.height() >= ny - 1
+    view.canvas.zoom_by(8.0)
+    part = view.visible_voxels()
+    assert part.width() < whole.width() / 2 or part.height() < whole.height() / 2
+    view.fit_button.click()
+    assert view.visible_voxels().width() >= nx - 1
     p.slice_slider.setValue(0)  # the bottom layer of a cloud is mostly background
     qtbot.waitUntil(lambda: p.shown_layer == 0, timeout=30000)
 
@@ -131,13 +151,20 @@ def _texts_showing(fragment: str) -> list[str]:
     return found
 
 
-def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data):
+@pytest.mark.parametrize("kind", ["cut .vox", "empty .vdb"])
+def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data, kind):
     """Opening a damaged file: one dialog says it; nothing else repeats it."""
     from PySide6.QtWidgets import QMessageBox
 
-    knight = shared_data / "voxels" / "magicavoxel_chr_knight.vox"
-    bad = tmp_path / "knight-cut.vox"
-    bad.write_bytes(knight.read_bytes()[:100])  # cut inside a chunk
+    if kind == "cut .vox":
+        knight = shared_data / "voxels" / "magicavoxel_chr_knight.vox"
+        bad = tmp_path / "knight-cut.vox"
+        bad.write_bytes(knight.read_bytes()[:100])  # cut inside a chunk
+        problem = "runs past the end"
+    else:
+        bad = tmp_path / "cloud.vdb"
+        bad.write_bytes(b"")
+        problem = "empty file"
     w = MainWindow(with_gamut=False)
     qtbot.addWidget(w)
     w.show()
@@ -145,10 +172,10 @@ def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data):
     with qtbot.waitSignal(w.openFailed, timeout=30000) as blocker:
         w.open_path(bad)
     message = blocker.args[1]
-    assert "knight-cut.vox" in message and "damaged" in message
+    assert bad.name in message and problem in message
     qtbot.waitUntil(lambda: w.problem_box is not None and w.problem_box.isVisible(),
                     timeout=5000)
-    where = _texts_showing("runs past the end")
+    where = _texts_showing(problem)
     assert where == ["label in QMessageBox"], where
     assert not w.statusBar().currentMessage().startswith("Opening")  # no stale promise
     boxes = [b for b in w.findChildren(QMessageBox) if b.isVisible()]
@@ -158,7 +185,7 @@ def test_a_damaged_file_is_reported_once(qtbot, tmp_path, shared_data):
         w.open_path(bad)
     qtbot.waitUntil(lambda: len([b for b in w.findChildren(QMessageBox)
                                  if b.isVisible()]) == 1, timeout=5000)
-    assert len(_texts_showing("runs past the end")) == 1
+    assert len(_texts_showing(problem)) == 1
     w.problem_box.close()
 
 

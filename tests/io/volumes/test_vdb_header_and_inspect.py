@@ -1,0 +1,100 @@
+"""OpenVDB header checks before the helper process, and the tidy ``inspect`` output."""
+
+import json
+import math
+import struct
+
+import pytest
+
+from dreamprint_gui.cli import main
+from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.io.volumes import open_source
+from dreamprint_gui.io.volumes.openvdb import check_header
+
+
+@pytest.fixture
+def no_helper(monkeypatch, tmp_path):
+    """No helper process can start: a message about the file proves the check came first."""
+    monkeypatch.setenv("DREAMPRINT_VDB_PYTHON", str(tmp_path / "no-python"))
+
+
+def _header(version=224, grids=(("density", "Tree_float_5_4_3", 100, 200, 300),), meta=0):
+    """A .vdb header written to the OpenVDB layout (io/Archive.cc, io/GridDescriptor.cc)."""
+    out = struct.pack("<qIIIb", 0x56444220, version, 10, 0, 1) + b"0" * 36
+    out += struct.pack("<i", meta)
+    for k in range(meta):
+        for s in (f"key{k}".encode(), b"string", b"value"):
+            out += struct.pack("<I", len(s)) + s
+    out += struct.pack("<i", len(grids))
+    for name, gtype, g, b, e in grids:
+        for s in (name.encode(), gtype.encode(), b""):
+            out += struct.pack("<I", len(s)) + s
+        out += struct.pack("<qqq", g, b, e)
+    return out
+
+
+def test_header_of_a_real_file(vdbs):
+    h = check_header(vdbs / "box_rgb3.vdb")
+    assert h["file_version"] >= 221 and [g["name"] for g in h["grids"]][0] == "density"
+    assert h["grids"][-1]["end"] == (vdbs / "box_rgb3.vdb").stat().st_size
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda good: b"", r"t\.vdb: empty file"),
+    (lambda good: good[:5], r"truncated: the magic number needs bytes 0\.\.8, the file has 5"),
+    (lambda good: b"\x00" * 64, r"not an OpenVDB file \(magic 0x0"),
+    (lambda good: good[:40], r"truncated: the file UUID needs bytes 21\.\.57, the file has 40"),
+    (lambda good: good[: len(good) // 2], r"truncated: grid '.*' ends at byte [\d,]+, the"),
+    (lambda good: good[:-1], r"truncated: grid 'color_b' ends at byte [\d,]+, the file has"),
+])
+def test_damaged_files_named_before_the_helper(vdbs, tmp_path, no_helper, make, message):
+    good = (vdbs / "box_rgb3.vdb").read_bytes()
+    t = tmp_path / "t.vdb"
+    t.write_bytes(make(good))
+    with pytest.raises(DreamPrintError, match=message) as e:
+        open_source(t)
+    assert "python3-openvdb" not in str(e.value)
+
+
+def test_descriptors_written_to_the_spec(tmp_path, no_helper, capsys):
+    f = tmp_path / "h.vdb"
+    f.write_bytes(_header(meta=2) + b"\x00" * 240)     # 300 bytes in all: as announced
+    assert check_header(f)["grids"] == [{"name": "density", "type": "Tree_float_5_4_3",
+                                         "end": 300}]
+    f.write_bytes(_header(meta=2) + b"\x00" * 100)
+    with pytest.raises(DreamPrintError, match="grid 'density' ends at byte 300, the file has"):
+        check_header(f)
+    f.write_bytes(_header(version=220))
+    with pytest.raises(DreamPrintError, match="version 220 is older than 221"):
+        check_header(f)
+    f.write_bytes(_header(grids=(("density", "Tree_float_5_4_3", 200, 100, 300),)) + bytes(300))
+    with pytest.raises(DreamPrintError, match="inconsistent offsets"):
+        check_header(f)
+    # the command line: one line, exit 2, no traceback
+    f.write_bytes(b"")
+    assert main(["inspect", str(f)]) == 2
+    assert capsys.readouterr().err.strip() == f"dreamprint: error: {f}: empty file"
+
+
+def test_inspect_vector_grid_ranges_and_units(vdbs, capsys):
+    assert main(["inspect", "--json", str(vdbs / "box_half_cd.vdb")]) == 0
+    info = json.loads(capsys.readouterr().out)
+    cd = next(g for g in info["grids"] if g["name"] == "Cd")
+    assert cd["min"] == pytest.approx([0.2, 0.5, 1.0]) and cd["max"] == pytest.approx(
+        [0.2, 0.5, 1.0])
+    assert cd["magnitude"] == pytest.approx([math.sqrt(0.04 + 0.25 + 1.0)] * 2, rel=1e-6)
+    assert cd["index_bounds"] == [[0, 0, 0], [15, 23, 9]]
+    assert info["content"] == {"mode": "fog", "reason": "a fog volume"}
+    assert main(["inspect", str(vdbs / "box_half_cd.vdb"), "--height-mm", "20"]) == 0
+    text = capsys.readouterr().out
+    assert "- .. -" not in text and "range" not in text
+    assert "values per component x 0.2 .. 0.2, y 0.5 .. 0.5, z 1 .. 1" in text
+    assert "source units" in text and "index i 0 .. 15, j 0 .. 23, k 0 .. 9" in text
+    # box of 16 x 24 x 10 voxels of 0.25 units: z extent 2.5 units -> 20 mm, 8 mm per unit
+    assert "1 source unit = 8 mm; the bounds span 32.00 x 48.00 x 20.00 mm" in text
+
+
+def test_inspect_level_set_content(vdbs, capsys):
+    assert main(["inspect", str(vdbs / "levelset.vdb")]) == 0
+    assert "content: solid (--content auto: a level set (grid 'ls_sphere'))" in \
+        capsys.readouterr().out
