@@ -237,6 +237,58 @@ def _occupied(q, occ, max_cascade):
 
 
 @njit(cache=True, nogil=True)
+def _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
+                table, n_feat, offsets, scales, res, hashed, interp,
+                d_mats, d_shapes, d_act, d_out_act,
+                r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
+                rgb_act, sigma_factor, fs, fr):
+    """Steps 2-4 of the module docstring for the ``nb`` positions in ``u``; results written to
+    the flat outputs at ``where``."""
+    n_d_out = d_shapes[d_shapes.shape[0] - 1, 0]
+    r_w = r_shapes[0, 0]
+    n_r = r_shapes.shape[0]
+    n_dirs = dir_consts.shape[0]
+    encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc, scratch)
+    out = mlp_forward(d_mats, d_shapes, d_act, d_out_act, n_d_out, enc, buf_a, buf_b, nb)
+    for o in range(n_d_out):
+        for b in range(nb):
+            dens[o, b] = out[o, b]
+    _matmul(r_first_a, dens, pre, r_w, n_d_out, nb)
+    for c in range(3):
+        for b in range(nb):
+            acc[c, b] = 0.0
+    r_rest = r_mats[r_shapes[0, 0] * r_shapes[0, 1]:]
+    r_rest_shapes = r_shapes[1:]
+    for kd in range(n_dirs):
+        for o in range(r_w):
+            cst = dir_consts[kd, o]
+            for b in range(nb):
+                v = pre[o, b] + cst
+                h1[o, b] = _act(v, r_act) if n_r > 1 else v
+        if n_r > 1:
+            res_out = mlp_forward(r_rest, r_rest_shapes, r_act, r_out_act, 3, h1,
+                                  buf_a, buf_b, nb)
+        else:
+            _activate(h1, 3, nb, r_out_act)
+            res_out = h1
+        for c in range(3):
+            for b in range(nb):
+                v = res_out[c, b]
+                if rgb_act == 0:
+                    v = np.float32(1.0 / (1.0 + math.exp(-v)))
+                else:
+                    v = np.float32(math.exp(min(max(v, -10.0), 10.0)))
+                acc[c, b] += v
+    inv_dirs = np.float32(1.0 / n_dirs)
+    for b in range(nb):
+        flat = where[b]
+        fs[flat] = np.float32(math.exp(dens[0, b]) * sigma_factor)
+        fr[flat, 0] = acc[0, b] * inv_dirs
+        fr[flat, 1] = acc[1, b] * inv_dirs
+        fr[flat, 2] = acc[2, b] * inv_dirs
+
+
+@njit(cache=True, nogil=True)
 def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_hi,
                 occ, use_occ, max_cascade,
                 table, n_feat, offsets, scales, res, hashed, interp, enc_width,
@@ -252,9 +304,9 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     d_w = d_shapes[0, 0]
     n_d_out = d_shapes[d_shapes.shape[0] - 1, 0]
     r_w = r_shapes[0, 0]
-    n_dirs = dir_consts.shape[0]
     width = max(max(d_w, r_w), max(n_d_out, enc_width))
     enc = np.zeros((enc_width, BATCH), np.float32)
+    scratch = np.zeros((16, BATCH), np.float32)
     buf_a = np.empty((width, BATCH), np.float32)
     buf_b = np.empty((width, BATCH), np.float32)
     dens = np.empty((n_d_out, BATCH), np.float32)
@@ -262,43 +314,39 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     h1 = np.empty((r_w, BATCH), np.float32)
     acc = np.empty((3, BATCH), np.float32)
     u = np.empty((3, BATCH), np.float32)
-    scratch = np.zeros((16, BATCH), np.float32)
     where = np.empty(BATCH, np.int64)
     q = np.empty(3, np.float64)
-    ext = aabb_hi - aabb_lo
-    n_r = r_shapes.shape[0]
-    # the colour MLP without its first layer
-    r_rest_off = r_shapes[0, 0] * r_shapes[0, 1]
-    r_rest = r_mats[r_rest_off:]
-    r_rest_shapes = r_shapes[1:]
-    inv_dirs = np.float32(1.0 / n_dirs)
+    qrow = np.empty(3, np.float64)
+    brow = np.empty(3, np.float64)
+    bx = np.empty(3, np.float64)
+    inv_ext = 1.0 / (aabb_hi - aabb_lo)
+    # the box test R q = R (qrow + A[:, 0] x): per-row base plus a per-voxel step
+    for d in range(3):
+        bx[d] = box_R[d, 0] * A[0, 0] + box_R[d, 1] * A[1, 0] + box_R[d, 2] * A[2, 0]
     fs = sigma.reshape(-1)
     fr = rgb.reshape(-1, 3)
     nb = 0
-    total = (r1 - r0) * nx
-    for k in range(total + 1):
-        if k < total:
-            row = r0 + k // nx
-            i = k % nx
-            lz = row // ny
-            j = row % ny
-            flat = (lz * ny + j) * nx + i
+    for row in range(r0, r1):
+        lz = row // ny
+        j = row % ny
+        base = row * nx
+        for d in range(3):
+            qrow[d] = A[d, 1] * ys[j] + A[d, 2] * zs[lz] + t[d]
+        for d in range(3):
+            brow[d] = box_R[d, 0] * qrow[0] + box_R[d, 1] * qrow[1] + box_R[d, 2] * qrow[2]
+        for i in range(nx):
+            flat = base + i
             fs[flat] = 0.0
             fr[flat, 0] = 0.0
             fr[flat, 1] = 0.0
             fr[flat, 2] = 0.0
-            p0 = xs[i]
-            p1 = ys[j]
-            p2 = zs[lz]
+            x = xs[i]
             inside = True
             for d in range(3):
-                q[d] = A[d, 0] * p0 + A[d, 1] * p1 + A[d, 2] * p2 + t[d]
+                q[d] = qrow[d] + A[d, 0] * x
                 if q[d] < aabb_lo[d] or q[d] > aabb_hi[d]:
                     inside = False
-            if not inside:
-                continue
-            for d in range(3):
-                v = box_R[d, 0] * q[0] + box_R[d, 1] * q[1] + box_R[d, 2] * q[2]
+                v = brow[d] + bx[d] * x
                 if v < box_lo[d] or v > box_hi[d]:
                     inside = False
             if not inside:
@@ -306,47 +354,19 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
             if use_occ and not _occupied(q, occ, max_cascade):
                 continue
             for d in range(3):
-                u[d, nb] = np.float32((q[d] - aabb_lo[d]) / ext[d])
+                u[d, nb] = np.float32((q[d] - aabb_lo[d]) * inv_ext[d])
             where[nb] = flat
             nb += 1
-            if nb < BATCH:
-                continue
-        if nb == 0:
-            continue
-        # --- evaluate the batch
-        encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc, scratch)
-        out = mlp_forward(d_mats, d_shapes, d_act, d_out_act, n_d_out, enc, buf_a, buf_b, nb)
-        for o in range(n_d_out):
-            for b in range(nb):
-                dens[o, b] = out[o, b]
-        _matmul(r_first_a, dens, pre, r_w, n_d_out, nb)
-        for c in range(3):
-            for b in range(nb):
-                acc[c, b] = 0.0
-        for kd in range(n_dirs):
-            for o in range(r_w):
-                cst = dir_consts[kd, o]
-                for b in range(nb):
-                    v = pre[o, b] + cst
-                    h1[o, b] = _act(v, r_act) if n_r > 1 else v
-            if n_r > 1:
-                res_out = mlp_forward(r_rest, r_rest_shapes, r_act, r_out_act, 3, h1,
-                                      buf_a, buf_b, nb)
-            else:
-                _activate(h1, 3, nb, r_out_act)
-                res_out = h1
-            for c in range(3):
-                for b in range(nb):
-                    v = res_out[c, b]
-                    if rgb_act == 0:
-                        v = np.float32(1.0 / (1.0 + math.exp(-v)))
-                    else:
-                        v = np.float32(math.exp(min(max(v, -10.0), 10.0)))
-                    acc[c, b] += v
-        for b in range(nb):
-            flat = where[b]
-            fs[flat] = np.float32(math.exp(dens[0, b]) * sigma_factor)
-            fr[flat, 0] = acc[0, b] * inv_dirs
-            fr[flat, 1] = acc[1, b] * inv_dirs
-            fr[flat, 2] = acc[2, b] * inv_dirs
-        nb = 0
+            if nb == BATCH:
+                _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
+                            table, n_feat, offsets, scales, res, hashed, interp,
+                            d_mats, d_shapes, d_act, d_out_act,
+                            r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
+                            rgb_act, sigma_factor, fs, fr)
+                nb = 0
+    if nb:
+        _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
+                    table, n_feat, offsets, scales, res, hashed, interp,
+                    d_mats, d_shapes, d_act, d_out_act,
+                    r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
+                    rgb_act, sigma_factor, fs, fr)
