@@ -217,16 +217,24 @@ def encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc
                         ef[b] += wt[b] * tab[idx[b], f]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _occupied(q, occ, max_cascade):
+    """Step 1's occupancy test (instant-ngp ``mip_from_pos`` and ``cascaded_grid_idx_at``)."""
     m = 0.0
     for d in range(3):
         a = abs(q[d] - 0.5)
         if a > m:
             m = a
-    e = math.frexp(m)[1]
-    mip = min(max(e + 1, 0), max_cascade)
-    sc = 2.0 ** (-mip)
+    # mip = clamp(e + 1, 0, max_cascade) with m = f 2^e, f in [0.5, 1) (frexp; e = 0 for m = 0)
+    mip = 0
+    if m == 0.0:
+        mip = min(1, max_cascade)
+    else:
+        lim = 0.5
+        while mip < max_cascade and m >= lim:
+            mip += 1
+            lim *= 2.0
+    sc = 1.0 / (1 << mip)
     n = occ.shape[1]
     ix = int(((q[0] - 0.5) * sc + 0.5) * n)
     iy = int(((q[1] - 0.5) * sc + 0.5) * n)
@@ -325,6 +333,7 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
         bx[d] = box_R[d, 0] * A[0, 0] + box_R[d, 1] * A[1, 0] + box_R[d, 2] * A[2, 0]
     fs = sigma.reshape(-1)
     fr = rgb.reshape(-1, 3)
+    fr3 = rgb.reshape(-1)
     nb = 0
     for row in range(r0, r1):
         lz = row // ny
@@ -335,11 +344,11 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
         for d in range(3):
             brow[d] = box_R[d, 0] * qrow[0] + box_R[d, 1] * qrow[1] + box_R[d, 2] * qrow[2]
         for i in range(nx):
+            fs[base + i] = 0.0
+        for i in range(3 * base, 3 * (base + nx)):
+            fr3[i] = 0.0
+        for i in range(nx):
             flat = base + i
-            fs[flat] = 0.0
-            fr[flat, 0] = 0.0
-            fr[flat, 1] = 0.0
-            fr[flat, 2] = 0.0
             x = xs[i]
             inside = True
             for d in range(3):

@@ -365,3 +365,18 @@ def test_inspect_names_kind_network_and_occupancy(tmp_path, capsys):
     assert main(["inspect", str(p)]) == 0
     text = capsys.readouterr().out
     assert "InstantNGP snapshot" in text and "FullyFusedMLP" in text and "occupied" in text
+
+
+def test_occupancy_cascades_follow_mip_from_pos():
+    """The cascade picked for a point is instant-ngp's mip_from_pos: frexp of max|q - 0.5|."""
+    from dreamprint_gui.io.volumes.ingp_kernels import _occupied
+
+    rng = np.random.default_rng(5)
+    occ = (rng.random((3, 8, 8, 8)) < 0.5).astype(np.uint8)
+    for q in rng.uniform(-1.6, 2.6, (2000, 3)):
+        e = math.frexp(float(np.max(np.abs(q - 0.5))))[1]
+        mip = min(max(e + 1, 0), 2)
+        c = ((q - 0.5) * 2.0 ** -mip + 0.5) * 8
+        i = c.astype(int)                                   # C++ float -> int truncation
+        want = bool(np.all((i >= 0) & (i < 8)) and occ[mip, i[2], i[1], i[0]])
+        assert _occupied(q, occ, 2) == want
