@@ -39,7 +39,7 @@ __all__ = ["ACT", "sample_rows", "encode_batch", "mlp_forward"]
 # hidden/output activation codes (tiny-cuda-nn names)
 ACT = {"none": 0, "relu": 1, "leakyrelu": 2, "exponential": 3, "sigmoid": 4, "tanh": 5}
 
-BATCH = 128
+BATCH = 256
 HASH_P1 = np.uint32(2654435761)
 HASH_P2 = np.uint32(805459861)
 
