@@ -380,3 +380,27 @@ def test_occupancy_cascades_follow_mip_from_pos():
         i = c.astype(int)                                   # C++ float -> int truncation
         want = bool(np.all((i >= 0) & (i < 8)) and occ[mip, i[2], i[1], i[0]])
         assert _occupied(q, occ, 2) == want
+
+
+def test_convert_a_snapshot(tmp_path):
+    """``dreamprint convert`` runs on a snapshot (two worker threads, one slab each)."""
+    cfg = make_config(n_levels=2, n_feat=2, log2_t=10)
+    dm, rm, levels = param_shapes(cfg)
+    table = np.full((sum(n for *_, n, _h in levels), 2), 0.5, np.float32)
+    d0 = np.zeros(dm[0], np.float32)
+    d0[0, 0] = 1.0
+    d1 = np.zeros(dm[1], np.float32)
+    d1[0, 0] = 4.0                                  # sigma = e^2 per unit: visibly dense
+    rmats = [np.zeros(sh, np.float32) for sh in rm]
+    grid = np.zeros(128 ** 3, np.float32)
+    grid[: 128 ** 3 // 8] = 1.0                     # Morton: the first octant (x, y, z < 0.5)
+    p = write_snapshot(tmp_path / "s.ingp", cfg, [d0, d1], rmats, table, density_grid=grid)
+    out = tmp_path / "JOB"
+    rc = main(["convert", str(p), "-o", str(out), "--height-mm", "0.5", "--table-size", "17",
+               "--workers", "2", "--slab-layers", "4", "--option", "view=mean"])
+    assert rc == 0
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["source"]["options"] == {"view": "mean"}
+    counts = manifest["voxel_counts"]
+    inked = sum(v for k, v in counts.items() if k not in ("Cl", "empty"))
+    assert 0.09 < inked / manifest["total_voxels"] < 0.16      # the occupied octant: 1/8
