@@ -70,7 +70,8 @@ def inspect(file: str, as_json: bool) -> None:
     """Describe a volume file: format and, per grid, class, size, active voxels, range, bounds.
 
     FILE is an OpenVDB, NanoVDB, VTK/MetaImage/NRRD image, radiance .npz or EXR stack (file or
-    folder), splat PLY/SPZ or MagicaVoxel file, or "demo".
+    folder), splat PLY/SPZ or MagicaVoxel file, InstantNGP snapshot (.ingp/.msgpack) or volume
+    export (RGBA PNG slice folder, WxHxD_C.bin), or "demo".
     """
     from ..io.volumes.base import inspect_file
 
