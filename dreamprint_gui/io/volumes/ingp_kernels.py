@@ -96,9 +96,15 @@ def _matmul(w, x, y, n_out, n_in, nb):
                 yo[b] += a0 * x0[b]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=True)
 def _activate(y, n_rows, nb, code):
     if code == 0:
+        return
+    if code == 1:                           # ReLU, the common case: a plain vector loop
+        for o in range(n_rows):
+            yo = y[o]
+            for b in range(nb):
+                yo[b] = max(yo[b], np.float32(0.0))
         return
     for o in range(n_rows):
         yo = y[o]
@@ -244,7 +250,7 @@ def _occupied(q, occ, max_cascade):
     return occ[mip, iz, iy, ix] != 0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=True)
 def _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
                 table, n_feat, offsets, scales, res, hashed, interp,
                 d_mats, d_shapes, d_act, d_out_act,
@@ -270,10 +276,12 @@ def _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
     for kd in range(n_dirs):
         for o in range(r_w):
             cst = dir_consts[kd, o]
+            po = pre[o]
+            ho = h1[o]
             for b in range(nb):
-                v = pre[o, b] + cst
-                h1[o, b] = _act(v, r_act) if n_r > 1 else v
+                ho[b] = po[b] + cst
         if n_r > 1:
+            _activate(h1, r_w, nb, r_act)
             res_out = mlp_forward(r_rest, r_rest_shapes, r_act, r_out_act, 3, h1,
                                   buf_a, buf_b, nb)
         else:
