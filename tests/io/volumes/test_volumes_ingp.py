@@ -404,3 +404,44 @@ def test_convert_a_snapshot(tmp_path):
     counts = manifest["voxel_counts"]
     inked = sum(v for k, v in counts.items() if k not in ("Cl", "empty"))
     assert 0.09 < inked / manifest["total_voxels"] < 0.16      # the occupied octant: 1/8
+
+
+def test_hdr_colour_and_render_box_crop(tmp_path):
+    """HDR snapshots: colour exp(clamp(out, -10, 10)), linear, encoded to sRGB; a render box
+    (turned 90 degrees about instant-ngp's y) crops the print to that box."""
+    from dreamprint_gui.io.volumes.base import linear_to_srgb
+
+    cfg = make_config(n_levels=1, n_feat=2, log2_t=10)
+    dm, rm, levels = param_shapes(cfg)
+    table = np.full((levels[0][2], 2), 0.5, np.float32)
+    d0 = np.zeros(dm[0], np.float32)
+    d0[0, 0] = 2.0
+    d1 = np.zeros(dm[1], np.float32)
+    d1[0, 0] = 1.0                                  # sigma = e
+    r0 = np.zeros(rm[0], np.float32)
+    r0[:3, 16] = 1.0
+    r1 = np.eye(*rm[1], dtype=np.float32)
+    r2 = np.zeros(rm[2], np.float32)
+    k = np.array([-1.0, -2.0, 0.5])
+    r2[:3, :3] = np.diag(k / SH_C[0])
+    # local = R q with R a quarter turn about y: (x, y, z) -> (z, y, -x); the local box
+    # x in [0.2, 0.6], y in [0, 1], z in [-0.9, -0.5] is q in x [0.5, 0.9], z [0.2, 0.6]
+    R = [[0.0, 0, 1], [0, 1, 0], [-1, 0, 0]]
+    extra = {"render_aabb": {"min": [0.2, 0.0, -0.9], "max": [0.6, 1.0, -0.5]},
+             "render_aabb_to_local": R}
+    ds = {"scale": 1.0, "offset": [0.0, 0.0, 0.0], "aabb_scale": 1, "is_hdr": True}
+    p = write_snapshot(tmp_path / "h.ingp", cfg, [d0, d1], [r0, r1, r2], table, dataset=ds,
+                       extra=extra)
+    s = open_source(p)
+    assert s.colour_encoding == "linear"
+    # source p = (q_z, q_x, q_y): x in [0.2, 0.6], y in [0.5, 0.9], z in [0, 1]
+    np.testing.assert_allclose(s.bounds, ((0.2, 0.5, 0.0), (0.6, 0.9, 1.0)), atol=1e-12)
+    g = grid_for_source(s, (0.1, 0.1, 0.1), size_mm=(4, 4, 10))
+    rgb, d = s.sample_slab(g, 0, g.shape_xyz[2])
+    assert np.all(d > 0)                            # the grid covers just the box
+    np.testing.assert_allclose(d * g.mm_per_unit, math.e, rtol=2e-3)
+    want = linear_to_srgb(np.exp(f16(k / SH_C[0]) * np.float32(SH_C[0])))
+    np.testing.assert_allclose(rgb.reshape(-1, 3), np.broadcast_to(want, (d.size, 3)),
+                               atol=2e-3)
+    _, outside = s.evaluate(np.array([0.1, 0.4, 0.7]), np.array([0.7]), np.array([0.5]))
+    assert outside[0, 0, 0] == 0 and outside[0, 0, 1] > 0 and outside[0, 0, 2] == 0
