@@ -445,3 +445,33 @@ def test_hdr_colour_and_render_box_crop(tmp_path):
                                atol=2e-3)
     _, outside = s.evaluate(np.array([0.1, 0.4, 0.7]), np.array([0.7]), np.array([0.5]))
     assert outside[0, 0, 0] == 0 and outside[0, 0, 1] > 0 and outside[0, 0, 2] == 0
+
+
+def test_aabb_scale_2_uses_two_cascades_and_derived_level_scale(tmp_path):
+    """aabb_scale 2: aabb 0.5 -+ 1 (load_nerf_post), two occupancy cascades, and without a
+    per_level_scale the level scale exp(ln(2048 * 2 / N_min) / (L - 1)) (reset_network)."""
+    cfg = make_config(n_levels=2, n_feat=2, log2_t=10, base=4)
+    del cfg["encoding"]["per_level_scale"]
+    pls = float(np.exp(np.float32(np.log(np.float32(4096.0) / np.float32(4)))))
+    cfg_w = make_config(n_levels=2, n_feat=2, log2_t=10, base=4, pls=pls)
+    dm, rm, levels = param_shapes(cfg_w)
+    rng = np.random.default_rng(2)
+    table = f16(rng.uniform(-1, 1, (sum(n for _s, _r, n, _h in levels), 2)))
+    dmats = [f16(rng.normal(0, 0.5, sh)) for sh in dm]
+    rmats = [f16(rng.normal(0, 0.5, sh)) for sh in rm]
+    grid = np.zeros(2 * 128 ** 3, np.float32)
+    grid[128 ** 3:] = 1.0                           # cascade 1 all occupied, cascade 0 empty
+    p = write_snapshot(tmp_path / "a2.ingp", cfg, dmats, rmats, table, aabb_scale=2,
+                       density_grid=grid)
+    tree = msgpack.unpackb(gzip.decompress(p.read_bytes()), raw=False)
+    del tree["snapshot"]["aabb"], tree["snapshot"]["render_aabb"]   # the reader derives them
+    p.write_bytes(gzip.compress(msgpack.packb(tree, use_bin_type=True)))
+    s = open_source(p)
+    assert s.bounds == ((-0.5, -0.5, -0.5), (1.5, 1.5, 1.5))
+    assert s.info()["occupancy_grid"]["occupied_fraction"] == [0.0, 1.0]
+    # source (x, y, z) = ngp (z, x, y): inside the unit cube -> cascade 0 (empty)
+    _, sig = s.evaluate(np.array([0.4, 1.3]), np.array([0.5]), np.array([0.5]))
+    assert sig[0, 0, 0] == 0 and sig[0, 0, 1] > 0
+    q = np.array([[0.5, 0.5, 1.3]])                 # ngp of source (1.3, 0.5, 0.5)
+    want, _ = ref_field((q + 0.5) / 2.0, dmats, rmats, table, levels, 2, [np.array([0, -1.0, 0])])
+    np.testing.assert_allclose(sig[0, 0, 1], want[0], rtol=1e-4)
