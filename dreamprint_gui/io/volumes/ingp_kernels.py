@@ -60,15 +60,51 @@ def _act(v, code):
 
 
 @njit(cache=True, nogil=True, fastmath=True)
+def _matmul_row(w, x, yo, o, n_in, nb):
+    """One output row of :func:`_matmul`, eight inputs per pass."""
+    n8 = n_in - n_in % 8
+    for b in range(nb):
+        yo[b] = 0.0
+    for i in range(0, n8, 8):
+        a0 = w[o, i]
+        a1 = w[o, i + 1]
+        a2 = w[o, i + 2]
+        a3 = w[o, i + 3]
+        a4 = w[o, i + 4]
+        a5 = w[o, i + 5]
+        a6 = w[o, i + 6]
+        a7 = w[o, i + 7]
+        x0 = x[i]
+        x1 = x[i + 1]
+        x2 = x[i + 2]
+        x3 = x[i + 3]
+        x4 = x[i + 4]
+        x5 = x[i + 5]
+        x6 = x[i + 6]
+        x7 = x[i + 7]
+        for b in range(nb):
+            yo[b] += (a0 * x0[b] + a1 * x1[b] + a2 * x2[b] + a3 * x3[b]
+                      + a4 * x4[b] + a5 * x5[b] + a6 * x6[b] + a7 * x7[b])
+    for i in range(n8, n_in):
+        a0 = w[o, i]
+        x0 = x[i]
+        for b in range(nb):
+            yo[b] += a0 * x0[b]
+
+
+@njit(cache=True, nogil=True, fastmath=True)
 def _matmul(w, x, y, n_out, n_in, nb):
     """``y[o, :nb] = sum_i w[o, i] x[i, :nb]`` for ``o < n_out`` (w is (out, in) row-major, as
-    tiny-cuda-nn stores its layers; the batch runs along the contiguous last axis, inputs taken
-    eight at a time so that each pass over ``y`` does eight multiply-adds per element)."""
+    tiny-cuda-nn stores its layers; the batch runs along the contiguous last axis).  Two output
+    rows and eight inputs per pass: each element loaded from ``x`` feeds two multiply-adds and
+    each pass over ``y`` does eight per element."""
     n8 = n_in - n_in % 8
-    for o in range(n_out):
-        yo = y[o]
+    for o in range(0, n_out - 1, 2):
+        ya = y[o]
+        yb = y[o + 1]
         for b in range(nb):
-            yo[b] = 0.0
+            ya[b] = 0.0
+            yb[b] = 0.0
         for i in range(0, n8, 8):
             a0 = w[o, i]
             a1 = w[o, i + 1]
@@ -78,6 +114,14 @@ def _matmul(w, x, y, n_out, n_in, nb):
             a5 = w[o, i + 5]
             a6 = w[o, i + 6]
             a7 = w[o, i + 7]
+            c0 = w[o + 1, i]
+            c1 = w[o + 1, i + 1]
+            c2 = w[o + 1, i + 2]
+            c3 = w[o + 1, i + 3]
+            c4 = w[o + 1, i + 4]
+            c5 = w[o + 1, i + 5]
+            c6 = w[o + 1, i + 6]
+            c7 = w[o + 1, i + 7]
             x0 = x[i]
             x1 = x[i + 1]
             x2 = x[i + 2]
@@ -87,13 +131,27 @@ def _matmul(w, x, y, n_out, n_in, nb):
             x6 = x[i + 6]
             x7 = x[i + 7]
             for b in range(nb):
-                yo[b] += (a0 * x0[b] + a1 * x1[b] + a2 * x2[b] + a3 * x3[b]
-                          + a4 * x4[b] + a5 * x5[b] + a6 * x6[b] + a7 * x7[b])
+                v0 = x0[b]
+                v1 = x1[b]
+                v2 = x2[b]
+                v3 = x3[b]
+                v4 = x4[b]
+                v5 = x5[b]
+                v6 = x6[b]
+                v7 = x7[b]
+                ya[b] += (a0 * v0 + a1 * v1 + a2 * v2 + a3 * v3
+                          + a4 * v4 + a5 * v5 + a6 * v6 + a7 * v7)
+                yb[b] += (c0 * v0 + c1 * v1 + c2 * v2 + c3 * v3
+                          + c4 * v4 + c5 * v5 + c6 * v6 + c7 * v7)
         for i in range(n8, n_in):
             a0 = w[o, i]
+            c0 = w[o + 1, i]
             x0 = x[i]
             for b in range(nb):
-                yo[b] += a0 * x0[b]
+                ya[b] += a0 * x0[b]
+                yb[b] += c0 * x0[b]
+    if n_out % 2:
+        _matmul_row(w, x, y[n_out - 1], n_out - 1, n_in, nb)
 
 
 @njit(cache=True, nogil=True, fastmath=True)
