@@ -163,8 +163,9 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     its class, voxels, value range and bounds (source units; index; mm with a size).
 
     FILE is an OpenVDB, NanoVDB, VTK/MetaImage/NRRD image, radiance .npz or EXR stack (file or
-    folder), Gaussian splats (PLY, SPZ, .splat, .ksplat, SOG .sog / folder / meta.json) or
-    MagicaVoxel file, or "demo".
+    folder), Gaussian splats (PLY, SPZ, .splat, .ksplat, SOG .sog / folder / meta.json),
+    MagicaVoxel file, InstantNGP snapshot (.ingp/.msgpack) or volume export (RGBA PNG slice
+    folder, WxHxD_C.bin), or "demo".
     """
     from .jobs import _size
 

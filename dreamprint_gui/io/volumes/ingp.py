@@ -486,8 +486,8 @@ class IngpSource:
 
     ``view``: ``"down"`` (default), ``"mean"`` or ``"x,y,z"``; ``occupancy``: skip cells the
     snapshot's occupancy grid marks empty (default, as instant-ngp renders); ``threads``: row
-    groups sampled at once by one call (default: every core when called from the main thread,
-    1 from a worker thread, where the print job already runs one slab per core).
+    groups sampled at once by one call (default: every core when called from the main thread
+    of the main process, else 1: a print job's workers already run one slab per core).
     """
 
     def __init__(self, name: str, model: IngpModel, *, view="down", occupancy: bool = True,
@@ -565,9 +565,12 @@ class IngpSource:
     def _threads(self) -> int:
         if self.threads is not None:
             return max(1, int(self.threads))
-        if threading.current_thread() is threading.main_thread():
+        import multiprocessing
+
+        if threading.current_thread() is threading.main_thread() and \
+                multiprocessing.parent_process() is None:
             return os.cpu_count() or 1
-        return 1
+        return 1                # a job's worker thread or process: the job uses the cores
 
     def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
                     out: SlabBuffers | None = None):

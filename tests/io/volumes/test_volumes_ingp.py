@@ -365,3 +365,113 @@ def test_inspect_names_kind_network_and_occupancy(tmp_path, capsys):
     assert main(["inspect", str(p)]) == 0
     text = capsys.readouterr().out
     assert "InstantNGP snapshot" in text and "FullyFusedMLP" in text and "occupied" in text
+
+
+def test_occupancy_cascades_follow_mip_from_pos():
+    """The cascade picked for a point is instant-ngp's mip_from_pos: frexp of max|q - 0.5|."""
+    from dreamprint_gui.io.volumes.ingp_kernels import _occupied
+
+    rng = np.random.default_rng(5)
+    occ = (rng.random((3, 8, 8, 8)) < 0.5).astype(np.uint8)
+    for q in rng.uniform(-1.6, 2.6, (2000, 3)):
+        e = math.frexp(float(np.max(np.abs(q - 0.5))))[1]
+        mip = min(max(e + 1, 0), 2)
+        c = ((q - 0.5) * 2.0 ** -mip + 0.5) * 8
+        i = c.astype(int)                                   # C++ float -> int truncation
+        want = bool(np.all((i >= 0) & (i < 8)) and occ[mip, i[2], i[1], i[0]])
+        assert _occupied(q, occ, 2) == want
+
+
+def test_convert_a_snapshot(tmp_path):
+    """``dreamprint convert`` runs on a snapshot (two worker threads, one slab each)."""
+    cfg = make_config(n_levels=2, n_feat=2, log2_t=10)
+    dm, rm, levels = param_shapes(cfg)
+    table = np.full((sum(n for *_, n, _h in levels), 2), 0.5, np.float32)
+    d0 = np.zeros(dm[0], np.float32)
+    d0[0, 0] = 1.0
+    d1 = np.zeros(dm[1], np.float32)
+    d1[0, 0] = 4.0                                  # sigma = e^2 per unit: visibly dense
+    rmats = [np.zeros(sh, np.float32) for sh in rm]
+    grid = np.zeros(128 ** 3, np.float32)
+    grid[: 128 ** 3 // 8] = 1.0                     # Morton: the first octant (x, y, z < 0.5)
+    p = write_snapshot(tmp_path / "s.ingp", cfg, [d0, d1], rmats, table, density_grid=grid)
+    out = tmp_path / "JOB"
+    rc = main(["convert", str(p), "-o", str(out), "--height-mm", "0.5", "--table-size", "17",
+               "--workers", "2", "--slab-layers", "4", "--option", "view=mean"])
+    assert rc == 0
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["source"]["options"] == {"view": "mean"}
+    counts = manifest["voxel_counts"]
+    inked = sum(v for k, v in counts.items() if k not in ("Cl", "empty"))
+    assert 0.09 < inked / manifest["total_voxels"] < 0.16      # the occupied octant: 1/8
+
+
+def test_hdr_colour_and_render_box_crop(tmp_path):
+    """HDR snapshots: colour exp(clamp(out, -10, 10)), linear, encoded to sRGB; a render box
+    (turned 90 degrees about instant-ngp's y) crops the print to that box."""
+    from dreamprint_gui.io.volumes.base import linear_to_srgb
+
+    cfg = make_config(n_levels=1, n_feat=2, log2_t=10)
+    dm, rm, levels = param_shapes(cfg)
+    table = np.full((levels[0][2], 2), 0.5, np.float32)
+    d0 = np.zeros(dm[0], np.float32)
+    d0[0, 0] = 2.0
+    d1 = np.zeros(dm[1], np.float32)
+    d1[0, 0] = 1.0                                  # sigma = e
+    r0 = np.zeros(rm[0], np.float32)
+    r0[:3, 16] = 1.0
+    r1 = np.eye(*rm[1], dtype=np.float32)
+    r2 = np.zeros(rm[2], np.float32)
+    k = np.array([-1.0, -2.0, 0.5])
+    r2[:3, :3] = np.diag(k / SH_C[0])
+    # local = R q with R a quarter turn about y: (x, y, z) -> (z, y, -x); the local box
+    # x in [0.2, 0.6], y in [0, 1], z in [-0.9, -0.5] is q in x [0.5, 0.9], z [0.2, 0.6]
+    R = [[0.0, 0, 1], [0, 1, 0], [-1, 0, 0]]
+    extra = {"render_aabb": {"min": [0.2, 0.0, -0.9], "max": [0.6, 1.0, -0.5]},
+             "render_aabb_to_local": R}
+    ds = {"scale": 1.0, "offset": [0.0, 0.0, 0.0], "aabb_scale": 1, "is_hdr": True}
+    p = write_snapshot(tmp_path / "h.ingp", cfg, [d0, d1], [r0, r1, r2], table, dataset=ds,
+                       extra=extra)
+    s = open_source(p)
+    assert s.colour_encoding == "linear"
+    # source p = (q_z, q_x, q_y): x in [0.2, 0.6], y in [0.5, 0.9], z in [0, 1]
+    np.testing.assert_allclose(s.bounds, ((0.2, 0.5, 0.0), (0.6, 0.9, 1.0)), atol=1e-12)
+    g = grid_for_source(s, (0.1, 0.1, 0.1), size_mm=(4, 4, 10))
+    rgb, d = s.sample_slab(g, 0, g.shape_xyz[2])
+    assert np.all(d > 0)                            # the grid covers just the box
+    np.testing.assert_allclose(d * g.mm_per_unit, math.e, rtol=2e-3)
+    want = linear_to_srgb(np.exp(f16(k / SH_C[0]) * np.float32(SH_C[0])))
+    np.testing.assert_allclose(rgb.reshape(-1, 3), np.broadcast_to(want, (d.size, 3)),
+                               atol=2e-3)
+    _, outside = s.evaluate(np.array([0.1, 0.4, 0.7]), np.array([0.7]), np.array([0.5]))
+    assert outside[0, 0, 0] == 0 and outside[0, 0, 1] > 0 and outside[0, 0, 2] == 0
+
+
+def test_aabb_scale_2_uses_two_cascades_and_derived_level_scale(tmp_path):
+    """aabb_scale 2: aabb 0.5 -+ 1 (load_nerf_post), two occupancy cascades, and without a
+    per_level_scale the level scale exp(ln(2048 * 2 / N_min) / (L - 1)) (reset_network)."""
+    cfg = make_config(n_levels=2, n_feat=2, log2_t=10, base=4)
+    del cfg["encoding"]["per_level_scale"]
+    pls = float(np.exp(np.float32(np.log(np.float32(4096.0) / np.float32(4)))))
+    cfg_w = make_config(n_levels=2, n_feat=2, log2_t=10, base=4, pls=pls)
+    dm, rm, levels = param_shapes(cfg_w)
+    rng = np.random.default_rng(2)
+    table = f16(rng.uniform(-1, 1, (sum(n for _s, _r, n, _h in levels), 2)))
+    dmats = [f16(rng.normal(0, 0.5, sh)) for sh in dm]
+    rmats = [f16(rng.normal(0, 0.5, sh)) for sh in rm]
+    grid = np.zeros(2 * 128 ** 3, np.float32)
+    grid[128 ** 3:] = 1.0                           # cascade 1 all occupied, cascade 0 empty
+    p = write_snapshot(tmp_path / "a2.ingp", cfg, dmats, rmats, table, aabb_scale=2,
+                       density_grid=grid)
+    tree = msgpack.unpackb(gzip.decompress(p.read_bytes()), raw=False)
+    del tree["snapshot"]["aabb"], tree["snapshot"]["render_aabb"]   # the reader derives them
+    p.write_bytes(gzip.compress(msgpack.packb(tree, use_bin_type=True)))
+    s = open_source(p)
+    assert s.bounds == ((-0.5, -0.5, -0.5), (1.5, 1.5, 1.5))
+    assert s.info()["occupancy_grid"]["occupied_fraction"] == [0.0, 1.0]
+    # source (x, y, z) = ngp (z, x, y): inside the unit cube -> cascade 0 (empty)
+    _, sig = s.evaluate(np.array([0.4, 1.3]), np.array([0.5]), np.array([0.5]))
+    assert sig[0, 0, 0] == 0 and sig[0, 0, 1] > 0
+    q = np.array([[0.5, 0.5, 1.3]])                 # ngp of source (1.3, 0.5, 0.5)
+    want, _ = ref_field((q + 0.5) / 2.0, dmats, rmats, table, levels, 2, [np.array([0, -1.0, 0])])
+    np.testing.assert_allclose(sig[0, 0, 1], want[0], rtol=1e-4)
