@@ -38,7 +38,14 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
+from .base import (
+    PrintGrid,
+    SlabBuffers,
+    check_slab,
+    linear_to_srgb_inplace,
+    uniform_rgb,
+    voxel_centres,
+)
 from .leaf_grid import LeafGridPlan
 from .sampling import SparseBlocks, sample_sparse
 
@@ -343,7 +350,7 @@ class VdbSource:
         else:
             return uniform_rgb(d.shape, self.uniform_colour), sigma.astype(np.float32)
         if self.colour_encoding == "linear":
-            rgb = linear_to_srgb(rgb)
+            rgb = linear_to_srgb_inplace(np.ascontiguousarray(rgb, np.float32))
         else:
             np.clip(rgb, 0.0, 1.0, out=rgb)
         return rgb, sigma.astype(np.float32)
