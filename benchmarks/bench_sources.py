@@ -3,7 +3,8 @@
 (made once, then reused; delete the folder to remake them).
 
 Kinds (:data:`KINDS`): ``demo``; ``openvdb`` (a generated 320 x 256 x 288 fog-volume cloud,
-half floats, ~30 % of its leaves active: a smoke simulation's size) and ``openvdb-manta``
+half floats, ~30 % of its leaves active: a smoke simulation's size), ``openvdb-colour`` (the
+same with a scene-linear ``Cd`` colour grid) and ``openvdb-manta``
 (Blender's Mantaflow sample, 21 x 21 x 32); ``nanovdb`` (the same cloud, float, through
 ``nanovdb_convert``); ``vtk`` (hydrogen.vti, ironProt.vtk); ``metaimage`` (HeadMRVolume.mhd);
 ``nrrd`` (ironProt written as NRRD); ``radiance`` (a generated 160^3 RGBA .npz, sRGB) and
@@ -54,36 +55,51 @@ _WRITE_VDB = textwrap.dedent("""
     import numpy as np
     import pyopenvdb as vdb
     a = np.load(sys.argv[1])              # (z, y, x)
-    for out, half in ((sys.argv[2], True), (sys.argv[3], False)):
+
+    def density(half):
         g = vdb.FloatGrid()
         g.copyFromArray(np.ascontiguousarray(a.transpose(2, 1, 0)), (0, 0, 0), 0.0)
         g.name = "density"
         g.gridClass = vdb.GridClass.FOG_VOLUME
         g.saveFloatAsHalf = half
         g.transform = vdb.createLinearTransform(voxelSize=0.01)
-        vdb.write(out, [g])
+        return g
+
+    for out, half in ((sys.argv[2], True), (sys.argv[3], False)):
+        vdb.write(out, [density(half)])
+    # a scene-linear colour grid where there is smoke (Cd, as Houdini writes it)
+    i, j, k = np.meshgrid(*(np.linspace(0, 1, n, dtype=np.float32) for n in a.shape[::-1]),
+                          indexing="ij")
+    cd = np.stack([0.1 + 0.8 * i, 0.6 * j * (1 - i), 0.9 - 0.7 * k], -1).astype(np.float32)
+    cd[a.transpose(2, 1, 0) <= 0] = 0.0
+    c = vdb.Vec3SGrid()
+    c.copyFromArray(cd, (0, 0, 0), (0.0, 0.0, 0.0))
+    c.name = "Cd"
+    c.transform = vdb.createLinearTransform(voxelSize=0.01)
+    vdb.write(sys.argv[4], [density(True), c])
 """)
 
 
-def _make_vdb() -> tuple[Path, Path]:
+def _make_vdb() -> tuple[Path, Path, Path]:
     half, full = DATA / "cloud_320x256x288_half.vdb", DATA / "cloud_320x256x288.vdb"
-    if not (half.exists() and full.exists()):
+    colour = DATA / "cloud_320x256x288_cd.vdb"
+    if not (half.exists() and full.exists() and colour.exists()):
         from dreamprint_gui.io.volumes.openvdb import helper_command
 
         npy = DATA / "cloud.npy"
         np.save(npy, _cloud_field())
         script = DATA / "write_vdb.py"
         script.write_text(_WRITE_VDB)
-        subprocess.run([helper_command()[0], "-I", str(script), str(npy), str(half), str(full)],
-                       check=True)
+        subprocess.run([helper_command()[0], "-I", str(script), str(npy), str(half), str(full),
+                        str(colour)], check=True)
         npy.unlink()
-    return half, full
+    return half, full, colour
 
 
 def _make_nvdb() -> Path:
     out = DATA / "cloud_320x256x288.nvdb"
     if not out.exists():
-        _, full = _make_vdb()
+        _, full, _ = _make_vdb()
         conv = shutil.which("nanovdb_convert")
         if conv is None:
             raise SystemExit("nanovdb_convert missing (apt-get install libnanovdb-tools)")
@@ -181,7 +197,8 @@ def source_path(kind: str) -> str:
              "vox": sd / "voxels" / "magicavoxel_chr_knight.vox"}
     if kind in fixed:
         return str(fixed[kind])
-    made = {"openvdb": lambda: _make_vdb()[0], "nanovdb": _make_nvdb,
+    made = {"openvdb": lambda: _make_vdb()[0], "openvdb-colour": lambda: _make_vdb()[2],
+            "nanovdb": _make_nvdb,
             "radiance": lambda: _make_radiance(False),
             "radiance-linear": lambda: _make_radiance(True), "inria": _make_inria,
             "compressed-ply": lambda: _make_gsply("compressed-ply"),
@@ -191,7 +208,8 @@ def source_path(kind: str) -> str:
     return str(made[kind]())
 
 
-KINDS = ("demo", "openvdb", "openvdb-manta", "nanovdb", "vtk", "vtk-legacy", "metaimage", "nrrd",
+KINDS = ("demo", "openvdb", "openvdb-colour", "openvdb-manta", "nanovdb", "vtk", "vtk-legacy",
+         "metaimage", "nrrd",
          "radiance", "radiance-linear", "inria", "inria-sample", "compressed-ply", "spz", "vox")
 
 

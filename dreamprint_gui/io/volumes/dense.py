@@ -12,7 +12,14 @@ import numpy as np
 from numba import njit
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
+from .base import (
+    PrintGrid,
+    SlabBuffers,
+    check_slab,
+    linear_to_srgb_inplace,
+    uniform_rgb,
+    voxel_centres,
+)
 from .dense_sampler import DenseLayers, rows_with_data, sample_dense, sample_dense_density
 
 __all__ = ["DenseVolume", "DenseSource", "DenseLayers", "colormap_lut", "check_claimed_size",
@@ -160,7 +167,7 @@ class DenseSource:
             rgb = uniform_rgb(sigma.shape, self.uniform_colour,
                               None if out is None else out.take(sigma.shape)[0])
         elif self.colour_encoding == "linear":
-            rgb = linear_to_srgb(rgb)
+            rgb = linear_to_srgb_inplace(rgb)      # the slab's own array (out or new)
         return rgb, sigma
 
     def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0

@@ -29,7 +29,8 @@ from numba import njit
 
 from .dense_sampler import rows_with_data
 
-__all__ = ["MAX_DENSE_VOXELS", "densify", "index_axis", "leaf_grid_layer", "LeafGridPlan"]
+__all__ = ["MAX_DENSE_VOXELS", "densify", "index_axis", "leaf_grid_layer", "leaf_grid_values",
+           "LeafGridPlan"]
 
 # 64 Mi voxels (256 MB of float32) per densified grid; larger ones keep the sparse sampler.
 MAX_DENSE_VOXELS = 1 << 26
@@ -44,27 +45,32 @@ def _fill(values, origins, lo, out):
         for a in range(8):
             for b in range(8):
                 for c in range(8):
-                    out[ok + c, oj + b, oi + a] = values[n, a, b, c, 0]
+                    for ch in range(values.shape[4]):
+                        out[ok + c, oj + b, oi + a, ch] = values[n, a, b, c, ch]
 
 
-def densify(origins: np.ndarray, values: np.ndarray, background: np.ndarray):
-    """(dense (nk, nj, ni) float32 indexed [k, j, i], its index of element [0, 0, 0] as (i, j,
-    k), rows with data (nk, nj) bool) of a one-channel leaf grid with background +0.0; one
-    voxel of 0 pads every side. None if the grid has another background or channel count, no
-    leaves, or a box larger than :data:`MAX_DENSE_VOXELS`."""
+def densify(origins: np.ndarray, values: np.ndarray, background: np.ndarray,
+            channels: bool = False, limit: int = MAX_DENSE_VOXELS):
+    """(dense (nk, nj, ni) float32 indexed [k, j, i] (``channels``: (nk, nj, ni, C)), its
+    index of element [0, 0, 0] as (i, j, k), rows with data (nk, nj) bool) of a leaf grid
+    whose background is +0.0; one voxel of 0 pads every side. None if the background is
+    another value, the grid has no leaves, more than one channel (unless ``channels``), or
+    more than ``limit`` values (default :data:`MAX_DENSE_VOXELS`)."""
     bg = np.asarray(background, np.float32).reshape(-1)
-    if (values.shape[-1] != 1 or len(origins) == 0 or bg[0] != 0
-            or math.copysign(1.0, float(bg[0])) < 0):
+    nc = values.shape[-1]
+    if ((nc != 1 and not channels) or len(origins) == 0 or np.any(bg != 0)
+            or np.any(np.signbit(bg))):
         return None
     o = np.asarray(origins, np.int64).reshape(-1, 3)
     lo = o.min(axis=0) - 1
     hi = o.max(axis=0) + 8 + 1
     shape = tuple(int(v) for v in (hi - lo)[::-1])
-    if math.prod(shape) > MAX_DENSE_VOXELS:
+    if math.prod(shape) * nc > limit:
         return None
-    out = np.zeros(shape, np.float32)
+    out = np.zeros(shape + (nc,), np.float32)
     _fill(values, o, lo, out)
-    return out, lo, rows_with_data(out[..., None])
+    rows = rows_with_data(out)
+    return (out if channels else out[..., 0]), lo, rows
 
 
 def index_axis(u: np.ndarray, lo: int) -> tuple[np.ndarray, np.ndarray]:
@@ -114,6 +120,49 @@ def leaf_grid_layer(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, sigma)
                 v = va + (vb - va) * wi[ii]
             d = v if (v >= zero or v != v) else zero      # np.maximum(v, 0): NaN, -0.0 kept
             out[ii] = d * scale
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def leaf_grid_values(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, out):
+    """Trilinear samples (L, ny, nx, C) of a densified multi-channel grid ``dense`` (nk, nj,
+    ni, C) into ``out``, corners and weights as :func:`leaf_grid_layer` (``k0``, ``wk`` per
+    layer), ``plane`` (C, ni) scratch: :func:`.sampling.sample_sparse`'s values, bit for bit
+    (e.g. an OpenVDB colour grid; the reconstruction step of sampling, paper sec. 4.1)."""
+    nk, nj, ni, nc = dense.shape
+    zero = np.float32(0.0)
+    for kk in range(k0.shape[0]):
+        k = k0[kk]
+        wk_ = wk[kk]
+        k_ok = 0 <= k and k + 1 < nk
+        for jj in range(j0.shape[0]):
+            b = j0[jj]
+            o = out[kk, jj]
+            if not (k_ok and 0 <= b and b + 1 < nj and (rows_nz[k, b] or rows_nz[k, b + 1]
+                                                     or rows_nz[k + 1, b]
+                                                     or rows_nz[k + 1, b + 1])):
+                o[:, :] = zero
+                continue
+            wj_ = wj[jj]
+            for c in range(nc):
+                r00 = dense[k, b, :, c]
+                r10 = dense[k, b + 1, :, c]
+                r01 = dense[k + 1, b, :, c]
+                r11 = dense[k + 1, b + 1, :, c]
+                p = plane[c]
+                for i in range(ni):
+                    y0 = r00[i] * (1 - wj_) + r10[i] * wj_
+                    y1 = r01[i] * (1 - wj_) + r11[i] * wj_
+                    p[i] = y0 * (1 - wk_) + y1 * wk_
+            for ii in range(i0.shape[0]):
+                a = i0[ii]
+                if 0 <= a and a + 1 < ni:
+                    for c in range(nc):
+                        va = plane[c, a]
+                        vb = plane[c, a + 1]
+                        o[ii, c] = va + (vb - va) * wi[ii]
+                else:
+                    for c in range(nc):
+                        o[ii, c] = zero
 
 
 class LeafGridPlan:

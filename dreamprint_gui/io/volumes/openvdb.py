@@ -4,9 +4,11 @@ Defines :class:`VdbSource`, :func:`open_path`, :func:`inspect_path` and :func:`h
 
 The file is read by Debian's ``python3-openvdb`` in an isolated helper process
 (:mod:`._vdb_helper`, run by ``/usr/bin/python3 -I``; override with ``DREAMPRINT_VDB_PYTHON``),
-which writes the active 8^3 leaf blocks of the grids we need to a private temporary folder.
-They are memory-mapped here and sampled by the compiled sparse trilinear sampler
-(:mod:`.sampling`), so a print of any size never densifies the grid.
+which writes the active 8^3 leaf blocks of the grids we need to a folder of the transfer cache
+(``_cached_extract``: a second opening of the same file skips the helper) or a private
+temporary folder. They are memory-mapped here and sampled by the compiled sparse trilinear
+sampler (:mod:`.sampling`); a print job densifies a fog volume over its leaves when that fits
+(:mod:`.leaf_grid`, bit-identical and ~10-100x faster), else samples the leaves.
 
 Semantics follow OpenVDB: voxel (i, j, k) holds its value at world ``M (i, j, k)`` (the grid's
 linear transform), interpolation is trilinear in index space (``BoxSampler``), voxels outside
@@ -23,24 +25,35 @@ Overview", "Grid classes"); Museth, "VDB", ACM TOG 32(3), 2013.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
 import subprocess
 import tempfile
+import threading
 import weakref
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, uniform_rgb, voxel_centres
-from .leaf_grid import LeafGridPlan
+from .base import (
+    PrintGrid,
+    SlabBuffers,
+    check_slab,
+    linear_to_srgb_inplace,
+    uniform_rgb,
+    voxel_centres,
+)
+from .leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
 from .sampling import SparseBlocks, sample_sparse
 
 __all__ = ["VdbSource", "open_path", "inspect_path", "helper_command", "check_header"]
 
 HELPER = Path(__file__).with_name("_vdb_helper.py")
+# Values (all grids of a source together, 512 MB of float32) densified for sample_slab.
+DENSE_BUDGET = 1 << 27
 COLOUR_VEC = ("Cd", "color", "colour", "Color", "rgb", "albedo")
 COLOUR_RGB = (("color_r", "color_g", "color_b"), ("Cd_r", "Cd_g", "Cd_b"),
               ("colour_r", "colour_g", "colour_b"), ("r", "g", "b"))
@@ -205,6 +218,120 @@ def check_header(path: Path) -> dict:
     return out
 
 
+# ---------------------------------------------------------------------------- transfer cache
+# The helper's transfer (start Debian's Python, import pyopenvdb, read the file, write the
+# leaves: ~1-2 s for a 10 MB smoke cache) is kept in the user cache folder, keyed by the
+# file's path, size and modification time, the helper's interpreter and its code, so a second
+# opening of the same file (every worker process of a job, a preview then an export, a rerun)
+# memory-maps the leaves at once. DREAMPRINT_VDB_CACHE=0 turns it off, =FOLDER moves it;
+# DREAMPRINT_VDB_CACHE_MB (default 2048) bounds its size, the least recently used go first.
+
+def _cache_root() -> Path | None:
+    v = os.environ.get("DREAMPRINT_VDB_CACHE", "")
+    if v == "0":
+        return None
+    if v:
+        return Path(v)
+    from platformdirs import user_cache_path
+
+    return user_cache_path("dreamprint") / "vdb"
+
+
+def _file_key(path: Path) -> str:
+    st = path.stat()
+    h = hashlib.sha256()
+    h.update(f"{path.resolve()}|{st.st_size}|{st.st_mtime_ns}|{helper_command()[0]}|"
+             .encode())
+    h.update(HELPER.read_bytes())
+    return h.hexdigest()[:24]
+
+
+def _cached_info(path: Path) -> dict:
+    """The helper's ``info`` of ``path``, from the cache when it holds it."""
+    root = _cache_root()
+    if root is None:
+        return _run(path, "info", str(path))
+    entry = root / _file_key(path)
+    f = entry / "info.json"
+    try:
+        res = json.loads(f.read_text())
+        os.utime(entry)
+        return res
+    except (OSError, ValueError):
+        pass
+    res = _run(path, "info", str(path))
+    try:
+        entry.mkdir(parents=True, exist_ok=True)
+        tmp = entry / f".info-{os.getpid()}-{threading.get_ident()}.json"
+        tmp.write_text(json.dumps(res))
+        os.replace(tmp, f)
+    except OSError:
+        pass                              # a full or read-only cache folder: not cached
+    return res
+
+
+def _cached_extract(path: Path, names: list[str]):
+    """(folder holding the leaves of grids ``names``, the helper's result, a cleanup to call
+    when the source is done with them or None): from the cache when it holds them, else
+    extracted (into the cache when it can take them, else a temporary folder)."""
+    root = _cache_root()
+    if root is not None:
+        sub = hashlib.sha256("\0".join(names).encode()).hexdigest()[:12]
+        final = root / _file_key(path) / f"extract-{sub}"
+        try:
+            res = json.loads((final / "result.json").read_text())
+            os.utime(final.parent)
+            return final, res, None
+        except (OSError, ValueError):
+            pass
+        try:
+            final.parent.mkdir(parents=True, exist_ok=True)
+            work = Path(tempfile.mkdtemp(prefix=".extract-", dir=final.parent))
+        except OSError:
+            work = None
+        if work is not None:
+            try:
+                res = _run(path, "extract", str(path), str(work), *names)
+                (work / "result.json").write_text(json.dumps(res))
+                try:
+                    os.rename(work, final)
+                except OSError:           # another process cached it meanwhile: use theirs
+                    shutil.rmtree(work, ignore_errors=True)
+                    res = json.loads((final / "result.json").read_text())
+            except BaseException:
+                shutil.rmtree(work, ignore_errors=True)
+                raise
+            _trim_cache(root, keep=final.parent)
+            return final, res, None
+    tmp = tempfile.mkdtemp(prefix="dreamprint-vdb-")
+    try:
+        res = _run(path, "extract", str(path), tmp, *names)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return Path(tmp), res, tmp
+
+
+def _trim_cache(root: Path, keep: Path) -> None:
+    """Remove the least recently used entries until the cache holds at most
+    DREAMPRINT_VDB_CACHE_MB (a file's memory map outlives its removal on POSIX)."""
+    limit = float(os.environ.get("DREAMPRINT_VDB_CACHE_MB", "2048")) * 1e6
+    entries = []
+    for e in root.iterdir():
+        try:
+            size = sum(f.stat().st_size for f in e.rglob("*") if f.is_file())
+            entries.append((e.stat().st_mtime, size, e))
+        except OSError:
+            continue
+    total = sum(x[1] for x in entries)
+    for _, size, e in sorted(entries):
+        if total <= limit:
+            break
+        if e != keep:
+            shutil.rmtree(e, ignore_errors=True)
+            total -= size
+
+
 def _affine(t: dict, name: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     cols = np.asarray(t["columns"], float)      # rows: world offset of one index step along i/j/k
     if not t.get("linear", True) or not np.allclose(cols - np.diag(np.diag(cols)), 0,
@@ -255,7 +382,7 @@ def _info_entry(g: dict, path: Path) -> dict:
 def inspect_path(path: Path) -> dict:
     """Per-grid description of a .vdb file (the ``inspect`` JSON)."""
     check_header(path)
-    res = _run(path, "info", str(path))
+    res = _cached_info(path)
     return {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}
 
 
@@ -275,10 +402,36 @@ class _Grid:
         bg = np.asarray(meta["background"], np.float32)
         self.blocks = SparseBlocks(origins, values, bg, self.name)
 
+        self._dense = None
+
+    def dense_values(self) -> int:
+        """How many values a dense copy of the leaves' box would hold (0: no leaves)."""
+        o = self.blocks.origins
+        if len(o) == 0:
+            return 0
+        return int(np.prod(o.max(axis=0) - o.min(axis=0) + 10)) * self.blocks.nc
+
+    def make_dense(self) -> None:
+        b = self.blocks
+        self._dense = densify(b.origins, b.values, b.background, channels=True,
+                              limit=DENSE_BUDGET)
+
     def sample(self, grid: PrintGrid, z0: int, z1: int) -> np.ndarray:
+        """Trilinear values (L, ny, nx, C): from a dense copy of the leaves when it fits
+        (:func:`.leaf_grid.leaf_grid_values`, made on first use), else from the leaves; the
+        same bits either way."""
         u = [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None))) - self.origin[a])
              / self.scale[a] for a in range(3)]
-        return sample_sparse(self.blocks, u[2], u[1], u[0])
+        if self._dense is None:
+            return sample_sparse(self.blocks, u[2], u[1], u[0])
+        dense, lo, rows = self._dense
+        k0, wk = index_axis(u[2], lo[2])
+        j0, wj = index_axis(u[1], lo[1])
+        i0, wi = index_axis(u[0], lo[0])
+        out = np.empty((len(k0), len(j0), len(i0), dense.shape[3]), np.float32)
+        plane = np.empty((dense.shape[3], dense.shape[2]), np.float32)
+        leaf_grid_values(dense, rows, k0, wk, j0, wj, i0, wi, plane, out)
+        return out
 
 
 class VdbSource:
@@ -294,11 +447,12 @@ class VdbSource:
         self.uniform_colour = np.asarray(colour, np.float32)
         self.level_set = level_set
         self.solid_density = float(solid_density)
-        self._tmp = tempfile.mkdtemp(prefix="dreamprint-vdb-")
-        self._cleanup = weakref.finalize(self, shutil.rmtree, self._tmp, True)
         names = [density_grid, *colour_grids]
-        res = _run(path, "extract", str(path), self._tmp, *names)
-        grids = [_Grid(m, Path(self._tmp), n, path) for n, m in enumerate(res["grids"])]
+        folder, res, tmp = _cached_extract(path, names)
+        self._tmp = str(folder)
+        self._cleanup = weakref.finalize(self, shutil.rmtree, tmp, True) if tmp else \
+            weakref.finalize(self, lambda: None)
+        grids = [_Grid(m, folder, n, path) for n, m in enumerate(res["grids"])]
         self.density = grids[0]
         self.colour_grids = grids[1:]
         self.is_level_set = _class_name(res["grids"][0]) == "level set"
@@ -309,6 +463,18 @@ class VdbSource:
                        tuple(float(v) for v in o + (hi_i + 0.5) * s))
         self.voxel_size = float(np.min(s))
         self._leaf_plan = LeafGridPlan(self.density.blocks, o, s)
+        self._dense_tried = False
+
+    def _densify(self) -> None:
+        """Dense copies of every grid's leaves for :meth:`sample_slab` when together they fit
+        :data:`DENSE_BUDGET` values (made once; the same samples, ~10x faster)."""
+        if self._dense_tried:
+            return
+        self._dense_tried = True
+        grids = [self.density, *self.colour_grids]
+        if sum(g.dense_values() for g in grids) <= DENSE_BUDGET:
+            for g in grids:
+                g.make_dense()
 
     # A fog volume with one uniform colour is sampled and labelled a layer at a time from a
     # dense copy of its leaves (engine.leaf_grid_job), bit-identical to sample_slab.
@@ -325,12 +491,14 @@ class VdbSource:
         return self._leaf_plan.args(grid, z0, z1, density_scale, self.uniform_colour)
 
     def close(self) -> None:
-        """Delete the extracted blocks now (otherwise when the source is collected)."""
+        """Delete the extracted blocks now (otherwise when the source is collected), unless
+        they are in the transfer cache."""
         self._cleanup()
 
     def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
                     out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
+        self._densify()
         d = self.density.sample(grid, z0, z1)[..., 0]
         if self.is_level_set:
             d = self.solid_density * np.clip(0.5 - d / self.voxel_size, 0.0, 1.0)
@@ -343,7 +511,7 @@ class VdbSource:
         else:
             return uniform_rgb(d.shape, self.uniform_colour), sigma.astype(np.float32)
         if self.colour_encoding == "linear":
-            rgb = linear_to_srgb(rgb)
+            rgb = linear_to_srgb_inplace(np.ascontiguousarray(rgb, np.float32))
         else:
             np.clip(rgb, 0.0, 1.0, out=rgb)
         return rgb, sigma.astype(np.float32)
@@ -361,7 +529,7 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
     if level_set not in ("refuse", "solid"):
         raise DreamPrintError(f"level_set must be 'refuse' or 'solid', got {level_set!r}", path)
     check_header(path)
-    res = _run(path, "info", str(path))
+    res = _cached_info(path)
     grids = {g["name"]: g for g in res["grids"]}
     info = {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}
     if not grids:

@@ -47,6 +47,7 @@ class _Blocks:
         lo = (-20.0, -4.0, 4.0)
         self.bounds = (lo, (14.0, 18.0, 22.0))
         self._leaf_plan = LeafGridPlan(blocks, self.density.origin, self.density.scale)
+        self._densify = lambda: None          # sample_slab keeps the sparse sampler here
         self.sample_slab = VdbSource.sample_slab.__get__(self)
         self.layer_plan = VdbSource.layer_plan.__get__(self)
 
@@ -118,3 +119,48 @@ def test_vdb_files_take_the_fused_path_unless_coloured(vdbs):
         s = open_source(vdbs / f"{name}.vdb")
         g = grid_for_source(s, (0.13, 0.07, 0.11), size_mm=(5, 5, 5))
         assert (s.layer_plan(g, 0, 1) is not None) == fused, name
+
+
+@pytest.mark.parametrize("channels", [1, 3])
+def test_densified_values_equal_the_sparse_sampler(channels):
+    """leaf_grid_values (OpenVDB sample_slab's grids, colour ones included) gives
+    sample_sparse's values bit for bit, every channel."""
+    from dreamprint_gui.io.volumes.base import voxel_centres
+    from dreamprint_gui.io.volumes.leaf_grid import index_axis, leaf_grid_values
+    from dreamprint_gui.io.volumes.sampling import sample_sparse
+
+    b1 = _random_blocks(seed=11)
+    values = np.concatenate([b1.values * (c + 1) for c in range(channels)], axis=-1)
+    values[..., -1][values[..., -1] < 0.5] = 0.0
+    blocks = SparseBlocks(b1.origins, values, np.zeros(channels, np.float32))
+    src = _Blocks(blocks)
+    grid = grid_for_source(src, (0.21, 0.13, 0.17), size_mm=(15, 15, 15))
+    u = [(voxel_centres(grid, a) - 0.3) / 0.5 for a in range(3)]
+    want = sample_sparse(blocks, u[2], u[1], u[0])
+    dense, lo, rows = densify(blocks.origins, blocks.values, blocks.background, channels=True)
+    k0, wk = index_axis(u[2], lo[2])
+    j0, wj = index_axis(u[1], lo[1])
+    i0, wi = index_axis(u[0], lo[0])
+    got = np.full(want.shape, 9.0, np.float32)
+    leaf_grid_values(dense, rows, k0, wk, j0, wj, i0, wi,
+                     np.empty((channels, dense.shape[2]), np.float32), got)
+    assert (want > 0).any() and np.isnan(want).any()
+    np.testing.assert_array_equal(got.view(np.uint32), want.view(np.uint32))
+
+
+def test_coloured_vdb_samples_the_same_through_dense_copies(vdbs, monkeypatch):
+    """A VDB with a colour grid samples the same with its grids densified as from the leaves."""
+    from dreamprint_gui.io.volumes import openvdb
+
+    for name in ("box_half_cd", "box_rgb3"):
+        s = open_source(vdbs / f"{name}.vdb")
+        g = grid_for_source(s, (0.13, 0.07, 0.11), size_mm=(5, 5, 5))
+        rgb, d = s.sample_slab(g, 0, g.shape_xyz[2])
+        assert s.density._dense is not None
+        monkeypatch.setattr(openvdb, "DENSE_BUDGET", 0)
+        s2 = open_source(vdbs / f"{name}.vdb")
+        rgb2, d2 = s2.sample_slab(g, 0, g.shape_xyz[2])
+        assert s2.density._dense is None
+        monkeypatch.undo()
+        np.testing.assert_array_equal(rgb.view(np.uint32), rgb2.view(np.uint32))
+        np.testing.assert_array_equal(d.view(np.uint32), d2.view(np.uint32))

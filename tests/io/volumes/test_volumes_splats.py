@@ -176,3 +176,27 @@ def test_bad_splat_files(tmp_path):
     z.write_bytes(b"\x1f\x8b" + b"\0" * 50)
     with pytest.raises(DreamPrintError, match="SPZ"):
         open_source(z)
+
+
+def test_frames_kernel_equals_the_numpy_formulas():
+    """The compiled per-Gaussian frames (inverse covariance, 3-sigma half-extents) give the bits
+    of R from the normalised quaternion and ``einsum("nij,nj,nkj->nik")`` in numpy, including
+    zero and huge quaternions."""
+    from dreamprint_gui.io.volumes.splats import _frames, _quat_to_rot
+
+    rng = np.random.default_rng(4)
+    n = 20_000
+    q = rng.normal(size=(n, 4))
+    q[:3] = 0.0
+    q[3] *= 1e-160
+    sig = rng.lognormal(-4, 2, (n, 3))
+    rot = _quat_to_rot(q)
+    inv = np.einsum("nij,nj,nkj->nik", rot, sig ** -2.0, rot)
+    cov = np.einsum("nij,nj,nkj->nik", rot, sig ** 2, rot)
+    want_inv = np.stack([inv[:, 0, 0], inv[:, 1, 1], inv[:, 2, 2], inv[:, 0, 1], inv[:, 0, 2],
+                         inv[:, 1, 2]], axis=1)
+    want_half = 3.0 * np.sqrt(np.einsum("nii->ni", cov))
+    got_inv, got_half = np.empty((n, 6)), np.empty((n, 3))
+    _frames(q, sig ** 2, sig ** -2.0, got_inv, got_half)
+    np.testing.assert_array_equal(got_inv.view(np.uint64), want_inv.view(np.uint64))
+    np.testing.assert_array_equal(got_half.view(np.uint64), want_half.view(np.uint64))
