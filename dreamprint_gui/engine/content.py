@@ -154,6 +154,8 @@ class SolidSource:
     job takes the general path (sample the slab, then label it).
     """
 
+    layer_plan = None  # never the inner source's fused dense path: it would skip the rule
+
     def __init__(self, inner, level: float | None, threshold: float) -> None:
         self.inner = inner
         self.level = level
