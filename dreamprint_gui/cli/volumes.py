@@ -30,8 +30,10 @@ def _fmt_bounds(b, unit: str = "source units") -> str:
 def _range(g: dict) -> str:
     lo, hi = g.get("min"), g.get("max")
     if isinstance(lo, (list, tuple)) and isinstance(hi, (list, tuple)):
+        names = "rgba" if len(lo) == 4 else "xyz" if len(lo) == 3 else \
+            [str(k) for k in range(len(lo))]
         parts = ", ".join(f"{a} {_fmt_num(a_lo)} .. {_fmt_num(a_hi)}"
-                          for a, a_lo, a_hi in zip("xyz", lo, hi, strict=False))
+                          for a, a_lo, a_hi in zip(names, lo, hi, strict=False))
         mag = g.get("magnitude")
         if mag:
             parts += f"; magnitude {_fmt_num(mag[0])} .. {_fmt_num(mag[1])}"

@@ -141,7 +141,9 @@ def content_of_info(info: dict) -> tuple[str, str]:
         g = fog[0] if fog else (ls[0] if ls else None)
     if g is not None and g.get("class") == "level set":
         return "solid", f"a level set (grid {g.get('name')!r})"
-    return "fog", "a fog volume" if g is not None else "no density grid"
+    if g is not None:
+        return "fog", "a fog volume"
+    return "fog", "not a voxel model, level set or binary mask"
 
 
 class SolidSource:
@@ -152,8 +154,7 @@ class SolidSource:
     job takes the general path (sample the slab, then label it).
     """
 
-    # Not forwarded to ``inner`` (whose fused layer plan would sample its own density).
-    layer_plan = None
+    layer_plan = None  # never the inner source's fused dense path: it would skip the rule
 
     def __init__(self, inner, level: float | None, threshold: float) -> None:
         self.inner = inner

@@ -288,3 +288,15 @@ def test_material_codes_distinct_and_one_definition():
     for name in ("voxelprint-14um", "voxelprint-27um"):
         assert load_printer(name).palette()[CL].tolist() == list(codes["Cl"])
     assert EMPTY_LABEL == len(INKS)
+
+
+def test_solid_forced_on_a_dense_fog_takes_the_solid_rule():
+    """A dense grid's fused path (layer_plan) must not bypass the solid rule."""
+    s = ConvertSettings(source="demo", height_mm=0.6, table_size=TABLE, content="solid")
+    ctx = prepare_job(s)
+    assert ctx.content.mode == "solid" and "auto would pick fog" in ctx.content.reason
+    z = ctx.shape_xyz[2] // 2
+    lab = halftone_layer(s, z, ctx)
+    _, d = open_source("demo").sample_slab(ctx.grid, z, z + 1)
+    occupied = d[0] >= ctx.halftoner.threshold
+    assert occupied.any() and np.array_equal(lab != CL, occupied)

@@ -292,7 +292,12 @@ def inspect_source(path_or_name: str | os.PathLike) -> tuple[dict, VolumeSource 
     module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
     if hasattr(module, "inspect_path"):
         return module.inspect_path(path), None
-    src = module.open_path(path, fmt=key)
+    try:
+        src = module.open_path(path, fmt=key)
+    except DreamPrintError:
+        if not hasattr(module, "describe_path"):  # a reader that can describe what it can't map
+            raise
+        return module.describe_path(path), None
     return src.info(), src
 
 

@@ -166,12 +166,20 @@ def _grid_info(mesh, name, assoc, arr) -> dict:
     dims = list(mesh.dimensions) if assoc == "point" else [max(1, d - 1) for d in mesh.dimensions]
     b = mesh.bounds
     vals = a if ncomp == 1 else a[:, -1] if ncomp == 4 else np.linalg.norm(a, axis=1)
-    return {"name": name, "class": "rgba image" if ncomp == 4 else "scalar image",
+    extra = {}
+    if ncomp == 1 or not a.size:
+        lo = float(np.nanmin(a)) if a.size else None
+        hi = float(np.nanmax(a)) if a.size else None
+    else:  # per component (a vector or RGBA array), and the magnitude of a vector
+        lo = [float(v) for v in np.nanmin(a, axis=0)]
+        hi = [float(v) for v in np.nanmax(a, axis=0)]
+        if ncomp != 4:
+            extra["magnitude"] = [float(np.nanmin(vals)), float(np.nanmax(vals))]
+    cls = "rgba image" if ncomp == 4 else "scalar image" if ncomp == 1 else "vector image"
+    return {"name": name, "class": cls,
             "shape": dims + ([ncomp] if ncomp > 1 else []),
-            "active_voxels": int(np.count_nonzero(vals)),
-            "min": float(np.nanmin(a)) if a.size else None,
-            "max": float(np.nanmax(a)) if a.size else None,
-            "dtype": str(a.dtype), "bounds": [[b[0], b[2], b[4]], [b[1], b[3], b[5]]]}
+            "active_voxels": int(np.count_nonzero(vals)), "min": lo, "max": hi,
+            "dtype": str(a.dtype), "bounds": [[b[0], b[2], b[4]], [b[1], b[3], b[5]]], **extra}
 
 
 class ImageSource:
@@ -243,6 +251,14 @@ def _outside(volume: DenseVolume, grid: PrintGrid, z0: int, z1: int):
         return None
     mz, my, mx = masks
     return mz[:, None, None] | my[None, :, None] | mx[None, None, :]
+
+
+def describe_path(path: Path) -> dict:
+    """The ``inspect`` description of every array, without choosing one (a file whose arrays
+    DreamPrint cannot map, e.g. 3-component vectors, can still be inspected)."""
+    mesh = _read(path)
+    return {"format": _FORMAT_NAMES.get(path.suffix.lower(), "VTK image data"),
+            "grids": [_grid_info(mesh, *a) for a in _arrays(mesh)]}
 
 
 def open_path(path: Path, fmt: str = "vtk", *, array: str | None = None, window=None,
