@@ -127,17 +127,18 @@ def linear_to_srgb_inplace(c: np.ndarray, rows: int = 32768) -> np.ndarray:
     low = np.empty(n, np.bool_)
     enc = np.empty(n, np.float32)
     lin = np.empty(n, np.float32)
-    for a in range(0, flat.size, n):
-        x = flat[a:a + n]
-        m = x.size
-        np.clip(x, 0.0, 1.0, out=x)
-        np.less_equal(x, 0.0031308, out=low[:m])
-        np.multiply(x, 12.92, out=lin[:m])
-        np.power(x, 1 / 2.4, dtype=np.float32, out=enc[:m])
-        np.multiply(enc[:m], 1.055, out=enc[:m])
-        np.subtract(enc[:m], 0.055, out=enc[:m])
-        np.copyto(enc[:m], lin[:m], where=low[:m])
-        x[:] = enc[:m]
+    with np.errstate(invalid="ignore"):   # NaN (a stale, never-read value) stays NaN
+        for a in range(0, flat.size, n):
+            x = flat[a:a + n]
+            m = x.size
+            np.clip(x, 0.0, 1.0, out=x)
+            np.less_equal(x, 0.0031308, out=low[:m])
+            np.multiply(x, 12.92, out=lin[:m])
+            np.power(x, 1 / 2.4, dtype=np.float32, out=enc[:m])
+            np.multiply(enc[:m], 1.055, out=enc[:m])
+            np.subtract(enc[:m], 0.055, out=enc[:m])
+            np.copyto(enc[:m], lin[:m], where=low[:m])
+            x[:] = enc[:m]
     return c
 
 
