@@ -62,13 +62,18 @@ def _fmt_time(s: float | None) -> str:
 @click.option("--slab-layers", type=int, default=None, help="Layers per task (default: auto).")
 @click.option("--option", "source_options", multiple=True,
               help="Source reader option KEY=VALUE (e.g. grid=density); repeatable.")
+@click.option("--objective", type=click.Choice(["srgb", "cielab", "de2000"]), default=None,
+              help="Colour table objective (default: the profile's, else de2000).")
+@click.option("--intent", type=click.Choice(["colorimetric", "perceptual"]), default=None,
+              help="Rendering intent for colours outside the printable gamut (default: the "
+                   "profile's, else colorimetric).")
 @click.option("--table-size", type=int, default=100, hidden=True,
               help="Colour table nodes per axis (tests use small tables).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the manifest as JSON at the end.")
 def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
             workers, scheduler, background, density_threshold, slab_layers, source_options,
-            table_size, overwrite, as_json) -> None:
+            objective, intent, table_size, overwrite, as_json) -> None:
     """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack."""
     from ..engine.pipeline import ConvertSettings, JobCancelled, run_conversion
 
@@ -83,7 +88,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         size_mm=_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
         workers=workers, scheduler=scheduler, background=background,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
-        table_size=table_size, source_options=opts)
+        objective=objective, intent=intent, table_size=table_size, source_options=opts)
 
     def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
         raise KeyboardInterrupt()
