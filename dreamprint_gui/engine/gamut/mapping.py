@@ -26,12 +26,16 @@ Defines
      (k = 0.9, SGCK's 90 % knee), so the source boundary lands on the printable boundary and
      order along the line is kept.
 
-  Both gamut boundaries are segment-maxima gamut boundary descriptors (Morovic & Luo 2000) in
-  (hue, elevation angle around E): the largest distance from E of the printable colours of a
-  5-ink simplex lattice (the printable gamut) and of the sRGB cube's surface (the source), per
-  segment, interpolated bilinearly between segment centres. The printable distance is shrunk by
-  :data:`BOUNDARY_MARGIN` so that the mapped colour is reproducible (segment maxima lie inside
-  the true boundary except where the boundary is concave between two segment centres).
+  Both gamut boundaries are tabulated per hue segment (3 degrees) and elevation angle around E
+  (the distance from E to the boundary along that direction): in each hue segment, the colours
+  of that hue (within +-4.5 degrees; for the printable gamut, mixtures on a simplex lattice and
+  dense lattices on every three-ink face; for the source, the sRGB cube's surface after step 1)
+  plus the grey axis between the gamut's black and white span a polygon in (M', J') whose convex
+  hull is the boundary of the slice (a convex-hull gamut boundary descriptor, Morovic 2008
+  ch. 8; it stays well defined near black and white, where colours of one hue are sparse).
+  The table is interpolated bilinearly; the printable distance is shrunk by
+  :data:`BOUNDARY_MARGIN` so that mapped colours are printable (the hull overestimates a
+  concave slice).
 - :func:`canonical_intent`: validates an intent name.
 """
 
@@ -55,6 +59,7 @@ KNEE = 0.9
 BOUNDARY_MARGIN = 0.98
 _N_HUE = 120
 _N_ELEV = 64
+_HUE_WINDOW = np.radians(4.5)
 _LATTICE_STEPS = 24
 _TRIANGLE_STEPS = 100
 _SRGB_FACE_STEPS = 81
@@ -187,12 +192,10 @@ class PerceptualMap:
         # smooth the cusp lightness a little along hue (one segment = 5 degrees)
         j_cusp = 0.25 * np.roll(j_cusp, 1) + 0.5 * j_cusp + 0.25 * np.roll(j_cusp, -1)
         proto = cls(white, j_src, j_print, j_cusp, np.zeros((1, 1)), np.zeros((1, 1)))
-        # eroded (minimum over the neighbouring segments) so that interpolating between segment
-        # centres stays inside the gamut near its sharp cusps
-        d_print = _erode(proto._segment_maxima(pr))
-        src = cam16_ucs(srgb_to_xyz(model, _srgb_surface(_SRGB_FACE_STEPS)), white)
-        src_lab = _lab(srgb_to_xyz(model, _srgb_surface(_SRGB_FACE_STEPS)), white)
-        d_src = proto._segment_maxima(proto._lightness(src, src_lab))
+        d_print = proto._hull_boundary(pr, j_print)
+        surface = srgb_to_xyz(model, _srgb_surface(_SRGB_FACE_STEPS))
+        src = proto._lightness(cam16_ucs(surface, white), _lab(surface, white))
+        d_src = proto._hull_boundary(src, j_print)  # grey: full lightness compression
         return cls(white, j_src, j_print, j_cusp, BOUNDARY_MARGIN * d_print,
                    np.maximum(d_src, BOUNDARY_MARGIN * d_print))
 
@@ -204,13 +207,32 @@ class PerceptualMap:
         dj = ucs[..., 0] - jc
         return h, np.arctan2(dj, m), np.hypot(m, dj)
 
-    def _segment_maxima(self, ucs: NDArray) -> NDArray[np.float64]:
-        h, el, d = self._polar(ucs)
-        ih = np.minimum((h / (2 * np.pi) * _N_HUE).astype(int), _N_HUE - 1)
-        ie = np.clip(((el + np.pi / 2) / np.pi * _N_ELEV).astype(int), 0, _N_ELEV - 1)
+    def _hull_boundary(self, ucs: NDArray, j_range: tuple[float, float]) -> NDArray[np.float64]:
+        """(n_hue, n_elev) distance from E to the convex hull of each hue slice."""
+        from scipy.spatial import ConvexHull, QhullError
+
+        h = _hue(ucs)
+        m = np.hypot(ucs[:, 1], ucs[:, 2])
+        axis = np.stack([np.zeros(9), np.linspace(j_range[0], j_range[1], 9)], axis=1)
+        el = -np.pi / 2 + (np.arange(_N_ELEV) + 0.5) * np.pi / _N_ELEV
+        direction = np.stack([np.cos(el), np.sin(el)], axis=1)  # (n_elev, 2) in (M', J')
         out = np.zeros((_N_HUE, _N_ELEV))
-        np.maximum.at(out, (ih, ie), d)
-        return np.stack([_fill_gaps(r) for r in out])
+        for i in range(_N_HUE):
+            hc = (i + 0.5) * 2 * np.pi / _N_HUE
+            near = np.abs((h - hc + np.pi) % (2 * np.pi) - np.pi) <= _HUE_WINDOW
+            pts = np.concatenate([np.stack([m[near], ucs[near, 0]], axis=1), axis])
+            try:
+                eq = ConvexHull(pts).equations  # n . x + b <= 0 inside
+            except QhullError:
+                continue
+            e = np.array([0.0, self.j_cusp[i]])
+            nd = direction @ eq[:, :2].T  # (n_elev, n_faces)
+            slack = -(eq[:, :2] @ e + eq[:, 2])  # >= 0: E inside
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = np.where(nd > 1e-12, np.maximum(slack, 0.0) / nd, np.inf)
+            out[i] = np.min(t, axis=1)
+        out[~np.isfinite(out)] = 0.0
+        return out
 
     def _boundary(self, table: NDArray, h: NDArray, el: NDArray) -> NDArray[np.float64]:
         """Bilinear interpolation of a segment table at (hue, elevation)."""
@@ -265,21 +287,6 @@ def _lab(xyz: NDArray, white: NDArray) -> NDArray[np.float64]:
     import colour
 
     return colour.XYZ_to_Lab(xyz, illuminant=colour.XYZ_to_xy(white))
-
-
-def _erode(table: NDArray) -> NDArray[np.float64]:
-    """Minimum of each segment and its 8 neighbours (periodic in hue, clamped in elevation)."""
-    out = table.copy()
-    for dh in (-1, 0, 1):
-        rolled = np.roll(table, dh, axis=0)
-        for de in (-1, 1, 0):
-            shifted = rolled.copy()
-            if de == 1:
-                shifted[:, :-1] = rolled[:, 1:]
-            elif de == -1:
-                shifted[:, 1:] = rolled[:, :-1]
-            out = np.minimum(out, shifted)
-    return out
 
 
 def _fill_periodic(values: NDArray, ok: NDArray) -> NDArray[np.float64]:

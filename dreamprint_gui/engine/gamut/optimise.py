@@ -259,7 +259,7 @@ def _residual(c, target, objective, K, S, W, t, white, M, xyz, jx, tmp, col, J, 
 
 
 @nb.njit(cache=True, parallel=True)
-def _solve_many(targets, starts, objective, lam, max_iter, K, S, W, t, white, M,
+def _solve_many(targets, starts, alt, objective, lam, max_iter, K, S, W, t, white, M,
                 out, cost_out, iters_out):
     n_targets = targets.shape[0]
     n = K.shape[0]
@@ -295,9 +295,32 @@ def _solve_many(targets, starts, objective, lam, max_iter, K, S, W, t, white, M,
                       jl, scratch)
         for i in range(n):
             f += lam * c[i] * c[i]
+        if alt.shape[0] > 0:  # a second start: keep the one of lower cost
+            tot = 0.0
+            for i in range(n):
+                trial[i] = max(alt[k, i], 0.0)
+                tot += trial[i]
+            for i in range(n):
+                trial[i] = trial[i] / tot if tot > 0 else 1.0 / n
+            f2 = _residual(trial, target, objective, K, S, W, t, white, M,
+                           xyz, jx, tmp, col, J2, r2, jl, scratch)
+            for i in range(n):
+                f2 += lam * trial[i] * trial[i]
+            if f2 < f:
+                f = f2
+                for i in range(n):
+                    c[i] = trial[i]
+                for a in range(3):
+                    r[a] = r2[a]
+                    for i in range(n):
+                        J[a, i] = J2[a, i]
         mu = -1.0
         it = 0
         while it < max_iter:
+            # CIEDE2000 is a cone (not smooth) at its zero: once the colour is matched to
+            # 1e-5 dE00 there is nothing left to gain, and LM would only reject steps
+            if objective == 2 and r[0] * r[0] + r[1] * r[1] + r[2] * r[2] < 1e-10:
+                break
             it += 1
             for i in range(n):
                 gi = lam * c[i]
@@ -380,14 +403,17 @@ def targets_for(model: ForwardModel, objective: str, rgb: NDArray) -> NDArray[np
 
 
 def _solve_coords(model: ForwardModel, objective: str, tgt: NDArray, starts: NDArray,
-                  max_iter: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray]:
+                  max_iter: int, alt: NDArray | None = None
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray]:
     tgt = np.ascontiguousarray(np.asarray(tgt, dtype=np.float64).reshape(-1, 3))
     st = np.ascontiguousarray(np.asarray(starts, dtype=np.float64).reshape(-1, N_COLOUR_INKS))
     st = np.broadcast_to(st, (tgt.shape[0], N_COLOUR_INKS)).copy()
+    alt = (np.empty((0, N_COLOUR_INKS)) if alt is None
+           else np.ascontiguousarray(alt, dtype=np.float64).reshape(-1, N_COLOUR_INKS))
     out = np.empty_like(st)
     cost = np.empty(tgt.shape[0])
     iters = np.empty(tgt.shape[0], dtype=np.int64)
-    _solve_many(tgt, st, _CODE[objective], REGULARISATION[objective], max_iter,
+    _solve_many(tgt, st, alt, _CODE[objective], REGULARISATION[objective], max_iter,
                 model.K, model.S, model.weights, model.thickness_mm, model.white,
                 model.xyz_to_rgb, out, cost, iters)
     return out, cost, iters
@@ -400,13 +426,16 @@ def solve(model: ForwardModel, objective: str, rgb: NDArray, starts: NDArray,
 
     Returns ``(conc, cost, iterations)``; ``cost`` includes the small regularisation term.
     ``de2000`` is solved as a polishing step: first ``cielab`` from ``starts``, then CIEDE2000
-    from that solution (CIEDE2000 is not smooth at neutral colours and where hues wrap, so a
-    cold start can stall); ``polish=False`` starts CIEDE2000 at ``starts`` (warm starts).
+    from whichever of ``starts`` and that solution has the lower CIEDE2000 (CIEDE2000 is not
+    smooth at neutral colours, where Gauss-Newton converges slowly from far away);
+    ``polish=False`` starts CIEDE2000 at ``starts`` only.
     """
     objective = canonical_objective(objective, "cielab")
+    alt = None
     if objective == "de2000" and polish:
-        starts, _, _ = solve(model, "cielab", rgb, starts, max_iter)
-    return _solve_coords(model, objective, targets_for(model, objective, rgb), starts, max_iter)
+        alt, _, _ = solve(model, "cielab", rgb, starts, max_iter)
+    return _solve_coords(model, objective, targets_for(model, objective, rgb), starts, max_iter,
+                         alt)
 
 
 def solve_xyz(model: ForwardModel, objective: str, xyz: NDArray, starts: NDArray,
@@ -414,10 +443,11 @@ def solve_xyz(model: ForwardModel, objective: str, xyz: NDArray, starts: NDArray
               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray]:
     """As :func:`solve` for targets given as XYZ (e.g. gamut-mapped colours)."""
     objective = canonical_objective(objective, "cielab")
+    alt = None
     if objective == "de2000" and polish:
-        starts, _, _ = solve_xyz(model, "cielab", xyz, starts, max_iter)
+        alt, _, _ = solve_xyz(model, "cielab", xyz, starts, max_iter)
     return _solve_coords(model, objective, target_coords(model, objective, xyz), starts,
-                         max_iter)
+                         max_iter, alt)
 
 
 def _starts() -> NDArray[np.float64]:
@@ -463,7 +493,7 @@ def solve_grid(model: ForwardModel, objective: str, size: int,
     """
     objective = canonical_objective(objective, "cielab")
 
-    def run(rgb, starts, max_iter, polish=False):
+    def run(rgb, starts, max_iter, polish=True):
         if target_xyz is None:
             return solve(model, objective, rgb, starts, max_iter, polish)
         return solve_xyz(model, objective, target_xyz(rgb), starts, max_iter, polish)
@@ -482,7 +512,7 @@ def solve_grid(model: ForwardModel, objective: str, size: int,
         if conc is None:
             best_c = best_f = None
             for s in _starts():
-                c, f, _ = run(rgb, s, 200, polish=True)
+                c, f, _ = run(rgb, s, 200)
                 if best_c is None:
                     best_c, best_f = c, f
                 else:
