@@ -18,6 +18,10 @@ Defines
      [J_min_p, J_max_p] (SGCK's sigmoid is replaced by this linear compression, the GCUSP form)
      and ``p_C = 1 - sqrt(C^3 / (C^3 + 5e5))`` with C the source's CIELAB chroma C*ab: neutral
      colours get the full lightness compression, saturated ones keep more of their lightness.
+     A colour lifted in lightness (dark colours: the inks' black is lighter than sRGB's) keeps
+     its saturation M'/J' (a', b' scaled by J / J_r): CAM16 colourfulness stays large down to
+     black, and keeping it would turn near-black colours into vivid dark colours far from the
+     mapped black (a departure from SGCK, which keeps CIELAB chroma).
   2. Chroma/lightness compression at constant hue towards the point E = (J_cusp(h), 0) on the
      grey axis at the lightness of the printable gamut's cusp for that hue: along the line from E
      through the colour, with d its distance from E and d_p, d_s the distances from E to the
@@ -256,6 +260,13 @@ class PerceptualMap:
         pc = 1.0 - np.sqrt(c3 / (c3 + 5e5))
         out = ucs.copy()
         out[..., 0] = (1.0 - pc) * ucs[..., 0] + pc * jl
+        # a colour lifted in lightness keeps its saturation M'/J' rather than its colourfulness
+        # M': CAM16's colourfulness stays large down to black, so near-black colours would
+        # otherwise become vivid dark colours far from (lifted) black, a jump in the mapping
+        with np.errstate(invalid="ignore", divide="ignore"):
+            lift = np.where(out[..., 0] > ucs[..., 0],
+                            ucs[..., 0] / np.maximum(out[..., 0], 1e-9), 1.0)
+        out[..., 1:] *= lift[..., None]
         return out
 
     def map_ucs(self, ucs: ArrayLike, lab: ArrayLike) -> NDArray[np.float64]:
