@@ -1,11 +1,16 @@
-"""Printable-gamut figures: table build time, LUT-vs-direct accuracy, alignment kernel speed.
+"""Printable-gamut figures: table build time, accuracy per objective and intent, kernel speed.
 
 Run from the checkout root:
-    PYTHONPATH=. .venv/bin/python benchmarks/bench_gamut.py [--size 100] [--objective lab|rgb|both]
-Builds in a fresh temporary cache (so the build is really timed), then prints wall and CPU
-seconds of the build, the cached reload time, LUT-vs-direct dE2000 at random in-gamut colours,
-mean node dE2000 per objective, the fused lookup+alignment kernel's voxels/s on one core, and its
-sigma error against the exact alignment.
+    PYTHONPATH=. .venv/bin/python benchmarks/bench_gamut.py [--size 100]
+        [--objective srgb|cielab|de2000|all] [--intent colorimetric|perceptual|all]
+Builds every objective x intent in a fresh temporary cache (so each build is really timed
+cold), then prints per table: wall and CPU seconds of the build, the cached reload time,
+LUT-vs-direct dE2000 at random in-gamut colours (mean, p95), the in-gamut fraction of sRGB, the
+lookup-minus-lattice-best dE2000 (300 random sRGB targets vs the best mixture of a 5 % simplex
+lattice, through ``mixture.predict``; mean, p95), and the largest dE2000 between the reproduced
+colours of neighbouring nodes. Then the fused lookup+alignment kernel's voxels/s on one core and
+its sigma error against the exact alignment (first table). The machine is shared: the load
+average is printed with every build.
 """
 
 from __future__ import annotations
@@ -24,7 +29,9 @@ from dreamprint_gui.engine.gamut import (
     lookup,
     lookup_and_align_into,
 )
-from dreamprint_gui.engine.gamut.evaluation import lut_vs_direct
+from dreamprint_gui.engine.gamut.evaluation import objective_figures
+from dreamprint_gui.engine.gamut.mapping import INTENTS
+from dreamprint_gui.engine.gamut.optimise import OBJECTIVES
 from dreamprint_gui.engine.gamut.tables import mixture_sigma
 from dreamprint_gui.engine.profile import default_profile
 
@@ -32,30 +39,46 @@ from dreamprint_gui.engine.profile import default_profile
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--size", type=int, default=100)
-    ap.add_argument("--objective", default="both")
-    ap.add_argument("--samples", type=int, default=4000)
+    ap.add_argument("--objective", default="all")
+    ap.add_argument("--intent", default="all")
+    ap.add_argument("--samples", type=int, default=2000)
     args = ap.parse_args()
     profile = default_profile()
-    build_tables(profile, "lab", 5)  # compile the numba kernels outside the timing
+    objectives = list(OBJECTIVES) if args.objective == "all" else [args.objective]
+    intents = list(INTENTS) if args.intent == "all" else [args.intent]
+    for obj in objectives:  # compile the numba kernels outside the timing
+        for intent in intents:
+            build_tables(profile, obj, 5, intent=intent)
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}")
-    objectives = ["lab", "rgb"] if args.objective == "both" else [args.objective]
     tables = {}
     with tempfile.TemporaryDirectory() as cache:
-        for obj in objectives:
-            w, c = time.perf_counter(), time.process_time()
-            t = get_tables(profile, obj, args.size, cache=cache)
-            w, c = time.perf_counter() - w, time.process_time() - c
-            w2 = time.perf_counter()
-            again = get_tables(profile, obj, args.size, cache=cache)
-            w2 = time.perf_counter() - w2
-            assert again.cached
-            tables[obj] = t
-            lut, _ = lut_vs_direct(t, profile, args.samples, seed=1)
-            print(f"[{obj}] build {args.size}^3: {w:.1f} s wall, {c:.1f} s CPU; cached reload "
-                  f"{w2 * 1e3:.0f} ms; node dE2000 mean {t.dE2000.mean():.3f}")
-            print(f"[{obj}] LUT vs direct dE2000 ({lut.size} in-gamut of {args.samples}): "
-                  f"mean {lut.mean():.4f}, p95 {np.percentile(lut, 95):.4f}, max {lut.max():.4f}")
-    t = tables[objectives[0]]
+        for intent in intents:
+            for obj in objectives:
+                load = os.getloadavg()[0]
+                w, c = time.perf_counter(), time.process_time()
+                t = get_tables(profile, obj, args.size, cache=cache, intent=intent)
+                w, c = time.perf_counter() - w, time.process_time() - c
+                w2 = time.perf_counter()
+                again = get_tables(profile, obj, args.size, cache=cache, intent=intent)
+                w2 = time.perf_counter() - w2
+                assert again.cached
+                tables[obj, intent] = t
+                f = objective_figures(t, profile, args.samples)
+                a, g, j = (f["lut_vs_direct_dE2000"], f["lookup_minus_lattice_best_dE2000"],
+                           f["adjacent_node_dE2000"])
+                tag = f"[{obj}, {intent}]"
+                print(f"{tag} build {args.size}^3 cold: {w:.1f} s wall, {c:.1f} s CPU (load "
+                      f"average {load:.1f} at start); cached reload {w2 * 1e3:.0f} ms")
+                print(f"{tag} LUT vs direct dE2000 ({a['count']} in-gamut of {args.samples}): "
+                      f"mean {a['mean']:.4f}, p95 {a['p95']:.4f}, max {a['max']:.4f}; sRGB in "
+                      f"gamut {100 * f['srgb_in_gamut_fraction']:.1f} %")
+                print(f"{tag} lookup minus lattice-best dE2000 (300 targets, 5 % lattice): "
+                      f"mean {g['mean']:+.3f}, p95 {g['p95']:+.3f}, max {g['max']:+.3f}")
+                print(f"{tag} neighbouring nodes dE2000: max {j['max']:.3f}, p99.9 "
+                      f"{j['p999']:.3f} (targets' own max {j['target_max']:.3f}; largest "
+                      f"excess over the targets' jump {j['max_excess']:+.3f}); node dE2000 mean "
+                      f"{f['node_dE2000_mean']:.3f}", flush=True)
+    t = tables[objectives[0], intents[0]]
     rng = np.random.default_rng(0)
     n = 4_000_000
     rgb = rng.random((n, 3), dtype=np.float32)

@@ -12,7 +12,14 @@ import click
 from ..errors import DreamPrintError
 from . import cli
 
-_OBJECTIVES = click.Choice(["rgb", "lab"])
+# rgb, lab: former names of srgb, cielab (still accepted)
+_OBJECTIVES = click.Choice(["srgb", "cielab", "de2000", "rgb", "lab"])
+_INTENTS = click.Choice(["colorimetric", "perceptual"])
+_OBJECTIVE_HELP = ("Table objective: srgb (paper eq. 10), cielab (dE76) or de2000 (CIEDE2000). "
+                   "Default: the profile's, else de2000 (see docs/physics.md).")
+_INTENT_HELP = ("Rendering intent for colours outside the printable gamut: colorimetric "
+                "(nearest printable colour) or perceptual (SGCK compression in CAM16-UCS). "
+                "Default: the profile's, else colorimetric.")
 
 
 def _parse_rgb(text: str) -> list[float]:
@@ -83,11 +90,12 @@ def _progress_bar(enabled: bool):
                    "mixture is kept).")
 @click.option("--profile", "profile_path", default=None, help="Ink profile JSON (default: "
               "built-in).")
-@click.option("--objective", type=_OBJECTIVES, default=None,
-              help="Table objective (default: lab, the lower mean dE2000).")
+@click.option("--objective", type=_OBJECTIVES, default=None, help=_OBJECTIVE_HELP)
+@click.option("--intent", type=_INTENTS, default=None, help=_INTENT_HELP)
 @click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def lookup(rgb_text, rgb_file, density, profile_path, objective, size, as_json) -> None:
+def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, size,
+           as_json) -> None:
     """Ink concentrations for colours: table lookup, density alignment, reproduced colour."""
     import numpy as np
 
@@ -103,7 +111,8 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, size, as_json) 
         raise DreamPrintError("--density must be a finite number >= 0 (1/mm)")
     colours = [_parse_rgb(rgb_text)] if rgb_text else _read_rgb_file(rgb_file)
     profile = load_profile(profile_path)
-    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json))
+    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json),
+                        intent=intent)
     rgb = np.asarray(colours, dtype=np.float64)
     conc5 = table_lookup(tables, rgb)
     pred = predict(profile, conc5)  # exactly what `dreamprint predict --mix` computes
@@ -139,8 +148,11 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, size, as_json) 
 
 @cli.command()
 @click.option("--profile", "profile_path", default=None, help="Ink profile JSON.")
-@click.option("--objective", type=_OBJECTIVES, default=None,
-              help="Table objective (default: lab, the lower mean dE2000).")
+@click.option("--objective", type=_OBJECTIVES, default=None, help=_OBJECTIVE_HELP)
+@click.option("--intent", type=_INTENTS, default=None, help=_INTENT_HELP)
+@click.option("--compare/--no-compare", default=True, show_default=True,
+              help="Also build (or load) the tables of the other objectives and report their "
+                   "figures under 'objectives'.")
 @click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True)
 @click.option("--samples", type=click.IntRange(10, 100000), default=2000, show_default=True,
               help="Random colours for the LUT-vs-direct comparison.")
@@ -148,16 +160,29 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, size, as_json) 
               "(PNG).")
 @click.option("--plot", type=click.Path(dir_okay=False), help="Write the CIELAB gamut plot (PNG).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def gamut(profile_path, objective, size, samples, chart, plot, as_json) -> None:
+def gamut(profile_path, objective, intent, compare, size, samples, chart, plot,
+          as_json) -> None:
     """Build (or load) the colour tables and report the printable gamut."""
     from ..engine.gamut import get_tables
     from ..engine.gamut.charts import gamut_plot, hexagon_chart
     from ..engine.gamut.evaluation import evaluate
+    from ..engine.gamut.optimise import OBJECTIVES
+    from ..engine.gamut.tables import resolve_choice
     from ..engine.profile import load_profile
 
     profile = load_profile(profile_path)
-    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json))
-    report = evaluate(tables, profile, samples)
+    objective, intent = resolve_choice(profile, objective, intent)
+    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json),
+                        intent=intent)
+    others = []
+    if compare:
+        for other in OBJECTIVES:
+            if other != objective:
+                if not as_json:
+                    click.echo(f"objective {other}:", err=True)
+                others.append(get_tables(profile, other, size, intent=intent,
+                                         progress=_progress_bar(not as_json)))
+    report = evaluate(tables, profile, samples, others)
     for target, draw in ((chart, lambda p: hexagon_chart(tables, profile, p)),
                          (plot, lambda p: gamut_plot(profile, p))):
         if target:
@@ -173,7 +198,8 @@ def gamut(profile_path, objective, size, samples, chart, plot, as_json) -> None:
     how = (f"loaded from the cache in {report['load_seconds']:.1f} s (built earlier in "
            f"{report['built_seconds_when_cached']:.1f} s)" if report["cached"] else
            f"built in {report['build_seconds']:.1f} s")
-    click.echo(f"table {report['lut_size']}^3, objective {report['objective']}, {how}")
+    click.echo(f"table {report['lut_size']}^3, objective {report['objective']}, intent "
+               f"{report['intent']}, {how}")
     click.echo(f"sRGB in gamut (dE2000 <= {report['in_gamut_threshold_dE2000']}): "
                f"{100 * report['srgb_in_gamut_fraction']:.1f} %; CIELAB volume printable "
                f"{report['lab_gamut_volume']:.0f} vs sRGB {report['srgb_lab_volume']:.0f}")
@@ -183,3 +209,16 @@ def gamut(profile_path, objective, size, samples, chart, plot, as_json) -> None:
     if og["count"]:
         click.echo(f"out of gamut dE2000: mean {og['mean']:.2f}, p95 {og['p95']:.2f}, "
                    f"max {og['max']:.2f}")
+    click.echo("objective  LUT-vs-direct mean/p95  in gamut  lookup-lattice mean/p95  "
+               "max node jump (excess)  build s")
+    for name, f in report["objectives"].items():
+        a, g, j = (f["lut_vs_direct_dE2000"], f["lookup_minus_lattice_best_dE2000"],
+                   f["adjacent_node_dE2000"])
+        click.echo(f"{name:9s}  {_num(a['mean']):>6s} / {_num(a['p95']):<6s}       "
+                   f"{100 * f['srgb_in_gamut_fraction']:5.1f} %  {g['mean']:+7.3f} / "
+                   f"{g['p95']:+7.3f}        {j['max']:6.2f} ({j['max_excess']:+.2f})"
+                   f"          {f['build_seconds']:6.1f}")
+
+
+def _num(x) -> str:
+    return "-" if x is None else f"{x:.3f}"

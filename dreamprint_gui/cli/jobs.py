@@ -69,6 +69,11 @@ def _fmt_time(s: float | None) -> str:
                    "for voxel models, level sets and binary masks; fog otherwise).")
 @click.option("--sampling", type=click.Choice(["nearest", "linear"]), default=None,
               help="Voxel models (.vox): nearest (default, sharp edges) or linear (smooth).")
+@click.option("--objective", type=click.Choice(["srgb", "cielab", "de2000"]), default=None,
+              help="Colour table objective (default: the profile's, else de2000).")
+@click.option("--intent", type=click.Choice(["colorimetric", "perceptual"]), default=None,
+              help="Rendering intent for colours outside the printable gamut (default: the "
+                   "profile's, else colorimetric).")
 @click.option("--table-size", type=int, default=100, hidden=True,
               help="Colour table nodes per axis (tests use small tables).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")
@@ -78,7 +83,7 @@ def _fmt_time(s: float | None) -> str:
               help="No pre-flight summary, warnings or progress on stderr.")
 def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
             workers, scheduler, background, density_threshold, slab_layers, source_options,
-            content, sampling, table_size, overwrite, as_json, quiet) -> None:
+            content, sampling, objective, intent, table_size, overwrite, as_json, quiet) -> None:
     """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack.
 
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
@@ -97,7 +102,8 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         size_mm=_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
         workers=workers, scheduler=scheduler, background=background,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
-        table_size=table_size, source_options=opts, content=content, sampling=sampling)
+        objective=objective, intent=intent, table_size=table_size, source_options=opts,
+        content=content, sampling=sampling)
 
     def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
         raise KeyboardInterrupt()

@@ -85,7 +85,8 @@ class ConvertSettings:
     density_threshold: float | None = None  # 1/mm; None: half the density of pure Clear
     overwrite: bool = False
     slab_layers: int | None = None        # None: ~DEFAULT_SLAB_VOXELS per slab
-    objective: str | None = None          # gamut table objective (None: its default)
+    objective: str | None = None          # gamut table objective (None: profile's/default)
+    intent: str | None = None             # rendering intent (None: profile's/colorimetric)
     table_size: int = 100
     source_options: dict[str, Any] = field(default_factory=dict)
     content: str = "auto"                 # "fog" | "solid" | "auto" (engine.content)
@@ -142,12 +143,12 @@ def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
     return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
-def _tables_for(profile_spec, layer_mm: float, objective, size: int):
+def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None):
     from .gamut import get_tables
     from .profile import load_profile
 
     profile = load_profile(profile_spec).with_settings(layer_thickness_mm=layer_mm)
-    return profile, get_tables(profile, objective=objective, size=size)
+    return profile, get_tables(profile, objective=objective, size=size, intent=intent)
 
 
 @dataclass
@@ -197,7 +198,7 @@ class JobContext:
         s = self.settings
         key = (s.source, repr(sorted(s.source_options.items())), str(s.profile),
                self.printer.layer_thickness_mm, s.objective, s.table_size, s.content,
-               s.sampling)
+               s.sampling, s.intent)
         with _WORKER_LOCK:
             if key not in _WORKER_CACHE:
                 from .content import apply_content
@@ -206,7 +207,7 @@ class JobContext:
                 src = _open_source(s.source, s.source_options, s.content, s.sampling)
                 src, _ = apply_content(src, mode, self.halftoner.threshold)
                 _, tables = _tables_for(s.profile, self.printer.layer_thickness_mm,
-                                        s.objective, s.table_size)
+                                        s.objective, s.table_size, s.intent)
                 _WORKER_CACHE.clear()  # one job per worker process at a time
                 _WORKER_CACHE[key] = (src, tables)
             return _WORKER_CACHE[key]
@@ -228,6 +229,15 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
     if s.halftone not in HALFTONE_METHODS:
         raise DreamPrintError(f"unknown halftoning '{s.halftone}' "
                               f"(use {' or '.join(HALFTONE_METHODS)})")
+    if s.objective is not None or s.intent is not None:
+        from .gamut.mapping import canonical_intent
+        from .gamut.optimise import canonical_objective
+
+        try:
+            canonical_objective(s.objective, "cielab")
+            canonical_intent(s.intent)
+        except ValueError as exc:
+            raise DreamPrintError(str(exc)) from None
     if s.background not in ("clear", "empty"):
         raise DreamPrintError(f"--background must be clear or empty, not '{s.background}'")
     if (s.height_mm is None) == (s.size_mm is None):
@@ -248,7 +258,7 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
                               f"{shape[2]}); choose a larger size")
     check_tray(shape, printer)  # before any expensive work
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
-                                  s.table_size)
+                                  s.table_size, s.intent)
     sigma_clear = getattr(tables, "sigma_clear", None)
     if sigma_clear is None:
         sigma_clear = _clear_sigma(profile)
@@ -571,6 +581,7 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
         "profile": {"name": ctx.profile_name, "fingerprint": ctx.profile_fingerprint,
                     "path": None if s.profile is None else str(s.profile),
                     "objective": getattr(ctx.tables, "objective", s.objective),
+                    "intent": getattr(ctx.tables, "intent", s.intent),
                     "table_size": s.table_size},
         "printer": ctx.printer.to_json_dict(),
         "physical_size_mm": [nx * ctx.printer.voxel_mm[0], ny * ctx.printer.voxel_mm[1],

@@ -12,6 +12,12 @@ its numbers their meaning:
 - ``density_t_max_mm``, ``density_samples``: the thickness range and samples of the exponential
   fit (eq. 8).
 
+Optional ``table`` settings choose how the RGB -> ink table is solved for this profile:
+``{"objective": "srgb" | "cielab" | "de2000", "intent": "colorimetric" | "perceptual"}``
+(either key may be absent: the engine's default applies; a command-line ``--objective`` or
+``--intent`` overrides them). They are not part of the fingerprint: tables are cached per
+profile fingerprint, objective and intent.
+
 Loading validates everything (inks, lengths, finiteness, signs) and raises
 :class:`~dreamprint_gui.errors.DreamPrintError` naming the file and the problem.
 """
@@ -59,6 +65,7 @@ class InkProfile:
     density_samples: int = 100
     provenance: dict[str, Any] = field(default_factory=dict)
     residuals: dict[str, Any] = field(default_factory=dict)
+    table_settings: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         validate_arrays(self.wavelengths_nm, self.K, self.S)
@@ -92,6 +99,7 @@ class InkProfile:
             },
             "provenance": self.provenance,
             "residuals": self.residuals,
+            **({"table": dict(self.table_settings)} if self.table_settings else {}),
         }
 
     def fingerprint(self) -> str:
@@ -102,6 +110,7 @@ class InkProfile:
         d.pop("provenance")
         d.pop("residuals")
         d.pop("name")
+        d.pop("table", None)
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
 
@@ -186,7 +195,31 @@ def profile_from_dict(d: Any, source: str = "<profile>") -> InkProfile:
         colour_thickness_mm=ct, layer_thickness_mm=lt, density_t_max_mm=tmax,
         density_samples=ns, provenance=dict(d.get("provenance", {}) or {}),
         residuals=dict(d.get("residuals", {}) or {}),
+        table_settings=_table_settings(d.get("table"), source),
     )
+
+
+# The names the ``table`` settings accept (engine/gamut/optimise.py and mapping.py own them;
+# listed here so that loading a profile does not import the solver).
+TABLE_OBJECTIVES = ("srgb", "cielab", "de2000", "rgb", "lab")
+TABLE_INTENTS = ("colorimetric", "perceptual")
+
+
+def _table_settings(t: Any, source: str) -> dict[str, str]:
+    if t is None:
+        return {}
+    if not isinstance(t, dict):
+        raise DreamPrintError("'table' must be an object with 'objective' and/or 'intent'",
+                              source)
+    unknown = sorted(set(t) - {"objective", "intent"})
+    if unknown:
+        raise DreamPrintError(f"'table' has unknown keys {unknown}; expected objective, intent",
+                              source)
+    for key, allowed in (("objective", TABLE_OBJECTIVES), ("intent", TABLE_INTENTS)):
+        if key in t and t[key] not in allowed:
+            raise DreamPrintError(f"'table' {key} {t[key]!r} is not one of "
+                                  f"{', '.join(allowed)}", source)
+    return {k: str(v) for k, v in t.items()}
 
 
 def load_profile(path: str | os.PathLike | None = None) -> InkProfile:

@@ -83,14 +83,17 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      output: str | os.PathLike | None = None, overwrite: bool = False,
                      workers: int | None = None, scheduler: str | None = None,
                      table_size: int | None = None, content: str = "auto",
-                     sampling: str | None = None):
+                     sampling: str | None = None, intent: str | None = None):
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
-    ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear")."""
+    ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear";
+    ``intent`` the rendering intent, None for the profile's)."""
     from ..engine.pipeline import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
         printer = printer.path or printer.name
     extra = {} if table_size is None else {"table_size": int(table_size)}
+    if intent is not None:
+        extra["intent"] = intent
     return ConvertSettings(source=str(source_path), output=output, profile=profile_path,
                            printer=printer, height_mm=height_mm,
                            size_mm=None if size_mm is None else tuple(size_mm),
@@ -331,6 +334,11 @@ class ExportDialog(QDialog):
         self.halftone.addItem("random (paper's stochastic)", "random")
         self.halftone.setCurrentIndex(max(0, self.halftone.findData(
             self.settings.get("export/halftone", "blue-noise", str))))
+        self.intent = QComboBox()  # rendering intent (ConvertSettings.intent)
+        self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
+        self.intent.addItem("perceptual (compress sRGB into the gamut)", "perceptual")
+        self.intent.setCurrentIndex(max(0, self.intent.findData(
+            self.settings.get("export/intent", "colorimetric", str))))
         self.seed = QSpinBox(minimum=0, maximum=2**31 - 1,
                              value=self.settings.get("export/seed", 0, int))
         self.folder = QLineEdit(self.settings.last_folder("export"))
@@ -373,6 +381,7 @@ class ExportDialog(QDialog):
         form.addRow("Background", self.background)
         form.addRow("Content", self.content)
         form.addRow("Halftoning", self.halftone)
+        form.addRow("Rendering intent", self.intent)
         form.addRow("Seed", self.seed)
         form.addRow("Folder", frow)
         form.addRow("Job name", self.job_name)
@@ -426,7 +435,7 @@ class ExportDialog(QDialog):
         lay.addWidget(self.buttons)
         self._form_widgets = [self.printer, self.by_height, self.by_box, self.height, *self.box,
                               self.density_scale, self.background, self.content,
-                              self.halftone, self.seed,
+                              self.halftone, self.intent, self.seed,
                               self.folder, browse, self.job_name, self.overwrite,
                               self.scheduler, self.scheduler_address, self.workers]
         self._printer_obj = None
@@ -557,7 +566,8 @@ class ExportDialog(QDialog):
             halftone=str(self.halftone.currentData()), seed=int(self.seed.value()),
             output=self.target_path(), overwrite=self.overwrite.isChecked(),
             workers=workers, scheduler=scheduler, table_size=self.table_size,
-            content=str(self.content.currentData()), sampling=self.sampling_choice)
+            content=str(self.content.currentData()), sampling=self.sampling_choice,
+            intent=str(self.intent.currentData()))
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:
@@ -570,6 +580,7 @@ class ExportDialog(QDialog):
             return
         self.settings.set("export/printer", self.printer.currentData())
         self.settings.set("export/halftone", self.halftone.currentData())
+        self.settings.set("export/intent", self.intent.currentData())
         self.settings.set("export/seed", int(self.seed.value()))
         self.settings.set("export/workers", int(self.workers.value()))
         self.settings.set("export/scheduler", self.scheduler.currentData())

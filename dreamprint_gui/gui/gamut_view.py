@@ -10,7 +10,11 @@ picker: any colour -> the table's C, M, Y, K, W concentrations, the colour the t
 beside the requested one with their dE2000 and whether the requested colour is in gamut (the
 engine's rule, ``evaluation.IN_GAMUT_DE2000``); both colours are marked in the 3D view. Below
 it, the share of sRGB that is printable (the table nodes within that dE2000, as ``dreamprint
-gamut`` reports it).
+gamut`` reports it). An intent
+selector (colorimetric / perceptual) above the picker chooses the rendering intent whose mapping
+(source colour -> printed colour) the picker and the chart show: the window's tables when they
+already have that intent, else that intent's tables (``gamut.get_tables``, cached on disk)
+loaded or built on a worker.
 
 The page can be put on hold (:meth:`GamutPage.set_hold`): the main window holds it while the
 preview starts up, so the two pages do not compete for the cores; and it draws into its 3D
@@ -25,6 +29,7 @@ from PySide6.QtCore import QRect, QSize, Qt, Signal
 from PySide6.QtGui import QColor, QImage, QPainter
 from PySide6.QtWidgets import (
     QColorDialog,
+    QComboBox,
     QFormLayout,
     QGridLayout,
     QGroupBox,
@@ -114,8 +119,10 @@ class GamutPage(QWidget):
         self.tables = None
         self.meshes = None
         self.last_pick: dict | None = None
+        self._main_tables = None  # the window's tables (the preview's and export's)
         self._task: Task | None = None
         self._chart_task: Task | None = None
+        self._intent_task: Task | None = None
         self._hold = False
         self._held: set[str] = set()  # work waiting for the hold to end: "meshes", "tables"
         self._draw_pending = False
@@ -140,8 +147,9 @@ class GamutPage(QWidget):
         self.repro_swatch.setToolTip("The colour the printer makes of the requested one: the "
                                      "colour table's ink mixture, as the model predicts it")
         sw = QGridLayout()
+        self.repro_title = QLabel("printed (mapped)")
         sw.addWidget(QLabel("requested"), 0, 0, Qt.AlignmentFlag.AlignHCenter)
-        sw.addWidget(QLabel("printed (mapped)"), 0, 1, Qt.AlignmentFlag.AlignHCenter)
+        sw.addWidget(self.repro_title, 0, 1, Qt.AlignmentFlag.AlignHCenter)
         sw.addWidget(self.target_swatch, 1, 0)
         sw.addWidget(self.repro_swatch, 1, 1)
         self.de_label = QLabel("dE2000 -")
@@ -203,8 +211,17 @@ class GamutPage(QWidget):
         self.pages = QTabWidget()
         self.pages.addTab(solids, "CIELAB gamut")
         self.pages.addTab(chart, "Hexagon chart")
+        self.intent = QComboBox()
+        self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
+        self.intent.addItem("perceptual (sRGB compressed into the gamut)", "perceptual")
+        self.intent.setToolTip("Rendering intent: how colours outside the printable gamut "
+                               "are mapped; the picker and the chart show its mapping")
+        self.intent.currentIndexChanged.connect(self._intent_changed)
+        intent_row = QFormLayout()
+        intent_row.addRow("Rendering intent", self.intent)
         right = QWidget()
         rl = QVBoxLayout(right)
+        rl.addLayout(intent_row)
         rl.addWidget(QLabel("<b>Colour picker</b>"))
         rl.addWidget(picker, 1)
         right.setMinimumWidth(300)
@@ -269,10 +286,48 @@ class GamutPage(QWidget):
 
     def set_tables(self, tables) -> None:
         self.tables = tables
+        self._main_tables = tables
         if self._hold:
             self._held.add("tables")
             return
         self._show_fraction()
+        self._intent_changed()
+
+    def set_intent(self, intent: str) -> None:
+        """Show the mapping of rendering intent ``intent`` ("colorimetric" or "perceptual")."""
+        self.intent.setCurrentIndex(self.intent.findData(intent))
+
+    def _intent_changed(self) -> None:
+        main, want = self._main_tables, str(self.intent.currentData())
+        self.repro_title.setText(f"printed ({want})")
+        if main is None or self.profile is None or self._hold:
+            return
+        if getattr(main, "intent", "colorimetric") == want:
+            self._apply_tables(main)
+            return
+        profile, objective, size = self.profile, main.objective, main.size
+
+        def job(report, cancel):
+            from ..engine.gamut import get_tables
+
+            return get_tables(profile, objective, size, intent=want,
+                              progress=lambda f: report(float(f)))
+
+        if self._intent_task is not None:
+            self._intent_task.cancel()
+        self.chart_status.setText(f"loading the {want} colour tables ...")
+        self.de_label.setText(f"dE2000 - (loading the {want} colour tables)")
+        task = Task(job, "intent-tables")
+        task.succeeded.connect(lambda t, w=want, p=profile: self._intent_ready(t, w, p))
+        task.failed.connect(lambda msg, _tb: self._failed(f"The {want} colour tables", msg))
+        self._intent_task = run_task(task)
+
+    def _intent_ready(self, tables, intent: str, profile) -> None:
+        if profile is self.profile and intent == self.intent.currentData():
+            self._apply_tables(tables)
+
+    def _apply_tables(self, tables) -> None:
+        self.tables = tables
         self._spins_changed()
         self._draw_chart()
 
@@ -450,7 +505,7 @@ class GamutPage(QWidget):
         self.chartReady.emit()
 
     def shutdown(self) -> None:
-        for t in (self._task, self._chart_task):
+        for t in (self._task, self._chart_task, self._intent_task):
             if t is not None:
                 t.cancel()
         self.view.close_view()

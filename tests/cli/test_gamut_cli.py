@@ -71,3 +71,25 @@ def test_gamut_json_chart_and_plot(capsys, tmp_path):
     assert rep["build_seconds"] is None and rep["seconds"] == rep["load_seconds"] >= 0
     if not first["cached"]:
         assert rep["built_seconds_when_cached"] == first["build_seconds"] == first["seconds"]
+    # every objective's figures (issue 17)
+    assert set(rep["objectives"]) == {"srgb", "cielab", "de2000"}
+    for fig in rep["objectives"].values():
+        assert fig["intent"] == "colorimetric"
+        assert set(fig["lut_vs_direct_dE2000"]) >= {"mean", "p95"}
+        assert 0 < fig["srgb_in_gamut_fraction"] < 1
+        assert fig["lookup_minus_lattice_best_dE2000"]["count"] == 300
+        assert fig["adjacent_node_dE2000"]["max"] > 0
+
+
+def test_gamut_intent_and_objective_choice(capsys):
+    code, out, _ = _run(capsys, "gamut", "--size", "5", "--samples", "50", "--json",
+                        "--objective", "cielab", "--intent", "perceptual", "--no-compare")
+    assert code == 0
+    rep = json.loads(out)
+    assert (rep["objective"], rep["intent"]) == ("cielab", "perceptual")
+    assert list(rep["objectives"]) == ["cielab"] and "SGCK" in rep["out_of_gamut_policy"]
+    code, out, _ = _run(capsys, "lookup", "--rgb", "0,0,1", "--size", "5", "--json",
+                        "--intent", "perceptual", "--objective", "lab")
+    assert code == 0 and json.loads(out)[0]["dE2000"] > 1.0
+    code, _, err = _run(capsys, "gamut", "--intent", "saturation")
+    assert code == 2 and "saturation" in err

@@ -51,6 +51,20 @@ def test_gamut_page(qtbot, gl_display, job_profile, table_size):
     assert min(ink_white) > 0.6  # the grey is darker than white ink: inside the gamut
     assert f"{pick['dE2000']:.2f}" in page.de_label.text()
 
+    # the perceptual intent: the chart and the picker show its mapping (source -> printed)
+    page.set_colour((0.0, 0.0, 1.0))  # sRGB blue, far outside the printable gamut
+    clipped = page.last_pick
+    with qtbot.waitSignal(page.chartReady, timeout=180000):
+        page.set_intent("perceptual")
+    assert page.tables.intent == "perceptual" and "perceptual" in page.repro_title.text()
+    page.set_colour((0.0, 0.0, 1.0))
+    mapped = page.last_pick
+    assert mapped["sRGB"] != clipped["sRGB"]
+    hue = [np.degrees(np.arctan2(p["Lab"][2], p["Lab"][1])) for p in (mapped, clipped)]
+    src_hue = np.degrees(np.arctan2(mapped["target_Lab"][2], mapped["target_Lab"][1]))
+    # perceptual keeps the (CAM16-UCS) hue of the source: closer to it in CIELAB than clipping
+    assert abs(hue[0] - src_hue) < abs(hue[1] - src_hue) + 1.0
+
 
 def _dialog(qtbot, tmp_path, table_size, height_mm):
     dlg = ExportDialog(None, source_path="demo", profile_path=None, table_size=table_size,
@@ -60,6 +74,13 @@ def _dialog(qtbot, tmp_path, table_size, height_mm):
     dlg.job_name.setText("job")
     dlg.show()
     return dlg
+
+
+def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    assert dlg.settings_for_job().intent == "colorimetric"
+    dlg.intent.setCurrentIndex(dlg.intent.findData("perceptual"))
+    assert dlg.settings_for_job().intent == "perceptual"
 
 
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):

@@ -243,3 +243,15 @@ def test_cli_convert_demo(tmp_path, capsys):
     assert m["background"]["mode"] == "empty" and m["halftoning"]["method"] == "random"
     assert main(["convert", "demo", "-o", str(out), "--height-mm", "0.3"]) == 2
     assert "--overwrite" in capsys.readouterr().err
+
+
+def test_cli_convert_objective_and_intent_reach_the_job(tmp_path, capsys):
+    out = tmp_path / "JOB"
+    rc = main(["convert", "demo", "-o", str(out), "--height-mm", "0.3", "--table-size", "9",
+               "--objective", "srgb", "--intent", "perceptual"])
+    assert rc == 0, capsys.readouterr().err
+    m = json.loads((out / "manifest.json").read_text())
+    assert m["profile"]["objective"] == "srgb" and m["profile"]["intent"] == "perceptual"
+    with pytest.raises(DreamPrintError, match="rendering intent"):
+        _run(_settings(tmp_path / "J2", intent="saturation"))
+    assert not (tmp_path / "J2").exists()

@@ -4,8 +4,8 @@ Defines
 -------
 - :func:`hexagon_chart`: the paper's Fig. 7 style chart: the sRGB cube seen along its grey axis
   (the hexagon of hue x saturation at HSV value 1 and 0.5), tiled with hexagonal cells; per
-  cell the target colour, the colour reproduced through the table (lookup, then KM eq. 7), and
-  their dE2000.
+  cell the source colour, the colour printed through the table under its rendering intent
+  (lookup, then KM eq. 7: the intent's mapping source -> printed), and their dE2000.
 - :func:`gamut_plot`: the printable gamut (mixtures of the five inks) against sRGB in CIELAB:
   a*-b* and C*-L* projections.
 """
@@ -77,8 +77,9 @@ def hexagon_chart(tables: ColourTables, profile: InkProfile, path: str | os.Path
         de = delta_E2000(lab, targets_for(model, "lab", rgb))
         stats[f"value_{value:g}"] = {"mean": float(de.mean()), "max": float(de.max())}
         polys = xy[:, None, :] + hexagon[None]
-        for col, (colours, title) in enumerate(((rgb, "target sRGB"),
-                                                (repro, "reproduced (table + KM)"))):
+        intent = getattr(tables, "intent", "colorimetric")
+        for col, (colours, title) in enumerate(((rgb, "source sRGB"),
+                                                (repro, f"printed, {intent}"))):
             ax = axes[row, col]
             ax.add_collection(PolyCollection(polys, facecolors=colours, edgecolors="none"))
             ax.set_title(f"{title}, HSV value {value:g}")
@@ -87,14 +88,14 @@ def hexagon_chart(tables: ColourTables, profile: InkProfile, path: str | os.Path
         pc.set_clim(0, max(10.0, float(np.percentile(de, 99))))
         ax.add_collection(pc)
         fig.colorbar(pc, ax=ax, label="dE2000")
-        ax.set_title(f"dE2000, mean {de.mean():.1f}")
+        ax.set_title(f"dE2000 source vs printed, mean {de.mean():.1f}")
         for ax in axes[row]:
             ax.set_xlim(-1.1, 1.1)
             ax.set_ylim(-1.1, 1.1)
             ax.set_aspect("equal")
             ax.axis("off")
-    fig.suptitle(f"Printable colours vs sRGB (objective {tables.objective}, "
-                 f"table {tables.size}^3)")
+    fig.suptitle(f"Printable colours vs sRGB (objective {tables.objective}, intent "
+                 f"{getattr(tables, 'intent', 'colorimetric')}, table {tables.size}^3)")
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return stats

@@ -9,13 +9,18 @@ Defines
   the node's K/W grey X (eqs. 11-13). Plus the 100-entry brightness table ``rho_K`` (eq. 11),
   dE2000 of every node's reproduction to its target (the out-of-gamut report), and metadata.
 - :func:`build_tables`, :func:`get_tables` (cached in the platformdirs user cache, keyed by the
-  profile's fingerprint, objective, size and :data:`TABLE_VERSION`), :func:`lookup` (trilinear).
+  profile's fingerprint, objective, rendering intent, size and :data:`TABLE_VERSION`),
+  :func:`lookup` (trilinear).
 - :func:`mixture_sigma`: the exact scalar sigma of six-ink mixtures, as ``predict`` computes it.
+- :func:`resolve_choice`: the objective and intent to use (explicit choice, else the profile's
+  ``table`` settings, else the defaults).
 
-Default objective: ``"lab"`` (squared CIELAB distance). Measured on the default profile at
-100^3: mean node dE2000 6.93 for ``lab`` vs 7.33 for ``rgb`` (``dreamprint gamut --json`` prints
-both figures for any profile). Out-of-gamut policy: the printable colour of minimum objective,
-i.e. minimum dE76 in CIELAB for the default; each node's resulting dE2000 is kept in ``dE2000``.
+Objectives (:mod:`.optimise`): ``srgb`` (paper eq. 10), ``cielab``, ``de2000``. Default:
+:data:`DEFAULT_OBJECTIVE`, the one with the smallest lookup-minus-lattice-best dE2000 (see
+docs/physics.md and ``dreamprint gamut --json``). Rendering intents (:mod:`.mapping`):
+``colorimetric`` (the printable colour of minimum objective) and ``perceptual`` (SGCK
+compression into the gamut first). Each node's dE2000 to its *source* colour is kept in
+``dE2000``.
 """
 
 from __future__ import annotations
@@ -40,14 +45,15 @@ from ..kubelka_munk import mix
 from ..profile import INKS, InkProfile
 from .forward import N_COLOUR_INKS, forward_model, mixtures_lab
 from .grey import brightness_table, grey_concentrations, rho_k_for
-from .optimise import OBJECTIVES, resample, solve_grid, targets_for
+from .mapping import DEFAULT_INTENT, PerceptualMap, canonical_intent
+from .optimise import canonical_objective, resample, solve_grid, targets_for
 
 __all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "mixture_sigma",
-           "DEFAULT_OBJECTIVE", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS", "FIELDS",
-           "TABLE_VERSION", "cache_dir"]
+           "DEFAULT_OBJECTIVE", "DEFAULT_INTENT", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS",
+           "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice"]
 
-TABLE_VERSION = 1
-DEFAULT_OBJECTIVE = "lab"
+TABLE_VERSION = 2
+DEFAULT_OBJECTIVE = "de2000"
 DEFAULT_SIZE = 100
 # Eq. 13 with the paper's "upper limit of rho+ 0.1" read as a bound on the grey: 1 - rho+ <= 0.1.
 GREY_MAX = 0.1
@@ -80,6 +86,7 @@ class ColourTables:
     cached: bool = False  # loaded from the disk cache
     load_seconds: float = 0.0  # the time to load it from the cache (0 when built)
     meta: dict = field(default_factory=dict)
+    intent: str = DEFAULT_INTENT
 
     @property
     def conc(self) -> NDArray[np.float32]:
@@ -106,9 +113,19 @@ def cache_dir() -> Path:
     return user_cache_path("dreamprint") / "gamut"
 
 
-def _cache_key(profile: InkProfile, objective: str, size: int) -> str:
+def resolve_choice(profile: InkProfile, objective: str | None = None,
+                   intent: str | None = None) -> tuple[str, str]:
+    """(objective, intent): the explicit choice, else the profile's, else the default."""
+    settings = getattr(profile, "table_settings", None) or {}
+    obj = canonical_objective(objective if objective is not None else settings.get("objective"),
+                              DEFAULT_OBJECTIVE)
+    return obj, canonical_intent(intent if intent is not None else settings.get("intent"))
+
+
+def _cache_key(profile: InkProfile, objective: str, size: int, intent: str) -> str:
     d = {"profile": profile.fingerprint(), "objective": objective, "size": size,
-         "version": TABLE_VERSION, "knots": CLEAR_KNOTS, "grey_max": GREY_MAX}
+         "intent": intent, "version": TABLE_VERSION, "knots": CLEAR_KNOTS,
+         "grey_max": GREY_MAX}
     return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:20]
 
 
@@ -150,16 +167,24 @@ def _clear_ratios(profile: InkProfile, conc5: NDArray) -> NDArray[np.float64]:
 
 
 def build_tables(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
-                 progress: Callable[[float], None] | None = None) -> ColourTables:
+                 progress: Callable[[float], None] | None = None,
+                 intent: str | None = None) -> ColourTables:
     """Solve the n^3 table (not cached; see :func:`get_tables`)."""
-    objective = objective or DEFAULT_OBJECTIVE
-    if objective not in OBJECTIVES:
-        raise ValueError(f"unknown objective {objective!r}; choose one of {OBJECTIVES}")
+    objective, intent = resolve_choice(profile, objective, intent)
     if size < 2:
         raise ValueError("the table needs at least 2 nodes per axis")
     t0 = time.perf_counter()
     model = forward_model(profile)
-    conc, _ = solve_grid(model, objective, size, progress)
+    target_xyz = None
+    if intent == "perceptual":
+        from .optimise import srgb_to_xyz
+
+        pmap = PerceptualMap.for_model(model)
+
+        def target_xyz(rgb):
+            return pmap.map_xyz(srgb_to_xyz(model, rgb))
+
+    conc, _ = solve_grid(model, objective, size, progress, target_xyz)
     a = np.linspace(0.0, 1.0, size)
     rgb = np.stack(np.meshgrid(a, a, a, indexing="ij"), axis=-1).reshape(-1, 3)
     flat = conc.reshape(-1, N_COLOUR_INKS)
@@ -194,7 +219,8 @@ def build_tables(profile: InkProfile, objective: str | None = None, size: int = 
     packed[:, F_SIGMA + 1:F_GREY] = packed[:, F_SIGMA:F_SIGMA + 1] * ratios
     clear6 = _clear()
     return ColourTables(
-        size=size, objective=objective, packed=packed.reshape(size, size, size, N_FIELDS),
+        size=size, objective=objective, intent=intent,
+        packed=packed.reshape(size, size, size, N_FIELDS),
         dE2000=dE.reshape(size, size, size).astype(np.float32), brightness_rho_k=rho_k_table,
         sigma_clear=float(mixture_sigma(profile, clear6)),
         profile_fingerprint=profile.fingerprint(),
@@ -204,7 +230,7 @@ def build_tables(profile: InkProfile, objective: str | None = None, size: int = 
 
 
 def _save(tables: ColourTables, path: Path) -> None:
-    meta = {"size": tables.size, "objective": tables.objective,
+    meta = {"size": tables.size, "objective": tables.objective, "intent": tables.intent,
             "sigma_clear": tables.sigma_clear, "profile_fingerprint": tables.profile_fingerprint,
             "colour_thickness_mm": None if math.isinf(tables.colour_thickness_mm)
             else tables.colour_thickness_mm,
@@ -221,7 +247,8 @@ def _save(tables: ColourTables, path: Path) -> None:
         tmp.unlink(missing_ok=True)
 
 
-def _load(path: Path, key_profile: str, objective: str, size: int) -> ColourTables | None:
+def _load(path: Path, key_profile: str, objective: str, size: int,
+          intent: str) -> ColourTables | None:
     try:
         with np.load(path, allow_pickle=False) as z:
             meta = json.loads(str(z["meta"]))
@@ -232,10 +259,11 @@ def _load(path: Path, key_profile: str, objective: str, size: int) -> ColourTabl
         return None  # missing or damaged: rebuild
     if (meta.get("version") != TABLE_VERSION or meta.get("profile_fingerprint") != key_profile
             or meta.get("objective") != objective or meta.get("size") != size
+            or meta.get("intent") != intent
             or packed.shape != (size, size, size, N_FIELDS) or not np.all(np.isfinite(packed))):
         return None
     ct = meta["colour_thickness_mm"]
-    return ColourTables(size=size, objective=objective, packed=packed, dE2000=dE,
+    return ColourTables(size=size, objective=objective, intent=intent, packed=packed, dE2000=dE,
                         brightness_rho_k=bt, sigma_clear=float(meta["sigma_clear"]),
                         profile_fingerprint=key_profile,
                         colour_thickness_mm=math.inf if ct is None else float(ct),
@@ -245,24 +273,26 @@ def _load(path: Path, key_profile: str, objective: str, size: int) -> ColourTabl
 
 def get_tables(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
                progress: Callable[[float], None] | None = None,
-               cache: str | os.PathLike | None = None) -> ColourTables:
+               cache: str | os.PathLike | None = None,
+               intent: str | None = None) -> ColourTables:
     """The tables for ``profile``: from the disk cache when present, else built and cached.
 
-    ``cache`` overrides the folder (default: :func:`cache_dir`). ``progress(fraction)`` is
-    called during a build.
+    ``objective``/``intent`` default to the profile's ``table`` settings, else to
+    :data:`DEFAULT_OBJECTIVE` / ``colorimetric``. ``cache`` overrides the folder (default:
+    :func:`cache_dir`). ``progress(fraction)`` is called during a build.
     """
-    objective = objective or DEFAULT_OBJECTIVE
+    objective, intent = resolve_choice(profile, objective, intent)
     folder = Path(cache) if cache is not None else cache_dir()
-    path = folder / f"tables_{_cache_key(profile, objective, size)}.npz"
+    path = folder / f"tables_{_cache_key(profile, objective, size, intent)}.npz"
     fp = profile.fingerprint()
     t0 = time.perf_counter()
-    found = _load(path, fp, objective, size)
+    found = _load(path, fp, objective, size, intent)
     if found is not None:
         found.load_seconds = time.perf_counter() - t0
         if progress is not None:
             progress(1.0)
         return found
-    tables = build_tables(profile, objective, size, progress)
+    tables = build_tables(profile, objective, size, progress, intent)
     try:
         _save(tables, path)
     except OSError:
