@@ -23,6 +23,7 @@ gives ``va`` of every source index of the row at once, and voxels in no leaf rea
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 from numba import njit
@@ -176,12 +177,14 @@ class LeafGridPlan:
         self.scale = np.asarray(scale, float)
         self._dense = None
         self._tried = False
+        self._lock = threading.Lock()     # worker threads share the source: one copy
 
     def dense(self):
-        if not self._tried:
-            b = self._blocks
-            self._dense = densify(b.origins, b.values, b.background)
-            self._tried = True
+        with self._lock:
+            if not self._tried:
+                b = self._blocks
+                self._dense = densify(b.origins, b.values, b.background)
+                self._tried = True
         return self._dense
 
     def args(self, grid, z0: int, z1: int, density_scale: float, uniform) -> tuple | None:

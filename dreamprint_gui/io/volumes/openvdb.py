@@ -464,17 +464,19 @@ class VdbSource:
         self.voxel_size = float(np.min(s))
         self._leaf_plan = LeafGridPlan(self.density.blocks, o, s)
         self._dense_tried = False
+        self._dense_lock = threading.Lock()
 
     def _densify(self) -> None:
         """Dense copies of every grid's leaves for :meth:`sample_slab` when together they fit
         :data:`DENSE_BUDGET` values (made once; the same samples, ~10x faster)."""
-        if self._dense_tried:
-            return
-        self._dense_tried = True
-        grids = [self.density, *self.colour_grids]
-        if sum(g.dense_values() for g in grids) <= DENSE_BUDGET:
-            for g in grids:
-                g.make_dense()
+        with self._dense_lock:            # worker threads share the source: one copy
+            if self._dense_tried:
+                return
+            grids = [self.density, *self.colour_grids]
+            if sum(g.dense_values() for g in grids) <= DENSE_BUDGET:
+                for g in grids:
+                    g.make_dense()
+            self._dense_tried = True
 
     # A fog volume with one uniform colour is sampled and labelled a layer at a time from a
     # dense copy of its leaves (engine.leaf_grid_job), bit-identical to sample_slab.
