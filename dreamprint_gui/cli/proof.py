@@ -144,6 +144,8 @@ def proof(source, output, method, overwrite, **kw) -> None:
 
     _check_source(source)
     report = _drive(run_proof(_settings(source, output, method, kw, overwrite)))
+    if report["renderer"]["variant"].startswith("scalar"):
+        click.echo(f"dreamprint: note: {report['renderer']['note']}", err=True)
     if kw["as_json"]:
         click.echo(json.dumps(report, indent=2))
         return
