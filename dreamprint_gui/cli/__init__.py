@@ -65,6 +65,7 @@ from . import spectra  # noqa: E402,F401,I001
 from . import volumes  # noqa: E402,F401,I001
 from . import jobs  # noqa: E402,F401,I001
 from . import gamut  # noqa: E402,F401,I001
+from . import proof  # noqa: E402,F401,I001
 
 if __name__ == "__main__":
     sys.exit(main())

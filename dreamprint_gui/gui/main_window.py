@@ -107,6 +107,11 @@ class MainWindow(QMainWindow):
             self.gamut = GamutPage(self)
             self.gamut.set_hold(True)  # until the preview is ready or the page is opened
             self.tabs.addTab(self.gamut, "Gamut")
+        from .proof_view import ProofPage
+
+        self.proof = ProofPage(self, lambda: self.preview.job_settings()
+                               if self.preview.source_path else None)
+        self.tabs.addTab(self.proof, "Print proof")
         self.setCentralWidget(self.tabs)
         self.preview.rendered.connect(self.ready)
         self.ready.connect(self._release_gamut)

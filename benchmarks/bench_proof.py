@@ -1,0 +1,140 @@
+"""Print proof speed and noise, and the error of the block-averaged medium.
+
+Default: the demo volume at 40 mm, one 256 x 256 view at the default spp: prints the seconds of
+each stage (labels, source render, print render per view with and without Mitsuba's JIT
+warm-up) and the noise level: the standard deviation of a pixel of the print image (linear
+sRGB, environment = 1) between two seeds, / sqrt(2). Target: <= 60 s per view on CPU.
+
+``--block-error``: a small job (demo, 3 mm) whose print is rendered from the full-resolution
+labels (one cell per printer voxel) and from blocks of the default 40 mm job's size (4 x 11 x 22
+voxels): prints dE2000 between the two print images (mean, 95th percentile over the object).
+
+    python benchmarks/bench_proof.py [--height-mm 40] [--resolution 256] [--spp 16]
+    python benchmarks/bench_proof.py --block-error
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+
+def _medium(lab, block, layers_per_block):
+    from dreamprint_gui.engine.proof.medium import block_fractions
+
+    return block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block, layers_per_block)
+
+
+def _print_xyz(medium, bands, view, res, spp, seed):
+    from dreamprint_gui.engine.proof.medium import medium_coefficients
+    from dreamprint_gui.engine.proof.print_render import render_print
+    from dreamprint_gui.engine.proof.runner import print_xyz
+    from dreamprint_gui.engine.proof.source_render import optical_depth
+
+    st, al = medium_coefficients(medium.fractions, bands.K, bands.S)
+    lo, hi = medium.box_mm
+    t0 = time.perf_counter()
+    img, info = render_print(st, al, lo, hi, [view], res, spp, seed)
+    t = time.perf_counter() - t0
+    T = optical_depth(st, lo, medium.cell_mm, view, res, sub=3)
+    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    return print_xyz(bands, img[0], T, False), 1.0 - T @ y_w, t, info
+
+
+def speed(args) -> None:
+    from dreamprint_gui.engine.proof.cameras import orbit_views
+    from dreamprint_gui.engine.proof.medium import block_for_cell
+    from dreamprint_gui.engine.proof.methods import method_labels
+    from dreamprint_gui.engine.proof.runner import ProofSettings
+    from dreamprint_gui.engine.proof.source_render import render_source, sample_source
+    from dreamprint_gui.engine.proof.spectral import spectral_bands
+
+    s = ProofSettings(source="demo", height_mm=args.height_mm, spp=args.spp,
+                      resolution=args.resolution)
+    print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {args.spp},"
+          f" {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (shared machine)")
+    t0 = time.perf_counter()
+    lab = method_labels(s)
+    t1 = time.perf_counter()
+    size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
+    block = block_for_cell(lab.voxel_mm, size, s.max_cells)
+    med = _medium(lab, block, s.layers_per_block)
+    t2 = time.perf_counter()
+    print(f"prepare (tables, kernels)     {t1 - t0:7.1f} s")
+    print(f"labels -> block fractions     {t2 - t1:7.1f} s  ({med.layers_read} layers, "
+          f"cells {med.cells_xyz}, block {med.block_xyz} voxels)")
+    bands = spectral_bands(lab.profile, s.bands)
+    view = orbit_views(med.print_size_mm, 1)[0]
+    t3 = time.perf_counter()
+    field = sample_source(lab.source, lab.grid, med.block_xyz, lab.density_scale, med.cells_xyz,
+                          med.box_mm[0])
+    render_source(field, view, args.resolution)
+    print(f"source render (per view)      {time.perf_counter() - t3:7.1f} s")
+    a, alpha, ta, info = _print_xyz(med, bands, view, args.resolution, args.spp, 1)
+    b, _, tb, _ = _print_xyz(med, bands, view, args.resolution, args.spp, 2)
+    print(f"print render, first (JIT)     {ta:7.1f} s  ({info['passes']} Mitsuba passes, "
+          f"{info['variant']})")
+    print(f"print render per view         {tb:7.1f} s  (target <= 60 s)")
+    obs = bands.observer
+    la, lb = obs.XYZ_to_linear_sRGB(a), obs.XYZ_to_linear_sRGB(b)
+    obj = alpha > 0.05
+    noise = float(np.std(la - lb) / np.sqrt(2))
+    noise_obj = float(np.std((la - lb)[obj]) / np.sqrt(2))
+    print(f"noise (pixel std between seeds, linear sRGB, environment 1): {noise:.4f} over the "
+          f"frame, {noise_obj:.4f} over the object's pixels")
+
+
+def block_error(args) -> None:
+    from dreamprint_gui.engine.colorimetry import delta_E2000
+    from dreamprint_gui.engine.proof.cameras import orbit_views
+    from dreamprint_gui.engine.proof.methods import method_labels
+    from dreamprint_gui.engine.proof.runner import ProofSettings
+    from dreamprint_gui.engine.proof.spectral import spectral_bands
+
+    s = ProofSettings(source="demo", height_mm=3.0)
+    lab = method_labels(s)
+    bands = spectral_bands(lab.profile, s.bands)
+    full = _medium(lab, (1, 1, 1), 0)
+    view = orbit_views(full.print_size_mm, 1)[0]
+    res = 96
+    spp = args.spp * 4
+    a, alpha, _, _ = _print_xyz(full, bands, view, res, spp, 1)
+    obs = bands.observer
+    obj = alpha > 0.05
+
+    def de_to(xyz):
+        de = delta_E2000(obs.XYZ_to_Lab(np.maximum(a, 0)), obs.XYZ_to_Lab(np.maximum(xyz, 0)))
+        return f"mean {de[obj].mean():.2f}, p95 {np.percentile(de[obj], 95):.2f}"
+
+    print(f"demo 3 mm, full resolution {full.cells_xyz} cells (one per printer voxel), {res} px, "
+          f"spp {spp}; dE2000 over the object against the full-resolution render:")
+    b, *_ = _print_xyz(full, bands, view, res, spp, 2)
+    print(f"  full resolution, another seed (noise floor): {de_to(b)}")
+    for block in ((2, 6, 11), (4, 11, 22)):
+        med = _medium(lab, block, 0)
+        b, *_ = _print_xyz(med, bands, view, res, spp, 1)
+        cell = ", ".join(f"{c:.3f}" for c in med.cell_mm)
+        print(f"  blocks of {block} voxels ({cell} mm, {med.cells_xyz} cells): {de_to(b)}")
+    med = _medium(lab, (4, 11, 22), 2)
+    b, *_ = _print_xyz(med, bands, view, res, spp, 1)
+    print(f"  blocks of (4, 11, 22), 2 layers read per block (the default): {de_to(b)}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--height-mm", type=float, default=40.0)
+    ap.add_argument("--resolution", type=int, default=256)
+    ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--block-error", action="store_true")
+    args = ap.parse_args()
+    if args.block_error:
+        block_error(args)
+    else:
+        speed(args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,197 @@
+"""The "Print proof" page: the print rendered physically (Mitsuba) beside the source.
+
+Defines :class:`ProofPage`. It takes the job settings the preview would export (source, profile,
+printer, height, density scale, background) from a callable, so the proof judges exactly what
+the operator is about to print; Render runs :func:`..engine.proof.runner.render_proof` on the
+background worker (:mod:`.workers`) with progress and Cancel; the result shows source | print |
+dE2000 map of the chosen view and the figures. Change the size, density or profile on the
+preview page and press Render again.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QImage, QPixmap
+from PySide6.QtWidgets import (
+    QComboBox,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
+)
+
+from .workers import Task, generator_job, run_task
+
+__all__ = ["ProofPage", "to_pixmap"]
+
+
+def to_pixmap(rgb: np.ndarray) -> QPixmap:
+    """QPixmap of an (h, w, 3) uint8 image."""
+    a = np.ascontiguousarray(rgb, np.uint8)
+    h, w, _ = a.shape
+    img = QImage(a.data, w, h, 3 * w, QImage.Format.Format_RGB888)
+    return QPixmap.fromImage(img.copy())
+
+
+class ProofPage(QWidget):
+    """Render controls, progress, three images and the figures."""
+
+    finished = Signal(str)  # "succeeded" | "failed" | "cancelled"
+
+    def __init__(self, parent: QWidget | None = None,
+                 job_settings: Callable[[], Any] | None = None) -> None:
+        super().__init__(parent)
+        self._job_settings = job_settings
+        self.task: Task | None = None
+        self.result: dict | None = None
+        self.images: list[dict[str, np.ndarray]] = []
+
+        self.views = QSpinBox(minimum=1, maximum=16, value=2)
+        self.resolution = QSpinBox(minimum=16, maximum=1024, value=192, singleStep=32,
+                                   suffix=" px")
+        self.spp = QSpinBox(minimum=1, maximum=4096, value=16)
+        self.method = QComboBox()
+        for m in ("paper", "no-alignment", "brute-force"):
+            self.method.addItem(m, m)
+        self.halftone = QComboBox()
+        for h in ("blue-noise", "random"):
+            self.halftone.addItem(h, h)
+        self.cells = QSpinBox(minimum=8, maximum=256, value=96)
+        self.cells.setToolTip("Medium cells along the print's longest axis")
+        self.render_button = QPushButton("Render proof")
+        self.cancel_button = QPushButton("Cancel", enabled=False)
+        self.progress = QProgressBar()
+        self.status = QLabel("Render the print as a scattering medium (Mitsuba 3) beside the "
+                             "source, on the preview's source, size and profile.")
+        self.status.setWordWrap(True)
+        self.view_pick = QSpinBox(minimum=0, maximum=0)
+        self.view_pick.setPrefix("view ")
+        self.view_pick.valueChanged.connect(self._show_view)
+        self.image_labels = [QLabel(alignment=Qt.AlignmentFlag.AlignCenter) for _ in range(3)]
+        self.figures = QLabel()
+        self.figures.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+
+        form = QFormLayout()
+        form.addRow("Views", self.views)
+        form.addRow("Resolution", self.resolution)
+        form.addRow("Samples per pixel", self.spp)
+        form.addRow("Method", self.method)
+        form.addRow("Halftoning", self.halftone)
+        form.addRow("Medium cells", self.cells)
+        side = QVBoxLayout()
+        side.addLayout(form)
+        side.addWidget(self.render_button)
+        side.addWidget(self.cancel_button)
+        side.addWidget(self.progress)
+        side.addWidget(self.status)
+        side.addStretch(1)
+        pics = QHBoxLayout()
+        for title, lab in zip(("source (emission-absorption)", "print (Mitsuba volpath)",
+                               "dE2000 (0..20)"), self.image_labels, strict=True):
+            col = QVBoxLayout()
+            col.addWidget(QLabel(title, alignment=Qt.AlignmentFlag.AlignCenter))
+            col.addWidget(lab, 1)
+            pics.addLayout(col)
+        right = QVBoxLayout()
+        right.addWidget(self.view_pick)
+        right.addLayout(pics, 1)
+        right.addWidget(self.figures)
+        top = QHBoxLayout(self)
+        top.addLayout(side)
+        top.addLayout(right, 1)
+        self.render_button.clicked.connect(lambda: self.render())
+        self.cancel_button.clicked.connect(self.cancel)
+
+    def set_job_settings(self, fn: Callable[[], Any]) -> None:
+        self._job_settings = fn
+
+    def proof_settings(self):
+        """The proof settings from the job settings and this page's controls (or None)."""
+        from ..engine.proof.runner import ProofSettings
+
+        js = self._job_settings() if self._job_settings is not None else None
+        if js is None or not getattr(js, "source", None):
+            return None
+        printer = js.printer
+        return ProofSettings(
+            source=str(js.source), height_mm=js.height_mm, size_mm=js.size_mm,
+            printer=printer if isinstance(printer, str | type(None)) else str(printer),
+            profile=None if js.profile is None else str(js.profile),
+            views=self.views.value(), resolution=self.resolution.value(),
+            spp=self.spp.value(), method=str(self.method.currentData()),
+            halftone=str(self.halftone.currentData()), seed=js.seed,
+            density_scale=js.density_scale, background=js.background,
+            max_cells=self.cells.value(), table_size=js.table_size or 100,
+            source_options=tuple(sorted(js.source_options.items())))
+
+    def render(self, settings=None) -> None:
+        """Start a render (of ``settings``, default :meth:`proof_settings`)."""
+        from ..engine.proof.runner import render_proof
+
+        s = settings if settings is not None else self.proof_settings()
+        if s is None:
+            self.status.setText("Open a source first (File > Open).")
+            return
+        if self.task is not None:
+            return
+        self.render_button.setEnabled(False)
+        self.cancel_button.setEnabled(True)
+        self.progress.setRange(0, 0)
+        self.status.setText("preparing ...")
+        self.task = Task(generator_job(lambda cancel: render_proof(s, cancel)), "proof")
+        self.task.progress.connect(self._on_progress)
+        self.task.succeeded.connect(self._on_result)
+        self.task.failed.connect(lambda msg, tb: self._end("failed", msg))
+        self.task.cancelled.connect(lambda: self._end("cancelled", "cancelled"))
+        run_task(self.task)
+
+    def cancel(self) -> None:
+        if self.task is not None:
+            self.task.cancel()
+
+    def _on_progress(self, p) -> None:
+        if p.total:
+            self.progress.setRange(0, p.total)
+            self.progress.setValue(p.done)
+        self.status.setText(f"{p.stage} {p.done}/{p.total}  {p.elapsed_s:.0f} s")
+
+    def _on_result(self, result: dict) -> None:
+        self.result = result["report"]
+        self.images = result["images"]
+        self.view_pick.setMaximum(len(self.images) - 1)
+        self._show_view(self.view_pick.value())
+        o = self.result["overall"]
+        self.figures.setText(
+            f"overall: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "
+            f"PSNR {o['psnr_db']:.1f} dB; SSIM {o['ssim']:.3f}; coverage "
+            f"{o['source_coverage']:.3f} (source) -> {o['print_coverage']:.3f} (print); "
+            f"{self.result['renderer']['variant']}, {self.result['timings_s']['total']:.0f} s")
+        self._end("succeeded", "done")
+
+    def _show_view(self, i: int) -> None:
+        from ..engine.proof.compare import de_heatmap, to_display
+
+        if not self.images or not 0 <= i < len(self.images):
+            return
+        im = self.images[i]
+        self.view_rgb = [to_display(im["source"]), to_display(im["print"]),
+                         de_heatmap(im["de2000"])]
+        for lab, rgb in zip(self.image_labels, self.view_rgb, strict=True):
+            lab.setPixmap(to_pixmap(rgb))
+
+    def _end(self, outcome: str, message: str) -> None:
+        self.task = None
+        self.render_button.setEnabled(True)
+        self.cancel_button.setEnabled(False)
+        self.progress.setRange(0, 1)
+        self.progress.setValue(1 if outcome == "succeeded" else 0)
+        self.status.setText(message)
+        self.finished.emit(outcome)

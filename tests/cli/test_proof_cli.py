@@ -1,0 +1,112 @@
+"""``dreamprint proof`` and ``evaluate methods``: output, determinism, one-line errors, cancel."""
+
+import json
+import threading
+
+import pytest
+
+from dreamprint_gui.cli import main
+from dreamprint_gui.engine.pipeline import JobCancelled
+from dreamprint_gui.engine.proof.runner import ProofSettings, run_proof
+
+TINY = ["--height-mm", "3", "--views", "1", "--resolution", "16", "--spp", "2", "--cells", "12",
+        "--table-size", "17"]
+
+
+def run(capsys, *args):
+    code = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_proof_demo_writes_everything_and_is_deterministic(tmp_path, capsys):
+    code, out, _ = run(capsys, "proof", "demo", "-o", tmp_path / "a", *TINY, "--json")
+    assert code == 0
+    rep = json.loads(out)
+    names = {p.name for p in (tmp_path / "a").iterdir()}
+    assert names == {"view_00_source.png", "view_00_print.png", "view_00_de2000.png",
+                     "contact_sheet.png", "proof.json"}
+    assert rep["renderer"]["renderer"] == "mitsuba" and rep["renderer"]["version"]
+    o = rep["overall"]
+    assert o["object_pixels"] > 0 and 0 <= o["mean_de2000"] <= o["p95_de2000"] + 1e-9
+    assert set(o) >= {"psnr_db", "ssim", "coverage_error", "coverage_abs_error"}
+    code, out2, _ = run(capsys, "proof", "demo", "-o", tmp_path / "b", *TINY, "--json")
+    rep2 = json.loads(out2)
+    assert rep2["overall"] == rep["overall"]
+    assert ((tmp_path / "a" / "view_00_print.png").read_bytes()
+            == (tmp_path / "b" / "view_00_print.png").read_bytes())
+
+
+def test_proof_of_an_exported_job(tmp_path, capsys):
+    job = tmp_path / "job"
+    assert main(["convert", "demo", "-o", str(job), "--height-mm", "2", "--table-size",
+                 "17"]) == 0
+    capsys.readouterr()
+    code, out, err = run(capsys, "proof", job, "-o", tmp_path / "p", "--views", "1",
+                         "--resolution", "16", "--spp", "2", "--cells", "12", "--json")
+    assert code == 0, err
+    assert json.loads(out)["source"] == str(job)
+    # a missing slice, then a manifest that does not match: one line, exit 2, nothing written
+    slices = sorted((job / "slices").iterdir())
+    slices[3].rename(tmp_path / "moved.png")
+    code, _, err = run(capsys, "proof", job, "-o", tmp_path / "q", "--views", "1")
+    assert code == 2 and err.startswith("dreamprint: error:") and "missing" in err
+    assert err.count("\n") == 1 and not (tmp_path / "q").exists()
+    (tmp_path / "moved.png").rename(slices[3])
+    m = json.loads((job / "manifest.json").read_text())
+    m["grid_dimensions"][0] += 1
+    (job / "manifest.json").write_text(json.dumps(m))
+    code, _, err = run(capsys, "proof", job, "-o", tmp_path / "q", "--views", "1")
+    assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--resolution", "0"], "--resolution"),
+    (["--resolution", "100000"], "--resolution"),
+    (["--spp", "0"], "--spp"),
+    (["--spp", "10000000"], "--spp"),
+    (["--views", "0"], "--views"),
+    (["--method", "magic"], "unknown method"),
+])
+def test_absurd_settings_are_one_line_errors(tmp_path, capsys, extra, words):
+    code, _, err = run(capsys, "proof", "demo", "-o", tmp_path / "x", "--height-mm", "3",
+                       *extra)
+    assert code == 2 and err.startswith("dreamprint: error:") and words in err
+    assert err.count("\n") == 1 and not (tmp_path / "x").exists()
+
+
+def test_unreadable_source_and_existing_output(tmp_path, capsys):
+    bad = tmp_path / "cloud.vdb"
+    bad.write_bytes(b"not a vdb at all")
+    code, _, err = run(capsys, "proof", bad, "-o", tmp_path / "x", "--height-mm", "3")
+    assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1
+    code, _, err = run(capsys, "proof", tmp_path / "nothing.vdb", "-o", tmp_path / "x",
+                       "--height-mm", "3")
+    assert code == 2 and "no such file" in err
+    (tmp_path / "exists").mkdir()
+    code, _, err = run(capsys, "proof", "demo", "-o", tmp_path / "exists", *TINY)
+    assert code == 2 and "already exists" in err
+
+
+def test_cancel_leaves_nothing(tmp_path):
+    cancel = threading.Event()
+    s = ProofSettings(source="demo", output=str(tmp_path / "c"), height_mm=3, views=1,
+                      resolution=16, spp=2, max_cells=12, table_size=17)
+    gen = run_proof(s, cancel)
+    with pytest.raises(JobCancelled):
+        for p in gen:
+            if p.stage == "source":  # always reported (labels may finish between polls)
+                cancel.set()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_evaluate_methods_table(capsys):
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
+                         "--halftones", "blue-noise,random", "--json")
+    assert code == 0, err
+    t = json.loads(out)
+    assert [(r["method"], r["halftone"]) for r in t["methods"]] == [
+        ("paper", "blue-noise"), ("paper", "random")]
+    assert all(r["object_pixels"] > 0 for r in t["methods"])
+    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "nope")
+    assert code == 2 and "unknown method" in err
