@@ -86,7 +86,8 @@ def srgb_gamut_mesh(profile, n: int = 17) -> GamutMesh:
 
 def pick_colour(profile, tables, rgb) -> dict:
     """What the printer makes of sRGB ``rgb``: table concentrations (C, M, Y, K, W), the
-    reproduced colour (``predict`` at the reference thickness) and its dE2000 to the target."""
+    reproduced colour (``predict`` at the reference thickness) and its dE2000 to the target,
+    under the tables' rendering intent (``intent``: the mapping source -> printed colour)."""
     from ..engine.colorimetry import delta_E2000, observer_for, srgb_to_lab
     from ..engine.gamut import lookup
     from ..engine.mixture import predict
@@ -106,4 +107,5 @@ def pick_colour(profile, tables, rgb) -> dict:
         "target_Lab": lab_t.reshape(3).tolist(),
         "dE2000": float(np.asarray(delta_E2000(lab_t, lab_r)).reshape(())),
         "sigma_per_mm": float(np.asarray(pred.sigma_per_mm).reshape(())),
+        "intent": getattr(tables, "intent", "colorimetric"),
     }

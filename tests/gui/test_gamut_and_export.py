@@ -59,6 +59,7 @@ def test_gamut_page(qtbot, gl_display, job_profile, table_size):
     assert page.tables.intent == "perceptual" and "perceptual" in page.repro_title.text()
     page.set_colour((0.0, 0.0, 1.0))
     mapped = page.last_pick
+    assert (mapped["intent"], clipped["intent"]) == ("perceptual", "colorimetric")
     assert mapped["sRGB"] != clipped["sRGB"]
     hue = [np.degrees(np.arctan2(p["Lab"][2], p["Lab"][1])) for p in (mapped, clipped)]
     src_hue = np.degrees(np.arctan2(mapped["target_Lab"][2], mapped["target_Lab"][1]))

@@ -154,14 +154,6 @@ def _periodic_interp(h: NDArray, table: NDArray) -> NDArray[np.float64]:
     return (1.0 - f) * table[i0 % n] + f * table[(i0 + 1) % n]
 
 
-def _fill_gaps(row: NDArray) -> NDArray[np.float64]:
-    ok = row > 0
-    if not ok.any():
-        return row
-    idx = np.arange(row.size)
-    return np.interp(idx, idx[ok], row[ok])
-
-
 @dataclass(frozen=True)
 class PerceptualMap:
     """The SGCK mapping of sRGB colours into one profile's printable gamut (see module doc)."""
@@ -189,11 +181,11 @@ class PerceptualMap:
         seg = np.minimum((h / (2 * np.pi) * _N_HUE).astype(int), _N_HUE - 1)
         j_cusp = np.full(_N_HUE, 0.5 * sum(j_print))
         best = np.full(_N_HUE, -1.0)
-        order = np.argsort(m)
-        best[seg[order]] = m[order]  # the last write per segment is its maximum
-        j_cusp[seg[order]] = pr[order, 0]
+        np.maximum.at(best, seg, m)
+        is_max = m >= best[seg]
+        j_cusp[seg[is_max]] = pr[is_max, 0]
         j_cusp = j_cusp if (best > 0).all() else _fill_periodic(j_cusp, best > 0)
-        # smooth the cusp lightness a little along hue (one segment = 5 degrees)
+        # smooth the cusp lightness a little along hue (one segment = 3 degrees)
         j_cusp = 0.25 * np.roll(j_cusp, 1) + 0.5 * j_cusp + 0.25 * np.roll(j_cusp, -1)
         proto = cls(white, j_src, j_print, j_cusp, np.zeros((1, 1)), np.zeros((1, 1)))
         d_print = proto._hull_boundary(pr, j_print)

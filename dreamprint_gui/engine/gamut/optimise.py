@@ -48,6 +48,8 @@ _CODE = {"srgb": 0, "cielab": 1, "de2000": 2}
 # Tikhonov weight per objective, in the objective's squared units: 1e-4 dE^2 for CIELAB and
 # CIEDE2000, the same relative weight for sRGB (whose unit range is ~1/100 of CIELAB's).
 REGULARISATION = {"cielab": 1e-4, "de2000": 1e-4, "srgb": 1e-8}
+# targets this close to grey get the cielab alternative start in the table's final level
+NEUTRAL_CHROMA = 10.0
 _DEG = math.pi / 180.0
 _25_7 = 25.0 ** 7
 
@@ -419,36 +421,52 @@ def _solve_coords(model: ForwardModel, objective: str, tgt: NDArray, starts: NDA
     return out, cost, iters
 
 
+def _de2000_polished(model: ForwardModel, lab: NDArray, starts: NDArray, max_iter: int,
+                     polish: bool | float, polish_iter: int | None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray]:
+    lab = np.asarray(lab, dtype=np.float64).reshape(-1, 3)
+    st = np.broadcast_to(np.asarray(starts, dtype=np.float64).reshape(-1, N_COLOUR_INKS),
+                         (lab.shape[0], N_COLOUR_INKS))
+    alt = None
+    if polish is not False:
+        mask = (np.ones(lab.shape[0], dtype=bool) if polish is True
+                else np.hypot(lab[:, 1], lab[:, 2]) < float(polish))
+        alt = st.copy()
+        if mask.any():
+            alt[mask] = _solve_coords(model, "cielab", lab[mask], st[mask],
+                                      polish_iter or max_iter)[0]
+    return _solve_coords(model, "de2000", lab, st, max_iter, alt)
+
+
 def solve(model: ForwardModel, objective: str, rgb: NDArray, starts: NDArray,
-          max_iter: int = 60, polish: bool = True, polish_iter: int | None = None
+          max_iter: int = 60, polish: bool | float = True, polish_iter: int | None = None
           ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray]:
     """Concentrations (N, 5) minimising the objective for encoded sRGB targets ``rgb`` (N, 3).
 
     Returns ``(conc, cost, iterations)``; ``cost`` includes the small regularisation term.
     ``de2000`` is solved as a polishing step: first ``cielab`` from ``starts``, then CIEDE2000
     from whichever of ``starts`` and that solution has the lower CIEDE2000 (CIEDE2000 is not
-    smooth at neutral colours, where Gauss-Newton converges slowly from far away);
-    ``polish=False`` starts CIEDE2000 at ``starts`` only; ``polish_iter`` caps the ``cielab``
-    iterations (default ``max_iter``).
+    smooth at neutral colours, where Gauss-Newton converges slowly from far away).
+    ``polish``: True for every target, a number for the targets of CIELAB chroma below it
+    only, False for none; ``polish_iter`` caps the ``cielab`` iterations (default
+    ``max_iter``).
     """
     objective = canonical_objective(objective, "cielab")
-    alt = None
-    if objective == "de2000" and polish:
-        alt, _, _ = solve(model, "cielab", rgb, starts, polish_iter or max_iter)
-    return _solve_coords(model, objective, targets_for(model, objective, rgb), starts, max_iter,
-                         alt)
+    tgt = targets_for(model, objective, rgb)
+    if objective == "de2000":
+        return _de2000_polished(model, tgt, starts, max_iter, polish, polish_iter)
+    return _solve_coords(model, objective, tgt, starts, max_iter)
 
 
 def solve_xyz(model: ForwardModel, objective: str, xyz: NDArray, starts: NDArray,
-              max_iter: int = 60, polish: bool = True, polish_iter: int | None = None
+              max_iter: int = 60, polish: bool | float = True, polish_iter: int | None = None
               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray]:
     """As :func:`solve` for targets given as XYZ (e.g. gamut-mapped colours)."""
     objective = canonical_objective(objective, "cielab")
-    alt = None
-    if objective == "de2000" and polish:
-        alt, _, _ = solve_xyz(model, "cielab", xyz, starts, polish_iter or max_iter)
-    return _solve_coords(model, objective, target_coords(model, objective, xyz), starts,
-                         max_iter, alt)
+    tgt = target_coords(model, objective, xyz)
+    if objective == "de2000":
+        return _de2000_polished(model, tgt, starts, max_iter, polish, polish_iter)
+    return _solve_coords(model, objective, tgt, starts, max_iter)
 
 
 def _starts() -> NDArray[np.float64]:
@@ -494,7 +512,7 @@ def solve_grid(model: ForwardModel, objective: str, size: int,
     """
     objective = canonical_objective(objective, "cielab")
 
-    def run(rgb, starts, max_iter, polish=True, polish_iter=None):
+    def run(rgb, starts, max_iter, polish: bool | float = True, polish_iter=None):
         if target_xyz is None:
             return solve(model, objective, rgb, starts, max_iter, polish, polish_iter)
         return solve_xyz(model, objective, target_xyz(rgb), starts, max_iter, polish,
@@ -526,11 +544,12 @@ def solve_grid(model: ForwardModel, objective: str, size: int,
             start = resample(conc.reshape(n_prev, n_prev, n_prev, N_COLOUR_INKS), lv)
             # Warm starts converge in a few steps; the cap only stops the slow (linear) tail
             # of far-out-of-gamut targets, whose cost it changes by < 0.1 dE76. de2000: the
-            # cielab alternative start (for neutral colours) only at the coarsest and the final
-            # level, where 6 cielab steps from the warm start suffice (it is only a start).
+            # cielab alternative start only at the coarsest and the final level, there only for
+            # near-neutral targets (CIELAB chroma < NEUTRAL_CHROMA, where CIEDE2000 is a cone)
+            # and 6 cielab steps from the warm start (it is only a start).
             final = lv == size
             conc, cost, _ = run(rgb, start.reshape(-1, N_COLOUR_INKS), 12 if final else 40,
-                                polish=final, polish_iter=6)
+                                polish=NEUTRAL_CHROMA if final else False, polish_iter=6)
         done += work[levels.index(lv)]
         if progress is not None:
             progress(0.8 * done / work.sum())

@@ -52,7 +52,7 @@ __all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "mixture_sigm
            "DEFAULT_OBJECTIVE", "DEFAULT_INTENT", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS",
            "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice"]
 
-TABLE_VERSION = 2
+TABLE_VERSION = 3
 DEFAULT_OBJECTIVE = "de2000"
 DEFAULT_SIZE = 100
 # Eq. 13 with the paper's "upper limit of rho+ 0.1" read as a bound on the grey: 1 - rho+ <= 0.1.
