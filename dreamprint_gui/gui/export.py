@@ -334,11 +334,12 @@ class ExportDialog(QDialog):
         self.halftone.addItem("random (paper's stochastic)", "random")
         self.halftone.setCurrentIndex(max(0, self.halftone.findData(
             self.settings.get("export/halftone", "blue-noise", str))))
-        self.intent = QComboBox()  # rendering intent (ConvertSettings.intent)
+        self.intent = QComboBox()  # rendering intent (ConvertSettings.intent; "" = profile's)
+        self.intent.addItem("the profile's (colorimetric unless it says otherwise)", "")
         self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
         self.intent.addItem("perceptual (compress sRGB into the gamut)", "perceptual")
         self.intent.setCurrentIndex(max(0, self.intent.findData(
-            self.settings.get("export/intent", "colorimetric", str))))
+            self.settings.get("export/intent", "", str))))
         self.seed = QSpinBox(minimum=0, maximum=2**31 - 1,
                              value=self.settings.get("export/seed", 0, int))
         self.folder = QLineEdit(self.settings.last_folder("export"))
@@ -567,7 +568,7 @@ class ExportDialog(QDialog):
             output=self.target_path(), overwrite=self.overwrite.isChecked(),
             workers=workers, scheduler=scheduler, table_size=self.table_size,
             content=str(self.content.currentData()), sampling=self.sampling_choice,
-            intent=str(self.intent.currentData()))
+            intent=str(self.intent.currentData()) or None)
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:

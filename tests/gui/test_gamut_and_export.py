@@ -79,6 +79,8 @@ def _dialog(qtbot, tmp_path, table_size, height_mm):
 
 def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
     dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    assert dlg.settings_for_job().intent is None  # the profile's own choice by default
+    dlg.intent.setCurrentIndex(dlg.intent.findData("colorimetric"))
     assert dlg.settings_for_job().intent == "colorimetric"
     dlg.intent.setCurrentIndex(dlg.intent.findData("perceptual"))
     assert dlg.settings_for_job().intent == "perceptual"
