@@ -85,10 +85,10 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
     opened = pipeline._open_source
     load_s = [0.0]
 
-    def timed_open(spec, options):
+    def timed_open(spec, options, *rest):
         t = time.perf_counter()
         try:
-            return opened(spec, options)
+            return opened(spec, options, *rest)
         finally:
             load_s[0] += time.perf_counter() - t
 
