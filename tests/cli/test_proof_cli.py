@@ -88,6 +88,20 @@ def test_unreadable_source_and_existing_output(tmp_path, capsys):
     assert code == 2 and "already exists" in err
 
 
+def test_output_over_the_source_is_refused(tmp_path, capsys):
+    """``-o`` equal to (or a parent of) the source, even with --overwrite: the job or volume
+    judged must not be replaced by its proof."""
+    job = tmp_path / "job"
+    job.mkdir()
+    (job / "manifest.json").write_text("{}")
+    for src, out in ((job, job), (job, tmp_path), (job / "manifest.json", tmp_path)):
+        code, _, err = run(capsys, "proof", src, "-o", out, "--overwrite", "--views", "1",
+                           "--resolution", "16", "--spp", "2")
+        assert code == 2 and err.startswith("dreamprint: error:"), err
+        assert "or contains, the source" in err and err.count("\n") == 1
+    assert (job / "manifest.json").read_text() == "{}"
+
+
 def test_cancel_leaves_nothing(tmp_path):
     cancel = threading.Event()
     s = ProofSettings(source="demo", output=str(tmp_path / "c"), height_mm=3, views=1,
