@@ -124,3 +124,14 @@ def test_evaluate_methods_table(capsys):
     assert all(r["object_pixels"] > 0 for r in t["methods"])
     code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "nope")
     assert code == 2 and "unknown method" in err
+
+
+def test_evaluate_methods_honours_halftone(capsys):
+    """``--halftone random`` was silently replaced by the --halftones default (blue-noise)."""
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
+                         "--halftone", "random", "--json")
+    assert code == 0, err
+    assert [r["halftone"] for r in json.loads(out)["methods"]] == ["random"]
+    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--halftone", "random",
+                       "--halftones", "blue-noise")
+    assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1
