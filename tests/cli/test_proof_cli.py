@@ -53,6 +53,13 @@ def test_proof_of_an_exported_job(tmp_path, capsys):
     assert code == 2 and err.startswith("dreamprint: error:") and "missing" in err
     assert err.count("\n") == 1 and not (tmp_path / "q").exists()
     (tmp_path / "moved.png").rename(slices[3])
+    # a truncated slice (perhaps one the block averaging would not read): refused up front
+    good = slices[5].read_bytes()
+    slices[5].write_bytes(good[:100])
+    code, _, err = run(capsys, "proof", job, "-o", tmp_path / "q", "--views", "1")
+    assert code == 2 and err.startswith("dreamprint: error:") and "truncated" in err
+    assert err.count("\n") == 1 and not (tmp_path / "q").exists()
+    slices[5].write_bytes(good)
     m = json.loads((job / "manifest.json").read_text())
     m["grid_dimensions"][0] += 1
     (job / "manifest.json").write_text(json.dumps(m))
