@@ -217,7 +217,13 @@ def gamut(profile_path, objective, intent, compare, size, samples, chart, plot,
         click.echo(f"{name:9s}  {_num(a['mean']):>6s} / {_num(a['p95']):<6s}       "
                    f"{100 * f['srgb_in_gamut_fraction']:5.1f} %  {g['mean']:+7.3f} / "
                    f"{g['p95']:+7.3f}        {j['max']:6.2f} ({j['max_excess']:+.2f})"
-                   f"          {f['build_seconds']:6.1f}")
+                   f"          {_built(f)}")
+
+
+def _built(f: dict) -> str:
+    if f["cached"]:
+        return f"{f['built_seconds_when_cached']:6.1f} (cached)"
+    return f"{f['build_seconds']:6.1f}"
 
 
 def _num(x) -> str:

@@ -170,6 +170,12 @@ def evaluate_methods(source, methods, halftones, **kw) -> None:
     from ..engine.proof.runner import render_proof
 
     _check_source(source)
+    ctx = click.get_current_context()
+    if ctx.get_parameter_source("halftone") is not click.core.ParameterSource.DEFAULT:
+        # --halftone (of the shared options) would otherwise be silently replaced per row
+        if ctx.get_parameter_source("halftones") is not click.core.ParameterSource.DEFAULT:
+            raise DreamPrintError("give --halftones (a list) or --halftone, not both")
+        halftones = kw["halftone"]
     ms = [m.strip() for m in methods.split(",") if m.strip()]
     hs = [h.strip() for h in halftones.split(",") if h.strip()]
     bad = [m for m in ms if m not in METHODS]

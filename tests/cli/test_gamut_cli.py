@@ -78,6 +78,9 @@ def test_gamut_json_chart_and_plot(capsys, tmp_path):
         assert set(fig["lut_vs_direct_dE2000"]) >= {"mean", "p95"}
         assert 0 < fig["srgb_in_gamut_fraction"] < 1
         assert fig["lookup_minus_lattice_best_dE2000"]["count"] == 300
+        # a cached table's per-objective build time is not reported as this run's build
+        assert fig["cached"] is True and fig["build_seconds"] is None
+        assert fig["built_seconds_when_cached"] >= 0
         assert fig["adjacent_node_dE2000"]["max"] > 0
 
 

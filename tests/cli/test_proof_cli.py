@@ -53,6 +53,13 @@ def test_proof_of_an_exported_job(tmp_path, capsys):
     assert code == 2 and err.startswith("dreamprint: error:") and "missing" in err
     assert err.count("\n") == 1 and not (tmp_path / "q").exists()
     (tmp_path / "moved.png").rename(slices[3])
+    # a truncated slice (perhaps one the block averaging would not read): refused up front
+    good = slices[5].read_bytes()
+    slices[5].write_bytes(good[:100])
+    code, _, err = run(capsys, "proof", job, "-o", tmp_path / "q", "--views", "1")
+    assert code == 2 and err.startswith("dreamprint: error:") and "truncated" in err
+    assert err.count("\n") == 1 and not (tmp_path / "q").exists()
+    slices[5].write_bytes(good)
     m = json.loads((job / "manifest.json").read_text())
     m["grid_dimensions"][0] += 1
     (job / "manifest.json").write_text(json.dumps(m))
@@ -88,6 +95,20 @@ def test_unreadable_source_and_existing_output(tmp_path, capsys):
     assert code == 2 and "already exists" in err
 
 
+def test_output_over_the_source_is_refused(tmp_path, capsys):
+    """``-o`` equal to (or a parent of) the source, even with --overwrite: the job or volume
+    judged must not be replaced by its proof."""
+    job = tmp_path / "job"
+    job.mkdir()
+    (job / "manifest.json").write_text("{}")
+    for src, out in ((job, job), (job, tmp_path), (job / "manifest.json", tmp_path)):
+        code, _, err = run(capsys, "proof", src, "-o", out, "--overwrite", "--views", "1",
+                           "--resolution", "16", "--spp", "2")
+        assert code == 2 and err.startswith("dreamprint: error:"), err
+        assert "or contains, the source" in err and err.count("\n") == 1
+    assert (job / "manifest.json").read_text() == "{}"
+
+
 def test_cancel_leaves_nothing(tmp_path):
     cancel = threading.Event()
     s = ProofSettings(source="demo", output=str(tmp_path / "c"), height_mm=3, views=1,
@@ -110,3 +131,14 @@ def test_evaluate_methods_table(capsys):
     assert all(r["object_pixels"] > 0 for r in t["methods"])
     code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "nope")
     assert code == 2 and "unknown method" in err
+
+
+def test_evaluate_methods_honours_halftone(capsys):
+    """``--halftone random`` was silently replaced by the --halftones default (blue-noise)."""
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
+                         "--halftone", "random", "--json")
+    assert code == 0, err
+    assert [r["halftone"] for r in json.loads(out)["methods"]] == ["random"]
+    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--halftone", "random",
+                       "--halftones", "blue-noise")
+    assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1

@@ -198,7 +198,9 @@ def objective_figures(tables: ColourTables, profile: InkProfile, samples: int = 
     return {
         "objective": tables.objective,
         "intent": tables.intent,
-        "build_seconds": round(tables.build_seconds, 3),
+        # as at the top level: this run's build, or the cached table's earlier build, apart
+        "build_seconds": None if tables.cached else round(tables.build_seconds, 3),
+        "built_seconds_when_cached": round(tables.build_seconds, 3) if tables.cached else None,
         "cached": tables.cached,
         "lut_vs_direct_dE2000": _stats(lut),
         "srgb_in_gamut_fraction": float(np.mean(de_direct <= IN_GAMUT_DE2000)),

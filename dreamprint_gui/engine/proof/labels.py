@@ -26,6 +26,8 @@ from ...errors import DreamPrintError
 
 __all__ = ["EngineLabels", "JobFolderLabels", "is_job_folder"]
 
+_PNG_END = b"\x00\x00\x00\x00IEND\xaeB`\x82"  # the empty IEND chunk that ends every PNG
+
 
 def is_job_folder(path: str) -> bool:
     p = Path(path)
@@ -100,6 +102,18 @@ class JobFolderLabels:
         if missing:
             raise DreamPrintError(f"{len(missing)} of {nz} slices missing (first: slices/"
                                   f"{missing[0]})", job)
+        # only some layers are decoded (--layers-per-block), so check every slice's end: a
+        # truncated or half-written PNG lacks its final IEND chunk
+        for z in range(nz):
+            path = folder / slice_name(z, nz)
+            try:
+                with open(path, "rb") as fh:
+                    fh.seek(max(path.stat().st_size - 12, 0))
+                    complete = fh.read(12) == _PNG_END
+            except OSError as exc:
+                raise DreamPrintError(f"unreadable slice: {exc.strerror}", path) from None
+            if not complete:
+                raise DreamPrintError("truncated or not a PNG slice (no IEND chunk)", path)
         self.job = job
         self.folder = folder
         self.nz = nz

@@ -288,7 +288,13 @@ def write_proof(result: dict, folder: Path) -> None:
                                        encoding="utf-8")
 
 
-def _check_target(out: Path, overwrite: bool) -> None:
+def _check_target(out: Path, overwrite: bool, source: str | None = None) -> None:
+    if source is not None and source != "demo":
+        src, dst = Path(source).resolve(), out.resolve()
+        if src == dst or dst in src.parents:
+            # --overwrite would replace the source (or the job folder judged) by the proof
+            raise DreamPrintError(f"the output folder is, or contains, the source {source}; "
+                                  "choose another -o", out)
     if out.exists() and not overwrite:
         raise DreamPrintError("already exists (use --overwrite to replace it)", out)
     if out.exists() and not out.is_dir():
@@ -304,7 +310,7 @@ def run_proof(s: ProofSettings, cancel: threading.Event | None = None
     if s.output is None:
         raise DreamPrintError("no output folder given (-o DIR)")
     out = Path(s.output)
-    _check_target(out, s.overwrite)
+    _check_target(out, s.overwrite, s.source)
     validate(s)
     result = yield from render_proof(s, cancel)
     if cancel is not None and cancel.is_set():
