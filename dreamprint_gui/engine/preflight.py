@@ -103,7 +103,7 @@ class Preflight:
         """One line: the job's size, disk and time estimates and the number of warnings."""
         n = len(self.warnings)
         return (f"pre-flight: {self.total_voxels:,} voxels in {self.slices:,} slices, about "
-                f"{_human_bytes(self.disk_bytes)}, about {_human_seconds(self.seconds)}; "
+                f"{_human_bytes(self.disk_bytes)}, {_about_seconds(self.seconds)}; "
                 + (f"{n} warning{'s' if n != 1 else ''}" if n else "no warnings"))
 
     def summary_lines(self) -> list[str]:
@@ -117,8 +117,8 @@ class Preflight:
             f"{nz:,} slices, {self.total_voxels:,} voxels",
             f"content: {self.content.get('mode')} ({self.content.get('reason')})",
             f"materials (estimated from {self.sampled_voxels:,} voxels): {fr}",
-            f"disk: about {_human_bytes(self.disk_bytes)}; conversion: about "
-            f"{_human_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
+            f"disk: about {_human_bytes(self.disk_bytes)}; conversion: "
+            f"{_about_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
             f"({self.rate_source})",
         ]
         lines += [f"warning: {w.message}" for w in self.warnings]
@@ -150,6 +150,11 @@ def _human_bytes(n: float) -> str:
             return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"
         n /= 1000
     return f"{n:.1f} TB"  # pragma: no cover
+
+
+def _about_seconds(s: float) -> str:
+    """``"about 7 s"``, ``"about 2.5 min"``, or ``"under 1 s"`` (never "about under 1 s")."""
+    return "under 1 s" if s < 1 else f"about {_human_seconds(s)}"
 
 
 def _human_seconds(s: float) -> str:
@@ -391,7 +396,8 @@ def _warnings(pf: Preflight) -> list[PreflightWarning]:
         nums = {"clamped_voxels": pf.clamped_voxels, "clamped_fraction": pf.clamped_fraction,
                 "density_scale": pf.density_scale}
         if pf.safe_density_scale is not None:
-            msg += f"; --density-scale {pf.safe_density_scale:.3g} or less avoids it"
+            msg += (f"; --density-scale {pf.safe_density_scale:.3g} or less avoids it in the "
+                    "sampled voxels (the densest voxels may be unsampled: a little less is safer)")
             nums["density_scale_without_clamping"] = pf.safe_density_scale
         out.append(PreflightWarning("clamped", msg, nums))
     if pf.out_of_gamut_fraction > OUT_OF_GAMUT_WARN:
