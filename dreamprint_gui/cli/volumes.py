@@ -79,7 +79,9 @@ def format_info(path: str, info: dict, height_mm: float | None = None,
     if c:
         lines.append(f"  content: {c['mode']} (--content auto: {c['reason']})")
     if "gaussians" in info:
-        lines.append(f"  {info['gaussians']:,} Gaussians, SH degree {info['sh_degree']}")
+        lines.append(f"  {info['gaussians']:,} Gaussians, SH degree {info['sh_degree']}"
+                     + (f" ({info['skipped']:,} skipped: zero opacity or scale, or non-finite)"
+                        if info.get("skipped") else ""))
         lines.append(f"    bounds {_fmt_bounds(info['bounds'])}")
         s = _size_line(info["bounds"], height_mm, size_mm)
         if s:

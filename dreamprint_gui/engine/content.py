@@ -121,6 +121,8 @@ def choose_content(source) -> tuple[str, str]:
             kind = "Gaussian splats"
         elif "radiance" in low:
             kind = "a radiance field"
+        elif "instantngp" in low:  # snapshots and the exported RGBA volumes / PNG slices
+            kind = "a radiance field (InstantNGP)"
         elif "demo" in low or "procedural" in low:
             kind = "a procedural cloud"
         else:

@@ -153,7 +153,7 @@ def _human_bytes(n: float) -> str:
 
 
 def _about_seconds(s: float) -> str:
-    """``about 12 s`` / ``about 3.5 min``, or ``under 1 s``."""
+    """``"about 7 s"``, ``"about 2.5 min"``, or ``"under 1 s"`` (never "about under 1 s")."""
     return "under 1 s" if s < 1 else f"about {_human_seconds(s)}"
 
 
@@ -396,7 +396,8 @@ def _warnings(pf: Preflight) -> list[PreflightWarning]:
         nums = {"clamped_voxels": pf.clamped_voxels, "clamped_fraction": pf.clamped_fraction,
                 "density_scale": pf.density_scale}
         if pf.safe_density_scale is not None:
-            msg += f"; --density-scale {pf.safe_density_scale:.3g} or less avoids it"
+            msg += (f"; --density-scale {pf.safe_density_scale:.3g} or less avoids it in the "
+                    "sampled voxels (the densest voxels may be unsampled: a little less is safer)")
             nums["density_scale_without_clamping"] = pf.safe_density_scale
         out.append(PreflightWarning("clamped", msg, nums))
     if pf.out_of_gamut_fraction > OUT_OF_GAMUT_WARN:

@@ -201,12 +201,12 @@ def check_header(path: Path) -> dict:
         h.fail(f"damaged: the header claims {n_grids:,} grids")
     for k in range(n_grids):
         name = h.string(f"grid descriptor {k + 1} of {n_grids}").split("\x1e")[0]
-        gtype = h.string(f"grid {name!r}'s type")
+        gtype = h.string(f"the type of grid {name!r}")
         if version >= 216:
-            h.string(f"grid {name!r}'s instance parent")
-        grid_pos = h.i64(f"grid {name!r}'s offsets")
-        block_pos = h.i64(f"grid {name!r}'s offsets")
-        end_pos = h.i64(f"grid {name!r}'s offsets")
+            h.string(f"the instance parent of grid {name!r}")
+        grid_pos = h.i64(f"the offsets of grid {name!r}")
+        block_pos = h.i64(f"the offsets of grid {name!r}")
+        end_pos = h.i64(f"the offsets of grid {name!r}")
         if not (0 < grid_pos <= block_pos <= end_pos):
             h.fail(f"damaged: grid {name!r} has inconsistent offsets {grid_pos}, {block_pos}, "
                    f"{end_pos}")

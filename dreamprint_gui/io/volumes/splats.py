@@ -118,6 +118,12 @@ class GaussianCloud:
               & np.all(sigmas > 0, 1) & np.isfinite(opacity) & (opacity > 0)
               & np.all(np.isfinite(rgb), 1))
         self.n_total = len(means)
+        self.n_skipped = int(self.n_total - np.count_nonzero(ok))
+        if bounds is None and self.n_skipped == self.n_total:
+            raise DreamPrintError(
+                "no Gaussians in the file" if not self.n_total else
+                f"none of the {self.n_total:,} Gaussians can be printed: each has zero opacity, "
+                "a zero scale or a non-finite value", name)
         means, sigmas, opacity, rgb = means[ok], sigmas[ok], opacity[ok], rgb[ok]
         quats = np.ascontiguousarray(np.asarray(quats, float).reshape(-1, 4)[ok])
         self.mean = np.ascontiguousarray(means)
@@ -154,6 +160,7 @@ class GaussianCloud:
 
     def info(self) -> dict:
         return {"format": self.format, "gaussians": int(self.n_total),
+                "skipped": self.n_skipped,  # zero opacity or scale, or non-finite: not printed
                 "sh_degree": self.sh_degree, "bounds": bounds_list(self.bounds)}
 
 
