@@ -71,8 +71,9 @@ def height_for(n_voxels: float) -> float:
 
 def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
         source: str = "demo", height: float | None = None) -> dict:
-    from dreamprint_gui.engine import pipeline
-    from dreamprint_gui.engine.pipeline import ConvertSettings, run_conversion
+    from dreamprint_gui.job import plan
+    from dreamprint_gui.job.plan import ConvertSettings
+    from dreamprint_gui.job.run import run_conversion
 
     s = ConvertSettings(source=source, output=out,
                         height_mm=height if height else height_for(n), workers=workers,
@@ -80,9 +81,9 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
     # Preparation (source, tables and mask from their caches, compiled kernels from numba's
     # cache) is timed on its own: it is per job, not per voxel. The source's opening (its
     # one-time load) is timed inside it.
-    from dreamprint_gui.engine.pipeline import prepare_job
+    from dreamprint_gui.job.plan import prepare_job
 
-    opened = pipeline._open_source
+    opened = plan._open_source  # prepare_job reads it from job.plan
     load_s = [0.0]
 
     def timed_open(spec, options, *rest):
@@ -92,7 +93,7 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
         finally:
             load_s[0] += time.perf_counter() - t
 
-    pipeline._open_source = timed_open
+    plan._open_source = timed_open
     tp = time.perf_counter()
     ctx = prepare_job(s)
     prep = time.perf_counter() - tp

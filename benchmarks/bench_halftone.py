@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from dreamprint_gui.engine.halftone import Halftoner, box_for_voxel, fraction_variance_ratio
+from dreamprint_gui.job.halftone import Halftoner, box_for_voxel, fraction_variance_ratio
 
 VOX = (0.084, 0.028, 0.014)
 CASES = {

@@ -66,7 +66,7 @@ def test_gsply_readers_present():
 
 
 def test_every_volume_reader_module_imports():
-    from dreamprint_gui.io.volumes.base import FORMATS
+    from dreamprint_gui.io.volumes.registry import FORMATS
 
     for _key, (module, _exts) in FORMATS.items():
         importlib.import_module(f"dreamprint_gui.io.volumes.{module}")

@@ -89,7 +89,8 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
     warnings (mostly Clear, clamping, out of gamut) go to stderr; after the job, how many voxels
     were clamped. --quiet silences both; --json adds them to the printed manifest."""
-    from ..engine.pipeline import ConvertSettings, JobCancelled, run_conversion
+    from ..job.plan import ConvertSettings, JobCancelled
+    from ..job.run import run_conversion
 
     opts = {}
     for kv in source_options:
@@ -231,7 +232,7 @@ def _option_value(v: str):
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 def evaluate_job(job, as_json) -> None:
     """Read a finished JOB back: material fractions vs intended concentrations, consistency."""
-    from ..io.job_check import check_job
+    from ..job.check import check_job
 
     report = check_job(Path(job))
     if as_json:

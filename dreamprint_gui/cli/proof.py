@@ -30,7 +30,7 @@ def _options(items: tuple[str, ...]) -> tuple[tuple[str, object], ...]:
 
 def _drive(gen, prefix: str = ""):
     """Run a proof generator with progress bars on stderr; return its value."""
-    from ..engine.pipeline import JobCancelled
+    from ..job.plan import JobCancelled
 
     def on_term(signum, frame):
         raise KeyboardInterrupt()

@@ -125,7 +125,7 @@ def format_info(path: str, info: dict, height_mm: float | None = None,
 def describe(file: str) -> dict:
     """The ``inspect`` description of ``file`` plus ``content``: what ``--content auto`` picks."""
     from ..engine.content import choose_content, content_of_info
-    from ..io.volumes.base import inspect_source
+    from ..io.volumes.registry import inspect_source
 
     info, src = inspect_source(file)
     mode, reason = choose_content(src) if src is not None else content_of_info(info)

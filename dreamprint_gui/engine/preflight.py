@@ -5,8 +5,8 @@ Defines
 - :class:`Preflight`: grid, slices, disk and time estimates, material fractions, warnings;
   :meth:`Preflight.summary_lines` (the terminal / dialog text) and :meth:`Preflight.to_json`.
 - :class:`PreflightWarning`: a code, a one-line message and its numbers.
-- :func:`preflight`: the estimate for a job (a :class:`.pipeline.JobContext`, a
-  :class:`.pipeline.ConvertSettings`, or a source spec with the job's options).
+- :func:`preflight`: the estimate for a job (a :class:`...job.plan.JobContext`, a
+  :class:`...job.plan.ConvertSettings`, or a source spec with the job's options).
 - :func:`record_rate` / :func:`measured_rate`: this machine's conversion rate, kept from the
   jobs it has run (the user cache folder, ``rates.json``).
 
@@ -258,8 +258,8 @@ def _node_fields(tables, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _disk_estimate(ctx, nz: int) -> int:
     """Mean PNG size of up to 16 evenly spaced full layers (at most ~8e6 voxels in all),
     labelled and encoded as the job does, times nz."""
-    from ..io.png_slices import encode_labels_pngs
-    from .pipeline import _oriented, _slab_into
+    from ..job.encode.png_slices import encode_labels_pngs
+    from ..job.slab import _oriented, _slab_into
 
     nx, ny, _ = ctx.shape_xyz
     n_layers = max(1, min(16, nz, 8_000_000 // max(1, nx * ny)))  # ~8e6 voxels at most
@@ -277,7 +277,7 @@ def _disk_estimate(ctx, nz: int) -> int:
 def _context(source, grid, profile, *, density_scale, content, background, printer,
              density_threshold, halftone, source_options, sampling, height_mm, size_mm,
              objective, table_size, seed):
-    from .pipeline import ConvertSettings, JobContext, prepare_job
+    from ..job.plan import ConvertSettings, JobContext, prepare_job
 
     if isinstance(source, JobContext):
         return source
@@ -305,15 +305,15 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
               table_size: int = 100, sample_voxels: int = 200_000, seed: int = 0) -> Preflight:
     """The pre-flight estimate of a job (module doc for how each figure is made).
 
-    ``source``: a prepared :class:`.pipeline.JobContext` (the CLI and the GUI pass the job's
+    ``source``: a prepared :class:`...job.plan.JobContext` (the CLI and the GUI pass the job's
     own, so nothing is opened twice; the other job options are then ignored), a
-    :class:`.pipeline.ConvertSettings`, or a source spec (path or ``"demo"``) with the job's
+    :class:`...job.plan.ConvertSettings`, or a source spec (path or ``"demo"``) with the job's
     options: ``grid`` (a :class:`..io.volumes.base.PrintGrid`, or ``height_mm`` / ``size_mm``),
     ``profile`` (spec), ``printer`` (spec), ``density_scale``, ``content``, ``background``...
     ``sample_voxels``: the size of the material sample; ``seed``: its lattice offset.
     """
+    from ..job.sample_label.layer_kernel import slab_labels
     from .gamut.evaluation import IN_GAMUT_DE2000
-    from .layer_kernel import slab_labels
 
     t0 = time.perf_counter()
     ctx = _context(source, grid, profile, density_scale=density_scale, content=content,

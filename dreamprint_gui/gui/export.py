@@ -1,7 +1,7 @@
 """The export dialog: printer, size, halftoning, seed, folder, workers -> a finished print job.
 
 Defines :func:`convert_settings` (the GUI's choices as the engine's ``ConvertSettings``, the
-same object ``dreamprint convert`` builds), :func:`export_job` (``pipeline.run_conversion`` as
+same object ``dreamprint convert`` builds), :func:`export_job` (``job.run.run_conversion`` as
 a worker job) and :class:`ExportDialog`, which runs it on a worker thread with a progress bar,
 time remaining and Cancel (the engine removes a cancelled job's partial folder), then shows a
 summary from the manifest. Where the slabs run is the engine's choice too
@@ -87,7 +87,7 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
     ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear";
     ``intent`` the rendering intent, None for the profile's)."""
-    from ..engine.pipeline import ConvertSettings
+    from ..job.plan import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
         printer = printer.path or printer.name
@@ -106,8 +106,8 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
 def export_job(settings, preflight=True):
     """A worker job running the conversion: progress items are ``ConvertProgress``.
     ``preflight``: an estimate already made for these settings (recorded in the manifest as
-    is), or True to make it first (``pipeline.run_conversion``)."""
-    from ..engine.pipeline import run_conversion
+    is), or True to make it first (``job.run.run_conversion``)."""
+    from ..job.run import run_conversion
 
     return generator_job(lambda cancel: run_conversion(settings, cancel, preflight=preflight))
 

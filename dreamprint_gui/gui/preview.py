@@ -8,7 +8,7 @@ footnote under them says how the preview grid relates to the print's. Controls: 
 density scale, background (Clear resin or nothing), content intent (auto, fog or solid:
 ``engine.content``, with what auto picked and why), voxel edges of voxel models (sharp or
 smooth), and a slice scrubber showing the halftoned material labels of any printer layer
-(``pipeline.halftone_layer``) at full resolution with zoom and pan (:mod:`.layer_view`), in the
+(``job.slab.halftone_layer``) at full resolution with zoom and pan (:mod:`.layer_view`), in the
 slice PNGs' own colour codes (:mod:`.materials`). The engine's pre-flight of the job
 (``engine.preflight``) runs after each preview; its warnings show in the Warnings box. Sampling,
 prediction, halftoning and the pre-flight run on worker threads (:mod:`.workers`); the page
@@ -253,7 +253,7 @@ class PreviewPage(QWidget):
     def _new_source(self, path: str) -> None:
         """A new source starts on auto content and its reader's own sampling; the voxel-edge
         choice is offered only for sources that have one (voxel models)."""
-        from ..io.volumes.base import reader_options
+        from ..io.volumes.registry import reader_options
 
         try:
             takes = reader_options(path)
@@ -465,7 +465,7 @@ class PreviewPage(QWidget):
         ctx = self.ctx
 
         def job(report, cancel):
-            from ..engine.pipeline import halftone_layer
+            from ..job.slab import halftone_layer
 
             return ctx, layer, np.asarray(halftone_layer(ctx.settings, layer, context=ctx))
 
@@ -529,7 +529,7 @@ def _box(size_mm):
 def _density_threshold() -> float | None:
     """The job pipeline's background threshold (1/mm), so the preview matches the export."""
     try:
-        from ..engine import pipeline
+        from ..job import plan as pipeline
     except ImportError:
         return None
     return getattr(pipeline, "DEFAULT_DENSITY_THRESHOLD", None)

@@ -1,6 +1,6 @@
 """What the preview shows, computed by the engine on a coarse grid (no Qt here).
 
-Defines :class:`PreviewData`, :func:`job_context` (the export's own ``pipeline.prepare_job``
+Defines :class:`PreviewData`, :func:`job_context` (the export's own ``job.plan.prepare_job``
 context, reused while only the size, density scale or background change) and
 :func:`compute_preview`: the source sampled on a downsampled, isotropic grid of the job's
 physical size (``VolumeSource.sample_slab``), and the predicted print of the same voxels after
@@ -75,7 +75,7 @@ def opacity_per_voxel(sigma_per_mm: NDArray, voxel_mm: float) -> NDArray[np.floa
 
 
 def job_context(settings, previous=None):
-    """The engine's ``JobContext`` for ``settings`` (``pipeline.prepare_job``).
+    """The engine's ``JobContext`` for ``settings`` (``job.plan.prepare_job``).
 
     When only the size, density scale or background changed since ``previous`` (same source,
     content intent, sampling, profile, printer, halftoning and seed), the open source, the
@@ -84,11 +84,11 @@ def job_context(settings, previous=None):
     """
     from dataclasses import replace
 
-    from ..engine.halftone import Halftoner
-    from ..engine.pipeline import prepare_job
     from ..engine.printer import EMPTY_LABEL
     from ..engine.profile import INKS
     from ..io.volumes import grid_for_source
+    from ..job.halftone import Halftoner
+    from ..job.plan import prepare_job
 
     same = ("source", "profile", "printer", "halftone", "seed", "table_size", "objective",
             "source_options", "density_threshold", "content", "sampling")

@@ -5,7 +5,7 @@ thread, carry progress, the result, a failure or a cancellation back to the GUI 
 :func:`run_task` (starts one on its own QThread), :func:`generator_job`, :func:`abandonable`
 and :func:`wait_all`.
 
-The engine's long operations are generators yielding progress (``pipeline.run_conversion``)
+The engine's long operations are generators yielding progress (``job.run.run_conversion``)
 or functions taking a progress callback (``gamut.get_tables``); both are driven by the same
 code as on the command line. Cancel is a :class:`threading.Event` the engine checks, plus a
 check between yields, so a cancelled generator is closed (its ``finally`` clean-up runs).

@@ -18,7 +18,7 @@ from dreamprint_gui.engine.gamut.alignment import (
     grey_rho_k,
     interpolate_block,
 )
-from dreamprint_gui.engine.vec16 import (
+from dreamprint_gui.job.sample_label.vec16 import (
     accumulate8,
     grey_rho_k16,
     transpose16x12,
@@ -173,7 +173,7 @@ def test_accumulate8_adds_eight_floats_in_double():
 
 @pytest.mark.parametrize("m", [0, 1, 7, 8, 9, 1023, ROW_BLOCK])
 def test_block_conc_sums_is_the_fixed_order_sum(m):
-    from dreamprint_gui.engine.layer_kernel import block_conc_sums
+    from dreamprint_gui.job.sample_label.layer_kernel import block_conc_sums
 
     rng = np.random.default_rng(m)
     C = rng.random(8 * ROW_STRIDE).astype(np.float32)

@@ -3,7 +3,7 @@
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.engine.vector_math import exp2_f64, log2_f64
+from dreamprint_gui.job.sample_label.vector_math import exp2_f64, log2_f64
 
 
 @njit(error_model="numpy")

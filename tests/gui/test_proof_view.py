@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from dreamprint_gui.engine.pipeline import ConvertSettings
 from dreamprint_gui.gui.proof_view import ProofPage
+from dreamprint_gui.job.plan import ConvertSettings
 
 
 def _page(qtbot, table_size):

@@ -10,18 +10,15 @@ import pytest
 
 from dreamprint_gui.cli import main
 from dreamprint_gui.engine.content import SOLID_SIGMA, choose_content, is_binary_mask
-from dreamprint_gui.engine.pipeline import (
-    ConvertSettings,
-    halftone_layer,
-    prepare_job,
-    run_conversion,
-)
 from dreamprint_gui.engine.preflight import preflight
 from dreamprint_gui.engine.printer import EMPTY_LABEL, load_printer, material_legend
 from dreamprint_gui.engine.profile import INKS
 from dreamprint_gui.errors import DreamPrintError
-from dreamprint_gui.io.png_slices import read_png_labels
 from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.job.encode.png_slices import read_png_labels
+from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+from dreamprint_gui.job.run import run_conversion
+from dreamprint_gui.job.slab import halftone_layer
 
 TABLE = 9
 CL = INKS.index("Cl")
@@ -102,7 +99,7 @@ def test_sampling_nearest_and_linear(knight):
 
 
 def test_sampling_nearest_refused_for_a_trilinear_source(tmp_path):
-    from dreamprint_gui.engine.pipeline import source_options_for
+    from dreamprint_gui.job.plan import source_options_for
 
     assert source_options_for("demo", {}, "fog", "linear") == {}
     with pytest.raises(DreamPrintError, match="voxel models"):

@@ -5,10 +5,11 @@ per-layer concentration sums and the clamp report, bit for bit, for any slab par
 import numpy as np
 import pytest
 
-from dreamprint_gui.engine.dense_job import dense_slab_labels
-from dreamprint_gui.engine.pipeline import ConvertSettings, _labels_of_slab, prepare_job
 from dreamprint_gui.io.volumes.base import SlabBuffers
 from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume
+from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+from dreamprint_gui.job.sample_label.dense_job import dense_slab_labels
+from dreamprint_gui.job.slab import _labels_of_slab
 
 
 def _cloud(shape, channels, seed=5):
@@ -107,9 +108,9 @@ def test_scalar_image_fused_path_equals_sample_then_label(tmp_path, window, colo
     """A scalar image (VTK, MetaImage, NRRD) through its window and colour table: the fused path
     (``window_slab_labels``) writes what sample_slab + slab_labels write, for any partition,
     including the zeroed density outside the image when the window starts below 0."""
-    from dreamprint_gui.engine.dense_job import window_slab_labels
     from dreamprint_gui.io.volumes.dense import colormap_lut
     from dreamprint_gui.io.volumes.vtkimage import ImageSource
+    from dreamprint_gui.job.sample_label.dense_job import window_slab_labels
 
     ctx = prepare_job(ConvertSettings(source="demo", output=tmp_path / "J", height_mm=0.5,
                                       table_size=17, seed=2, density_threshold=0.0,

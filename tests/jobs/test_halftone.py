@@ -9,7 +9,7 @@ the same 5-sigma i.i.d. bound, which it must beat by far.
 import numpy as np
 import pytest
 
-from dreamprint_gui.engine.halftone import (
+from dreamprint_gui.job.halftone import (
     Halftoner,
     blue_noise_mask,
     box_for_voxel,
@@ -119,7 +119,7 @@ def _first_crossing(c, t, order):
 def test_pick_label_is_the_first_crossing():
     from numba import njit
 
-    from dreamprint_gui.engine.halftone import INK_ORDER, pick_label
+    from dreamprint_gui.job.halftone import INK_ORDER, pick_label
 
     @njit
     def labels(conc, t, order):
@@ -148,7 +148,7 @@ def test_pick_label_is_the_first_crossing():
 def test_label_rows_gives_pick_labels_answers():
     """The branch-free, vectorised form used by the print job equals the written-out rule on
     the same awkward inputs (negative and NaN shares, all-zero voxels, t = 0, 1 and NaN)."""
-    from dreamprint_gui.engine.halftone import INK_ORDER, label_rows
+    from dreamprint_gui.job.halftone import INK_ORDER, label_rows
 
     rng = np.random.default_rng(9)
     n = 3000

@@ -10,7 +10,7 @@ import textwrap
 import pytest
 
 from dreamprint_gui.errors import DreamPrintError
-from dreamprint_gui.io.job_export import JobWriter, check_target, slice_name
+from dreamprint_gui.job.write import JobWriter, check_target, slice_name
 
 
 def _leftovers(folder):
@@ -72,7 +72,7 @@ def test_killed_process_leaves_no_final_folder_and_is_cleaned_later(tmp_path):
     target = tmp_path / "JOB"
     code = textwrap.dedent(f"""
         import sys, time
-        from dreamprint_gui.io.job_export import JobWriter
+        from dreamprint_gui.job.write import JobWriter
         with JobWriter({str(target)!r}) as w:
             (w.slices_dir / "00000.png").write_bytes(b"x")
             print("writing", flush=True)

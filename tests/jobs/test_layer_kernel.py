@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.engine.gamut import lookup_and_align_into
-from dreamprint_gui.engine.pipeline import ConvertSettings, _labels_of_slab, prepare_job
+from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+from dreamprint_gui.job.slab import _labels_of_slab
 
 
 @pytest.mark.parametrize("halftone", ["blue-noise", "random"])

@@ -13,16 +13,12 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.engine.pipeline import (
-    ConvertSettings,
-    JobCancelled,
-    halftone_layer,
-    prepare_job,
-    run_conversion,
-)
 from dreamprint_gui.errors import DreamPrintError
-from dreamprint_gui.io.job_check import check_job
-from dreamprint_gui.io.png_slices import read_png_labels
+from dreamprint_gui.job.check import check_job
+from dreamprint_gui.job.encode.png_slices import read_png_labels
+from dreamprint_gui.job.plan import ConvertSettings, JobCancelled, prepare_job
+from dreamprint_gui.job.run import run_conversion
+from dreamprint_gui.job.slab import halftone_layer
 
 TABLE = 17  # small colour tables keep the suite fast; the pipeline is the same at 100
 
@@ -149,8 +145,8 @@ def test_same_slices_when_compiled_for_another_cpu(reference_job, tmp_path):
     same bytes as for this machine's CPU: no fast-math, explicit vectors lowered exactly."""
     job, _, _ = reference_job
     out = tmp_path / "J"
-    code = ("import sys; from dreamprint_gui.engine.pipeline import ConvertSettings, "
-            "run_conversion\n"
+    code = ("import sys; from dreamprint_gui.job.plan import ConvertSettings\n"
+            "from dreamprint_gui.job.run import run_conversion\n"
             f"s = ConvertSettings(source='demo', output=sys.argv[1], height_mm=0.6, "
             f"table_size={TABLE}, seed=3, workers=1, slab_layers=3)\n"
             "for _ in run_conversion(s):\n    pass\n")

@@ -8,8 +8,8 @@ from PIL import Image
 
 from dreamprint_gui.engine.printer import load_printer
 from dreamprint_gui.errors import DreamPrintError
-from dreamprint_gui.io.label_deflate import label_zlib
-from dreamprint_gui.io.png_slices import encode_labels_png, read_png_labels
+from dreamprint_gui.job.encode.label_deflate import label_zlib
+from dreamprint_gui.job.encode.png_slices import encode_labels_png, read_png_labels
 
 
 @pytest.mark.parametrize("uniform", [False, True])  # short runs, long runs
@@ -108,7 +108,7 @@ def test_any_palette_and_label_count_encodes():
 
 
 def test_block_code_is_a_complete_prefix_code_within_15_bits():
-    from dreamprint_gui.io.label_deflate import _huffman_lengths
+    from dreamprint_gui.job.encode.label_deflate import _huffman_lengths
 
     rng = np.random.default_rng(9)
     for weights in ([1], [5, 1], list(rng.integers(1, 10**6, 286)), [2**k for k in range(40)]):

@@ -36,11 +36,11 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...job.sample_label.vec16 import grey_rho_k16, transpose16x12, weighted_sum16
+from ...job.sample_label.vector_math import exp2_f64, log2_f64
 from ..colorimetry import observer_for
 from ..mixture import mixture_colour
 from ..profile import INKS, InkProfile
-from ..vec16 import grey_rho_k16, transpose16x12, weighted_sum16
-from ..vector_math import exp2_f64, log2_f64
 from .forward import N_COLOUR_INKS
 from .grey import grey_concentrations, rho_k_for
 from .tables import (

@@ -3,7 +3,7 @@
 Defines
 -------
 - :class:`EngineLabels`: a print job prepared exactly as ``dreamprint convert`` prepares it
-  (:func:`..pipeline.prepare_job`), labelled a layer at a time by :func:`..pipeline.
+  (:func:`...job.plan.prepare_job`), labelled a layer at a time by :func:`...job.slab.
   halftone_layer` (byte-identical to the exported slice).
 - :class:`JobFolderLabels`: the labels of an exported job, read back from its PNG slices with
   the manifest's palette and slice layout; the folder is checked first (manifest fields, every
@@ -35,10 +35,10 @@ def is_job_folder(path: str) -> bool:
 
 
 class EngineLabels:
-    """Labels of a job made from ``settings`` (:class:`..pipeline.ConvertSettings`)."""
+    """Labels of a job made from ``settings`` (:class:`...job.plan.ConvertSettings`)."""
 
     def __init__(self, settings: Any) -> None:
-        from ..pipeline import prepare_job
+        from ...job.plan import prepare_job
         from ..profile import load_profile
 
         self.settings = settings
@@ -53,7 +53,7 @@ class EngineLabels:
         self.halftoning = self.ctx.halftoner.describe()
 
     def layer(self, z: int) -> NDArray[np.uint8]:
-        from ..pipeline import halftone_layer
+        from ...job.slab import halftone_layer
 
         return halftone_layer(self.settings, int(z), context=self.ctx)
 
@@ -62,8 +62,8 @@ class JobFolderLabels:
     """Labels of an exported job folder (``JOB/manifest.json`` + ``JOB/slices/*.png``)."""
 
     def __init__(self, job: str | Path, profile: str | None = None) -> None:
-        from ...io.job_export import MANIFEST, SLICES, slice_name
         from ...io.volumes import grid_for_source, open_source
+        from ...job.write import MANIFEST, SLICES, slice_name
         from ..profile import load_profile
 
         job = Path(job)
@@ -137,8 +137,8 @@ class JobFolderLabels:
                                   f"source at the recorded size ({self.grid.shape_xyz})", mpath)
 
     def layer(self, z: int) -> NDArray[np.uint8]:
-        from ...io.job_export import slice_name
-        from ...io.png_slices import read_png_labels
+        from ...job.encode.png_slices import read_png_labels
+        from ...job.write import slice_name
 
         path = self.folder / slice_name(int(z), self.nz)
         try:

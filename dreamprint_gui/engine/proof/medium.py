@@ -130,7 +130,7 @@ def block_fractions(layer_labels: Callable[[int], NDArray[np.uint8]],
         acc = np.zeros((ncy, ncx, N_LABELS), np.float64)
         for z in zs:
             if cancelled is not None and cancelled():
-                from ..pipeline import JobCancelled
+                from ...job.plan import JobCancelled
 
                 raise JobCancelled("the proof was cancelled")
             if z < nz:

@@ -39,7 +39,7 @@ _CL = INKS.index("Cl")
 
 
 def _convert_settings(s: Any):
-    from ..pipeline import ConvertSettings
+    from ...job.plan import ConvertSettings
 
     return ConvertSettings(source=s.source, output=None, profile=s.profile, printer=s.printer,
                            height_mm=s.height_mm, size_mm=s.size_mm,

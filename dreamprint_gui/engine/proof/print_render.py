@@ -155,7 +155,7 @@ def render_print(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArray,
             max_depth, key_light, floor))
         for i in range(len(views)):
             if cancelled is not None and cancelled():
-                from ..pipeline import JobCancelled
+                from ...job.plan import JobCancelled
 
                 raise JobCancelled("the proof was cancelled")
             img = mi.render(scene, sensor=i, spp=int(spp),

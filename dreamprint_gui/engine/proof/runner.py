@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import DreamPrintError
-from ..pipeline import JobCancelled
+from ...job.plan import JobCancelled
 
 __all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_proof",
            "write_proof", "print_xyz", "MAX_RESOLUTION", "MAX_SPP", "DEFAULT_SPP",
@@ -80,7 +80,7 @@ class ProofProgress:
 
 def validate(s: ProofSettings) -> None:
     """One-line errors for absurd settings, before any work."""
-    from ..halftone import HALFTONE_METHODS
+    from ...job.halftone import HALFTONE_METHODS
     from .methods import METHODS
 
     if not 8 <= int(s.resolution) <= MAX_RESOLUTION:

@@ -1,7 +1,10 @@
-"""The one interface every volume reader offers, the printer grid, and format dispatch.
+"""The one interface every volume reader offers, and the printer grid.
 
 Defines :class:`PrintGrid`, :func:`grid_for_source`, the :class:`VolumeSource` protocol,
-:func:`voxel_centres`, :func:`linear_to_srgb`, :func:`sniff_format` and :func:`open_source`.
+:class:`SlabBuffers`, :func:`voxel_centres`, :func:`linear_to_srgb`. The registry of source
+kinds (:func:`open_source`, :func:`sniff_format`, ``FORMATS``, ...) is :mod:`.registry`, which
+imports the readers, which import this module; the registry's names are still reachable from
+here (lazily, see :func:`__getattr__`) for older imports.
 
 Conventions shared by every reader:
 
@@ -22,9 +25,7 @@ Conventions shared by every reader:
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -33,9 +34,7 @@ from ...errors import DreamPrintError
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
            "linear_to_srgb_inplace",
-           "uniform_rgb", "SlabBuffers",
-           "sniff_format", "open_source", "inspect_file", "inspect_source", "reader_options",
-           "FORMATS"]
+           "uniform_rgb", "SlabBuffers"]
 
 
 @dataclass(frozen=True)
@@ -209,155 +208,21 @@ class VolumeSource(Protocol):
 
     # Optional: ``layer_plan(grid, z0, z1, *, density_scale=1.0)`` -> the arguments of the
     # compiled call named by the source's ``layer_kind`` (default "dense":
-    # ``engine.dense_job.dense_slab_labels``; "leaf_grid": ``engine.leaf_grid_job``) up to its
-    # layer arrays, or None. A source offers it so that a print job samples and labels one
-    # layer at a time (DenseSource, VdbSource, NanoVdbSource).
+    # ``job.sample_label.dense_job.dense_slab_labels``; "leaf_grid":
+    # ``job.sample_label.leaf_grid_job``) up to its layer arrays, or None. A source offers it
+    # so that a print job samples and labels one layer at a time (DenseSource, VdbSource,
+    # NanoVdbSource).
 
 
-# format key -> (module, extensions)
-FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "openvdb": ("openvdb", (".vdb",)),
-    "nanovdb": ("nanovdb", (".nvdb",)),
-    "vtk": ("vtkimage", (".vti", ".vtk", ".mhd", ".mha", ".nrrd", ".nhdr")),
-    "radiance-npz": ("radiance", (".npz",)),
-    "radiance-exr": ("radiance", (".exr",)),
-    "splats": ("splats", (".ply", ".spz", ".splat", ".ksplat", ".sog")),
-    "magicavoxel": ("magicavoxel", (".vox",)),
-    "instant-ngp": ("ingp", (".ingp", ".msgpack")),
-    "ingp-volume": ("ingp_volume", ()),     # told by name: NNNN_WxH.png, WxHxD_C.bin
-}
+_REGISTRY_NAMES = ("FORMATS", "sniff_format", "inspect_file", "inspect_source", "open_source",
+                   "reader_options", "OPTION_ALIASES")
 
 
-def sniff_format(path: Path) -> str:
-    """Format key of ``path`` from its extension, falling back to its first bytes."""
-    if path.is_dir() or path.name == "meta.json":
-        from .splat_formats import is_sog
+def __getattr__(name: str):
+    """The registry's names (moved to :mod:`.registry`), imported on first use so that this
+    module, which every reader imports, imports no reader."""
+    if name in _REGISTRY_NAMES:
+        from . import registry
 
-        if is_sog(path):
-            return "splats"
-    from .ingp_volume import is_ingp_volume_dir, is_ingp_volume_name
-
-    if path.is_dir():
-        return "ingp-volume" if is_ingp_volume_dir(path) else "radiance-exr"
-    if is_ingp_volume_name(path.name):
-        return "ingp-volume"
-    suffix = path.suffix.lower()
-    for key, (_mod, exts) in FORMATS.items():
-        if suffix in exts:
-            return key
-    try:
-        with open(path, "rb") as f:
-            head = f.read(64)
-    except OSError as exc:
-        raise DreamPrintError(f"cannot read: {exc.strerror or exc}", path) from None
-    if head[:4] == b"\x20\x42\x44\x56":
-        return "openvdb"
-    if head[:7] == b"NanoVDB":
-        return "nanovdb"
-    if head[:4] in (b"ply\n", b"ply\r"):
-        return "splats"
-    if head[:2] == b"\x1f\x8b" or head[:4] == b"NGSP":
-        return "splats"
-    if head[:4] == b"VOX ":
-        return "magicavoxel"
-    if head[:4] == b"PK\x03\x04":
-        return "radiance-npz"
-    if head[:4] == b"\x76\x2f\x31\x01":
-        return "radiance-exr"
-    if head[:4] == b"NRRD" or head.startswith(b"# vtk DataFile") or b"<VTKFile" in head \
-            or head.startswith(b"ObjectType"):
-        return "vtk"
-    raise DreamPrintError("not a volume format DreamPrint reads (OpenVDB, NanoVDB, VTK image, "
-                          "MetaImage, NRRD, radiance .npz/EXR stack, splat PLY/SPZ/.splat/"
-                          ".ksplat/SOG, MagicaVoxel, InstantNGP snapshot or volume export)", path)
-
-
-def inspect_file(path_or_name: str | os.PathLike) -> dict:
-    """The ``inspect`` description of a file, without choosing grids or options (a file whose
-    density grid is empty or missing can still be inspected)."""
-    return inspect_source(path_or_name)[0]
-
-
-def inspect_source(path_or_name: str | os.PathLike) -> tuple[dict, VolumeSource | None]:
-    """(the ``inspect`` description, the source opened with default options for it, or None
-    for the formats described without opening a source: OpenVDB, NanoVDB)."""
-    import importlib
-
-    if str(path_or_name) == "demo":
-        src = open_source("demo")
-        return src.info(), src
-    path = Path(path_or_name)
-    if not path.exists():
-        raise DreamPrintError("no such file", path)
-    key = sniff_format(path)
-    module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
-    if hasattr(module, "inspect_path"):
-        return module.inspect_path(path), None
-    try:
-        src = module.open_path(path, fmt=key)
-    except DreamPrintError:
-        if not hasattr(module, "describe_path"):  # a reader that can describe what it can't map
-            raise
-        return module.describe_path(path), None
-    return src.info(), src
-
-
-def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
-    """Open a volume file (or ``"demo"``, the built-in procedural cloud) as a source.
-
-    ``options`` are passed to the format's reader (e.g. ``density_grid="density"``,
-    ``window=(lo, hi)``, ``level_set="solid"``); unknown options are refused by the reader.
-    """
-    import importlib
-
-    if str(path_or_name) == "demo":
-        from .demo import DemoCloud
-        return DemoCloud(**_checked_options(DemoCloud, options, "demo"))
-    path = Path(path_or_name)
-    if not path.exists():
-        raise DreamPrintError("no such file", path)
-    key = sniff_format(path)
-    module = importlib.import_module(f"{__package__}.{FORMATS[key][0]}")
-    return module.open_path(path, fmt=key, **_checked_options(module.open_path, options, path))
-
-
-def reader_options(path_or_name: str | os.PathLike) -> set[str]:
-    """The option names the reader of ``path_or_name`` takes (empty for an unknown format)."""
-    import importlib
-    import inspect
-
-    if str(path_or_name) == "demo":
-        from .demo import DemoCloud
-        func = DemoCloud
-    else:
-        path = Path(path_or_name)
-        if not path.exists():
-            return set()
-        module = importlib.import_module(f"{__package__}.{FORMATS[sniff_format(path)][0]}")
-        func = module.open_path
-    return {p.name for p in inspect.signature(func).parameters.values()
-            if p.name not in ("self", "path", "fmt")}
-
-
-OPTION_ALIASES = {"grid": "density_grid", "color": "colour", "colormap": "colormap",
-                  "cmap": "colormap"}
-
-
-def _checked_options(func, options: dict, where) -> dict:
-    """Refuse options the reader does not take, naming the ones it does (``grid`` is accepted
-    for ``density_grid``, ``color`` for ``colour``)."""
-    import inspect
-
-    params = [p for p in inspect.signature(func).parameters.values()
-              if p.kind == p.KEYWORD_ONLY or (p.name not in ("self", "path", "fmt")
-                                              and p.kind == p.POSITIONAL_OR_KEYWORD)]
-    names = {p.name for p in params}
-    out = {}
-    for k, v in options.items():
-        k2 = k if k in names else OPTION_ALIASES.get(k, k)
-        if k2 not in names:
-            known = ", ".join(sorted(names)) or "none"
-            raise DreamPrintError(f"unknown reader option {k!r} (this format takes: {known})",
-                                  where)
-        out[k2] = v
-    return out
+        return getattr(registry, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

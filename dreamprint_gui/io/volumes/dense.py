@@ -172,7 +172,7 @@ class DenseSource:
 
     def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
                    ) -> tuple | None:
-        """The arguments of :func:`...engine.dense_job.dense_slab_labels` before its layer
+        """The arguments of :func:`...job.sample_label.dense_job.dense_slab_labels` before its layer
         arrays, for layers z0..z1-1: the samples :meth:`sample_slab` gives, a layer at a time.
         None for linear colour (its conversion to sRGB is :meth:`sample_slab`'s)."""
         check_slab(grid, z0, z1)

@@ -4,8 +4,8 @@ time.
 Defines :func:`axis_map` (per-axis trilinear indices/weights), :func:`rows_with_data`,
 :class:`DenseLayers` (the per-slab plan and working arrays) with :func:`dense_layer` (one output
 layer, compiled, for callers that consume a layer at a time: the print job's fused path,
-:mod:`...engine.dense_job`), and :func:`sample_dense` / :func:`sample_dense_density` (whole
-slabs).
+:mod:`...job.sample_label.dense_job`), and :func:`sample_dense` / :func:`sample_dense_density`
+(whole slabs).
 
 Trilinear interpolation is separable for an axis-aligned grid, so each axis is mapped once per
 slab (numpy, O(n)) and evaluated x first: every source row an output layer needs is interpolated

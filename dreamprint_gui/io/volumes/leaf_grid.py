@@ -169,7 +169,7 @@ def leaf_grid_values(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, out):
 class LeafGridPlan:
     """A fog volume's densified copy, made on first use and kept (:func:`densify`; ``None``
     when it does not apply), and the per-slab arguments of
-    :func:`...engine.leaf_grid_job.leaf_grid_slab_labels`."""
+    :func:`...job.sample_label.leaf_grid_job.leaf_grid_slab_labels`."""
 
     def __init__(self, blocks, origin: np.ndarray, scale: np.ndarray):
         self._blocks = blocks

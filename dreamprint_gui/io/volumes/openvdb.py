@@ -479,14 +479,14 @@ class VdbSource:
             self._dense_tried = True
 
     # A fog volume with one uniform colour is sampled and labelled a layer at a time from a
-    # dense copy of its leaves (engine.leaf_grid_job), bit-identical to sample_slab.
+    # dense copy of its leaves (job.sample_label.leaf_grid_job), bit-identical to sample_slab.
     layer_kind = "leaf_grid"
 
     def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
                    ) -> tuple | None:
-        """The arguments of :func:`...engine.leaf_grid_job.leaf_grid_slab_labels` before its
-        layer arrays (:class:`.leaf_grid.LeafGridPlan`), or None: a level set, colour grids or a
-        grid too large to densify take :meth:`sample_slab`."""
+        """The arguments of :func:`...job.sample_label.leaf_grid_job.leaf_grid_slab_labels`
+        before its layer arrays (:class:`.leaf_grid.LeafGridPlan`), or None: a level set,
+        colour grids or a grid too large to densify take :meth:`sample_slab`."""
         check_slab(grid, z0, z1)
         if self.is_level_set or self.colour_grids:
             return None

@@ -210,12 +210,12 @@ class ImageSource:
                 sigma[out] = 0.0
         return rgb, sigma
 
-    layer_kind = "window"  # engine.dense_job.window_slab_labels
+    layer_kind = "window"  # job.sample_label.dense_job.window_slab_labels
 
     def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
                    ) -> tuple:
-        """The arguments of :func:`...engine.dense_job.window_slab_labels` before its layer
-        arrays, for layers z0..z1-1: :meth:`sample_slab`'s samples and window, a layer at a
+        """The arguments of :func:`...job.sample_label.dense_job.window_slab_labels` before its
+        layer arrays, for layers z0..z1-1: :meth:`sample_slab`'s samples and window, a layer at a
         time, plus one layer's sample buffer."""
         check_slab(grid, z0, z1)
         vol = self.volume

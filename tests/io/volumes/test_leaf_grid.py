@@ -5,12 +5,13 @@ writes what the general path writes (sample the slab, then ``slab_labels``)."""
 import numpy as np
 import pytest
 
-from dreamprint_gui.engine.leaf_grid_job import leaf_grid_slab_labels
-from dreamprint_gui.engine.pipeline import ConvertSettings, _labels_of_slab, prepare_job
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.base import SlabBuffers
 from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, leaf_grid_layer
 from dreamprint_gui.io.volumes.sampling import SparseBlocks
+from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+from dreamprint_gui.job.sample_label.leaf_grid_job import leaf_grid_slab_labels
+from dreamprint_gui.job.slab import _labels_of_slab
 
 
 def _random_blocks(seed=3, bg=0.0):
@@ -89,9 +90,9 @@ def test_densify_refuses_what_it_cannot_reproduce():
 @pytest.mark.parametrize("threshold", [None, 0.0])
 def test_fused_path_writes_what_the_general_path_writes(tmp_path, monkeypatch, threshold):
     src = _Blocks(_random_blocks(seed=8))
-    from dreamprint_gui.engine import pipeline
+    from dreamprint_gui.job import plan
 
-    monkeypatch.setattr(pipeline, "_open_source", lambda spec, options, *_: src)
+    monkeypatch.setattr(plan, "_open_source", lambda spec, options, *_: src)
     s = ConvertSettings(source="vdb-like", output=tmp_path / "j", size_mm=(6, 6, 6),
                         density_threshold=threshold)
     ctx = prepare_job(s)

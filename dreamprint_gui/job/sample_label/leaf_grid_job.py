@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..io.volumes.leaf_grid import leaf_grid_layer
+from ...io.volumes.leaf_grid import leaf_grid_layer
 from .layer_kernel import layer_labels
 
 __all__ = ["leaf_grid_slab_labels"]

@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import DreamPrintError
-from .job_export import MANIFEST, SLICES, slice_name
-from .png_slices import read_png_labels
+from .encode.png_slices import read_png_labels
+from .write import MANIFEST, SLICES, slice_name
 
 __all__ = ["check_job", "Z_LIMIT"]
 

@@ -26,8 +26,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .gamut.alignment import ROW_BLOCK, ROW_STRIDE, block_buffers, lookup_align_block, stage_voxel
-from .halftone import fg_threshold, label_rows, mask_columns, scatter_counts
+from ...engine.gamut.alignment import (
+    ROW_BLOCK,
+    ROW_STRIDE,
+    block_buffers,
+    lookup_align_block,
+    stage_voxel,
+)
+from ..halftone import fg_threshold, label_rows, mask_columns, scatter_counts
 from .vec16 import accumulate8
 
 __all__ = ["layer_labels", "slab_labels", "block_conc_sums"]

@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..io.volumes.dense import _window_kernel
-from ..io.volumes.dense_sampler import COLOUR, COLOUR_WHERE_DENSE, DENSITY, RAW, dense_layer
+from ...io.volumes.dense import _window_kernel
+from ...io.volumes.dense_sampler import COLOUR, COLOUR_WHERE_DENSE, DENSITY, RAW, dense_layer
 from .layer_kernel import layer_labels
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]

@@ -1,0 +1,334 @@
+"""The print-job conversion (paper Fig. 2 and section 4), streamed slab by slab.
+
+Defines :func:`run_conversion`: a generator driven by the CLI and the GUI alike; it plans the
+job (:mod:`.plan`), runs its slabs (:func:`.slab.run_slab`: sample -> label -> encode -> write)
+on Dask, yields progress and returns the manifest dict once the job folder is complete and
+renamed into place (:mod:`.write`). Only a slab is ever in memory per worker. Slabs run through
+Dask: the threaded scheduler (default, all cores), the multiprocessing scheduler
+(``scheduler="processes"``), or a ``dask.distributed`` cluster (``scheduler="tcp://host:8786"``)
+whose workers write the slices into the job's temporary folder directly, so that folder must be
+on a path every worker sees (docs/print-jobs.md). Every label is a function of the voxel's
+position, the seed and its concentrations, never of the slab or worker, so the slices are
+byte-identical whatever the slab size, worker count or scheduler.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import queue
+import threading
+import time
+from collections.abc import Generator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..engine.profile import INKS
+from ..errors import DreamPrintError
+from .plan import (
+    ConvertProgress,
+    ConvertSettings,
+    JobCancelled,
+    JobContext,
+    _scheduler_kind,
+    _slabs,
+    prepare_job,
+)
+from .slab import run_slab
+
+__all__ = ["run_conversion"]
+
+_LABELS = (*INKS, "empty")
+
+
+# ----------------------------------------------------------------------------- scheduling
+def _merge_clamped(acc: dict[str, float], add: dict[str, float]) -> None:
+    for k, v in add.items():
+        if k.startswith("max"):
+            acc[k] = max(acc.get(k, 0.0), v)
+        else:
+            acc[k] = acc.get(k, 0.0) + v
+
+
+def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
+    """Run slabs with Dask's local scheduler; put each result (or the exception) on out_q."""
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+
+    import dask
+
+    stop = threading.Event()
+
+    def pretask(key, dsk, state):
+        if stop.is_set() or (cancel is not None and cancel.is_set()):
+            raise JobCancelled()
+
+    def posttask(key, result, dsk, state, worker_id):
+        if isinstance(key, tuple) and key[0] == "slab":
+            out_q.put(("result", result))
+
+    dsk: dict[Any, Any] = {"ctx": ctx}
+    keys = []
+    for i, (z0, z1) in enumerate(slabs):
+        if kind == "processes":
+            dsk[("slab", i)] = (run_slab, "ctx", z0, z1, slices_dir)
+        else:
+            dsk[("slab", i)] = (run_slab, "ctx", z0, z1, slices_dir, cancel)
+        keys.append(("slab", i))
+    if kind == "processes":
+        import multiprocessing as mp
+
+        pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"))
+        get = dask.multiprocessing.get
+    else:
+        pool = ThreadPoolExecutor(workers)
+        get = dask.threaded.get
+    # dask.local's callback tuple: (start, start_state, pretask, posttask, finish).
+    cb = (None, None, pretask, posttask, None)
+
+    def drive():
+        try:
+            get(dsk, keys, num_workers=workers, pool=pool, callbacks=[cb])
+            out_q.put(("done", None))
+        except BaseException as exc:  # noqa: BLE001 - handed to the consuming generator
+            out_q.put(("error", exc))
+        finally:
+            stop.set()
+            pool.shutdown(wait=True, cancel_futures=True)  # no task outlives the driver
+            out_q.put(("closed", None))
+
+    th = threading.Thread(target=drive, name="dreamprint-dask", daemon=True)
+    th.start()
+    return th, stop
+
+
+def _distributed_results(ctx, slabs, slices_dir, address, out_q, cancel):
+    from distributed import Client, as_completed
+
+    try:
+        client = Client(address, timeout="10s")
+    except (OSError, TimeoutError) as exc:
+        raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    stop = threading.Event()
+
+    def drive():
+        futs = []
+        try:
+            ctx_f = client.scatter(ctx, broadcast=True, hash=False)
+            futs = [client.submit(run_slab, ctx_f, z0, z1, slices_dir, pure=False)
+                    for z0, z1 in slabs]
+            for f in as_completed(futs):
+                if stop.is_set() or (cancel is not None and cancel.is_set()):
+                    raise JobCancelled()
+                out_q.put(("result", f.result()))
+            out_q.put(("done", None))
+        except BaseException as exc:  # noqa: BLE001
+            out_q.put(("error", exc))
+        finally:
+            stop.set()
+            try:
+                if futs:
+                    client.cancel(futs)
+                client.close()
+            finally:
+                out_q.put(("closed", None))
+
+    th = threading.Thread(target=drive, name="dreamprint-distributed", daemon=True)
+    th.start()
+    return th, stop
+
+
+# ----------------------------------------------------------------------------- driver
+def _sha256(path: str) -> str | None:
+    p = Path(path)
+    if not p.is_file():
+        return None
+    h = hashlib.sha256()
+    with open(p, "rb") as f:
+        for block in iter(lambda: f.read(1 << 22), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> dict[str, Any]:
+    from .. import __version__
+
+    s = ctx.settings
+    nx, ny, nz = ctx.shape_xyz
+    n = nx * ny * nz
+    counts = totals["counts"]
+    src_path = s.source if Path(s.source).is_file() else None
+    return {
+        "format": "dreamprint-job",
+        "format_version": 1,
+        "software": {"name": "dreamprint", "version": __version__},
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "source": {"path": str(Path(src_path).absolute()) if src_path else s.source,
+                   "sha256": totals["source_sha256"], "options": s.source_options,
+                   "density_scale": s.density_scale, "sampling": s.sampling,
+                   "content": (ctx.content.to_json() if ctx.content is not None else
+                               {"mode": "fog", "requested": s.content, "reason": ""})},
+        "profile": {"name": ctx.profile_name, "fingerprint": ctx.profile_fingerprint,
+                    "path": None if s.profile is None else str(s.profile),
+                    "objective": getattr(ctx.tables, "objective", s.objective),
+                    "intent": getattr(ctx.tables, "intent", s.intent),
+                    "table_size": s.table_size},
+        "printer": ctx.printer.to_json_dict(),
+        "physical_size_mm": [nx * ctx.printer.voxel_mm[0], ny * ctx.printer.voxel_mm[1],
+                             nz * ctx.printer.voxel_mm[2]],
+        "voxel_mm": list(ctx.printer.voxel_mm),
+        "grid_dimensions": [nx, ny, nz],
+        "requested_size": {"height_mm": s.height_mm,
+                           "size_mm": None if s.size_mm is None else list(s.size_mm)},
+        "seed": s.seed,
+        "halftoning": ctx.halftoner.describe(),
+        "background": {"mode": s.background, "density_threshold_per_mm":
+                       ctx.halftoner.threshold},
+        "slices": {"folder": "slices", "count": nz, "width": nx if ctx.printer.image_columns
+                   == "x" else ny, "height": ny if ctx.printer.image_columns == "x" else nx,
+                   "first": "slices/" + _slice(0, nz), "last": "slices/" + _slice(nz - 1, nz),
+                   "png_mode": ctx.printer.png_mode},
+        "labels": {lab: {"material": (ctx.printer.material_names[i] if i < 6 else "none"),
+                         "rgb": ctx.palette[i].tolist()} for i, lab in enumerate(_LABELS)},
+        "voxel_counts": {lab: int(counts[i]) for i, lab in enumerate(_LABELS)},
+        "mean_concentration": {lab: totals["conc_sums"][i] / n for i, lab in enumerate(_LABELS)},
+        "total_voxels": n,
+        "clamped_density": totals["clamped"],
+        "timings_s": {"total": time.perf_counter() - started, **timings},
+        "execution": {"scheduler": s.scheduler or "threads", "workers": totals["workers"],
+                      "slabs": totals["slabs"]},
+    }
+
+
+def _slice(z: int, nz: int) -> str:
+    from .write import slice_name
+
+    return slice_name(z, nz)
+
+
+def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,
+                   context: JobContext | None = None, preflight: Any = True
+                   ) -> Generator[ConvertProgress, None, dict[str, Any]]:
+    """Convert ``settings.source`` into the job folder ``settings.output``.
+
+    Yields :class:`ConvertProgress`; returns the manifest dict (also written to
+    ``manifest.json``). Setting ``cancel`` (or closing the generator, or Ctrl-C) stops the work
+    and removes the partial job; nothing is ever left under the final name unless complete.
+    ``preflight``: True estimates the job first (:func:`.preflight.preflight`, yielded once
+    with stage "preflight"), a :class:`.preflight.Preflight` already made is used as is, False
+    skips it; the manifest records its estimate and warnings (``preflight``).
+    """
+    from .write import JobWriter, check_target
+
+    started = time.perf_counter()
+    if settings.output is None:
+        raise DreamPrintError("no output folder given (-o JOB)")
+    check_target(settings.output, settings.overwrite)  # before any work
+    yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
+    ctx = context if context is not None else prepare_job(settings)
+    pf = None
+    t_pf = 0.0
+    if preflight is True:
+        from ..engine.preflight import preflight as estimate
+
+        t0 = time.perf_counter()
+        pf = estimate(ctx, seed=settings.seed)
+        t_pf = time.perf_counter() - t0
+    elif preflight is not False and preflight is not None:
+        pf = preflight
+    if pf is not None:
+        yield ConvertProgress("preflight", 0, 0, 0, 0, time.perf_counter() - started, None,
+                              pf.short_line(), preflight=pf)
+    t_prep = time.perf_counter() - started
+    kind = _scheduler_kind(settings)
+    workers = settings.workers or os.cpu_count() or 1
+    slabs = _slabs(ctx, workers)
+    nx, ny, nz = ctx.shape_xyz
+    # Per-layer sums, added exactly (math.fsum) once all are in: the total is then the same
+    # whatever the slab size, the number of workers or the order in which slabs finish.
+    layer_sums = np.zeros((nz, 7))
+    totals: dict[str, Any] = {"counts": np.zeros(7, np.int64),
+                              "clamped": {}, "workers": workers, "slabs": len(slabs)}
+    stage_t = {"sample": 0.0, "lookup_halftone": 0.0, "sample_lookup_halftone": 0.0, "png": 0.0,
+               "write": 0.0}
+    with JobWriter(settings.output, settings.overwrite) as writer:
+        sha_box: dict[str, str | None] = {}
+        sha_th = threading.Thread(target=lambda: sha_box.update(v=_sha256(settings.source)),
+                                  daemon=True)
+        sha_th.start()  # hashing a big source overlaps the conversion
+        yield ConvertProgress("converting", 0, nz, 0, nx * ny * nz,
+                              time.perf_counter() - started, None)
+        out_q: queue.Queue = queue.Queue()
+        slices_dir = str(writer.slices_dir)
+        if kind == "distributed":
+            th, stop = _distributed_results(ctx, slabs, slices_dir, settings.scheduler, out_q,
+                                            cancel)
+        elif kind == "sync":
+            th, stop = _local_results(ctx, slabs, slices_dir, 1, "threads", cancel, out_q)
+        else:
+            th, stop = _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q)
+        error: BaseException | None = None
+        layers = 0
+        t_conv = time.perf_counter()
+        try:
+            while True:
+                try:
+                    what, payload = out_q.get(timeout=0.2)
+                except queue.Empty:
+                    if cancel is not None and cancel.is_set():
+                        writer.request_cancel()
+                        stop.set()
+                    continue
+                if what == "result":
+                    totals["counts"] += np.asarray(payload["counts"], np.int64)
+                    layer_sums[payload["z0"]:payload["z1"]] = payload["conc_sums"]
+                    _merge_clamped(totals["clamped"], payload["clamped"])
+                    for k, v in payload["seconds"].items():
+                        stage_t[k] += v
+                    layers += payload["z1"] - payload["z0"]
+                    el = time.perf_counter() - started
+                    rate = layers / max(1e-9, time.perf_counter() - t_conv)
+                    yield ConvertProgress("converting", layers, nz, layers * nx * ny,
+                                          nx * ny * nz, el, (nz - layers) / rate)
+                elif what == "error":
+                    error = payload
+                elif what == "closed":
+                    break
+        except BaseException:
+            # GeneratorExit (closed by the GUI), KeyboardInterrupt: stop the tasks, wait for
+            # them, then JobWriter removes the partial folder.
+            writer.request_cancel()
+            stop.set()
+            th.join()
+            raise
+        th.join()
+        if error is not None:
+            if isinstance(error, JobCancelled) or (cancel is not None and cancel.is_set()):
+                raise JobCancelled("the conversion was cancelled") from None
+            raise error
+        if cancel is not None and cancel.is_set():
+            raise JobCancelled("the conversion was cancelled")
+        yield ConvertProgress("finishing", nz, nz, nx * ny * nz, nx * ny * nz,
+                              time.perf_counter() - started, 0.0, "writing the manifest")
+        sha_th.join()
+        totals["source_sha256"] = sha_box.get("v")
+        timings = {"prepare": t_prep, "preflight": t_pf, "convert": time.perf_counter() - t_conv,
+                   "worker_stage_sum": stage_t}
+        conc_sums = [math.fsum(layer_sums[:, i]) for i in range(7)]
+        manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
+                                   "conc_sums": conc_sums},
+                             timings, started)
+        manifest["timings_s"]["voxels_per_second"] = (nx * ny * nz) / max(
+            1e-9, manifest["timings_s"]["total"])
+        if pf is not None:
+            manifest["preflight"] = pf.to_json()
+            manifest["warnings"] = [w.to_json() for w in pf.warnings]
+        writer.commit(manifest)
+    from ..engine.preflight import record_rate
+
+    record_rate(nx * ny * nz, timings["convert"])
+    yield ConvertProgress("done", nz, nz, nx * ny * nz, nx * ny * nz,
+                          time.perf_counter() - started, 0.0, str(writer.target))
+    return manifest

@@ -1,0 +1,178 @@
+"""Stages 2-5 of a print job for one slab of layers: sample -> label -> encode -> write.
+
+Per slab of layers ``[z0, z1)``: sample the source on the printer grid (density in 1/mm, the
+volume source's rule) into the worker thread's reused buffers; then one compiled call
+(:func:`.sample_label.layer_kernel.slab_labels`, nogil) does, layer by layer, the background
+threshold (``--background clear|empty``) -> trilinear table lookup of C, M, Y, K, W -> density
+alignment (Clear, K/W grey; paper section 4.2) -> halftone (the rule of
+:func:`.halftone.pick_label`, section 4.3) -> label. A dense grid (a source with a
+``layer_plan``) is sampled a layer at a time into one layer's buffers, each labelled at once by
+the same kernel, in one compiled call (:mod:`.sample_label.dense_job`; OpenVDB/NanoVDB fog
+volumes densified over their leaves: :mod:`.sample_label.leaf_grid_job`). Then each layer is
+encoded to PNG (:mod:`.encode.png_slices`) and written into the job's slices folder.
+
+Defines :func:`run_slab` (one slab task, what :mod:`.run` schedules) and :func:`halftone_layer`
+(the labels (ny, nx) of one layer, for the GUI's slice scrubber, byte-identical to the layer in
+an exported job).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from typing import Any
+
+import numpy as np
+
+from ..errors import DreamPrintError
+from .plan import ConvertSettings, JobCancelled, JobContext, prepare_job
+from .sample_label.dense_job import dense_slab_labels, window_slab_labels
+from .sample_label.layer_kernel import slab_labels
+from .sample_label.leaf_grid_job import leaf_grid_slab_labels
+
+__all__ = ["run_slab", "halftone_layer"]
+
+# A source's ``layer_kind`` -> the compiled call that samples and labels its layers (the
+# arguments: the source's ``layer_plan``, one layer's rgb and density arrays, z0, the kernel's).
+_LAYER_KERNELS = {"dense": dense_slab_labels, "leaf_grid": leaf_grid_slab_labels,
+                  "window": window_slab_labels}
+
+
+def _labels_of_slab(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z0: int,
+                    labels: np.ndarray, counts: np.ndarray, sums: np.ndarray,
+                    stats: np.ndarray) -> None:
+    """Labels (L, ny, nx) of the sampled layers ``z0 .. z0 + L - 1`` (rgb (L, ny, nx, 3), dens
+    (L, ny, nx)); accumulates counts, intended concentration sums (``sums`` (L, 7), per layer)
+    and the clamp report."""
+    n_layers = labels.shape[0]
+    rgb = np.ascontiguousarray(rgb.reshape(n_layers, -1, 3), dtype=np.float32)
+    d = np.ascontiguousarray(dens.reshape(n_layers, -1), dtype=np.float32)
+    # Background voxels skip the lookup: faster, and they are not "clamped" (they become
+    # background by choice, not for want of a reachable density).
+    slab_labels(rgb, d, z0, *ctx.kernel_args(), labels, counts, sums, stats)
+
+
+def _slab_into(ctx: JobContext, grid: Any, z0: int, z1: int, labels: np.ndarray,
+               counts: np.ndarray, sums: np.ndarray, stats: np.ndarray) -> dict[str, float]:
+    """Labels (L, ny, nx) of layers ``[z0, z1)`` of ``grid`` into ``labels`` (counts, sums and
+    stats as :func:`_labels_of_slab`); returns the seconds per stage. A source that offers a
+    layer plan (a dense grid) is sampled and labelled a layer at a time in one compiled call
+    (:mod:`.sample_label.dense_job`); any other fills the worker's slab buffers, which are
+    then labelled."""
+    source, _ = ctx.resources()
+    ny, nx = labels.shape[1:]
+    scale = ctx.settings.density_scale
+    t0 = time.perf_counter()
+    planner = getattr(source, "layer_plan", None)
+    plan = planner(grid, z0, z1, density_scale=scale) if planner is not None else None
+    if plan is not None:
+        rgb, dens = _WORKSPACE.samples.take((1, ny, nx))
+        kernel = _LAYER_KERNELS[getattr(source, "layer_kind", "dense")]
+        kernel(*plan, rgb.reshape(-1, 3), dens.reshape(-1), z0, *ctx.kernel_args(), labels,
+               counts, sums, stats)
+        return {"sample_lookup_halftone": time.perf_counter() - t0}
+    # The kernel reads colour only where the density reaches a positive threshold: the
+    # sampler may then leave the colour of empty rows stale instead of zeroing it.
+    _WORKSPACE.samples.colour_where_dense = bool(ctx.kernel_args()[0] > 0)
+    rgb, dens = source.sample_slab(grid, z0, z1, density_scale=scale, out=_WORKSPACE.samples)
+    t1 = time.perf_counter()
+    _labels_of_slab(ctx, rgb, dens, z0, labels, counts, sums, stats)
+    return {"sample": t1 - t0, "lookup_halftone": time.perf_counter() - t1}
+
+
+def _clamp_report(stats: np.ndarray) -> dict[str, float]:
+    return {"n_clamped_low": float(stats[0]), "n_clamped_high": float(stats[1]),
+            "max_shortfall_low": float(stats[2]), "max_shortfall_high": float(stats[3])}
+
+
+def _oriented(ctx: JobContext, labels: np.ndarray) -> np.ndarray:
+    """The slice image(s) of labels (..., ny, nx): the printer's column axis and row order."""
+    img = labels if ctx.printer.image_columns == "x" else labels.swapaxes(-1, -2)
+    return img[..., ::-1, :] if ctx.printer.flip_rows else img
+
+
+def _write_new(path: str, data: bytes) -> None:
+    """Write a new file (never an existing one); os-level calls: a slice costs one open, one
+    write and one close, which matters for small jobs of many layers."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    finally:
+        os.close(fd)
+
+
+def _cancelled(slices_dir: str, event: threading.Event | None) -> bool:
+    if event is not None and event.is_set():
+        return True
+    return os.path.exists(os.path.join(os.path.dirname(slices_dir), ".cancelled"))
+
+
+class _Workspace(threading.local):
+    """A worker thread's slab buffers, reused from slab to slab (see ``SlabBuffers``)."""
+
+    def __init__(self) -> None:
+        from ..io.volumes.base import SlabBuffers
+
+        self.samples = SlabBuffers()
+        self.labels = np.empty((0, 0, 0), np.uint8)
+
+    def labels_for(self, n: int, ny: int, nx: int) -> np.ndarray:
+        if self.labels.shape[1:] != (ny, nx) or self.labels.shape[0] < n:
+            self.labels = np.empty((n, ny, nx), np.uint8)
+        return self.labels[:n]
+
+
+_WORKSPACE = _Workspace()
+
+
+def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
+             cancel: threading.Event | None = None) -> dict[str, Any]:
+    """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings."""
+    from .encode.png_slices import encode_labels_pngs
+    from .write import slice_name
+
+    nx, ny, nz = ctx.shape_xyz
+    if _cancelled(slices_dir, cancel):
+        raise JobCancelled()
+    labels = _WORKSPACE.labels_for(z1 - z0, ny, nx)
+    counts = np.zeros(7, dtype=np.int64)
+    sums = np.zeros((z1 - z0, 7), dtype=np.float64)
+    stats = np.zeros(4)
+    seconds = _slab_into(ctx, ctx.grid, z0, z1, labels, counts, sums, stats)
+    t2 = time.perf_counter()
+    pngs = encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+    t3 = time.perf_counter()
+    # The cancel marker (other processes, cluster workers) is looked for once per slab here,
+    # the in-process event at every layer: a stat per slice cost as much as writing it on
+    # tmpfs (~14 us), and a slab's slices are written in milliseconds.
+    if _cancelled(slices_dir, cancel):
+        raise JobCancelled()
+    prefix = os.path.join(slices_dir, "")
+    for k, png in enumerate(pngs):
+        if cancel is not None and cancel.is_set():
+            raise JobCancelled()
+        # Never create folders here: after a cancel the job's temporary folder is removed and
+        # a straggling task must fail rather than recreate it.
+        _write_new(prefix + slice_name(z0 + k, nz), png)
+    seconds.update(png=t3 - t2, write=time.perf_counter() - t3)
+    return {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
+            "clamped": _clamp_report(stats), "seconds": seconds}
+
+
+def halftone_layer(settings: ConvertSettings, layer: int,
+                   context: JobContext | None = None) -> np.ndarray:
+    """Labels (ny, nx) of one layer (0..5 = INKS, 6 = empty) exactly as the export writes it.
+
+    Pass ``context`` (from :func:`prepare_job`) when scrubbing many layers of one job.
+    """
+    ctx = context if context is not None else prepare_job(settings)
+    nx, ny, nz = ctx.shape_xyz
+    if not 0 <= layer < nz:
+        raise DreamPrintError(f"layer {layer} is outside the job's 0..{nz - 1}")
+    labels = np.empty((1, ny, nx), dtype=np.uint8)
+    _slab_into(ctx, ctx.grid, layer, layer + 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
+               np.zeros(4))
+    return labels[0]
