@@ -1,5 +1,6 @@
-"""The fused path for dense grids (sample a layer, label it: ``engine.dense_job``) writes exactly
-what the general path does (sample the whole slab, then ``slab_labels``): labels, counts,
+"""The fused path for dense grids (sample a layer, label it:
+``job.sample_label.dense_job``) writes exactly what the general path does (sample the whole
+slab, then ``slab_labels``): labels, counts,
 per-layer concentration sums and the clamp report, bit for bit, for any slab partition."""
 
 import numpy as np

@@ -1,5 +1,5 @@
 """Sparse VDB grids densified over their leaves (``io.volumes.leaf_grid``) give the sparse
-sampler's densities bit for bit, and the fused print-job path (``engine.leaf_grid_job``)
+sampler's densities bit for bit, and the fused print-job path (``job.sample_label.leaf_grid_job``)
 writes what the general path writes (sample the slab, then ``slab_labels``)."""
 
 import numpy as np
