@@ -21,7 +21,6 @@ Defines
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numba as nb
@@ -31,7 +30,7 @@ from numpy.typing import NDArray
 from ..colorimetry import delta_E2000
 from ..profile import InkProfile
 from .forward import N_COLOUR_INKS, forward_model, mixtures_lab
-from .mapping import PerceptualMap
+from .mapping import PerceptualMap, simplex_lattice, srgb_cube_faces
 from .optimise import de2000_residual, solve, solve_xyz, srgb_to_xyz, targets_for
 from .tables import ColourTables, lookup
 
@@ -74,11 +73,7 @@ def lut_vs_direct(tables: ColourTables, profile: InkProfile, samples: int = 2000
 
 
 def _simplex_lattice(step: float) -> NDArray[np.float64]:
-    n = round(1.0 / step)
-    combos = [c for c in itertools.product(range(n + 1), repeat=N_COLOUR_INKS - 1)
-              if sum(c) <= n]
-    a = np.asarray(combos, dtype=np.float64)
-    return np.concatenate([a, n - a.sum(axis=1, keepdims=True)], axis=1) / n
+    return simplex_lattice(round(1.0 / step))
 
 
 @nb.njit(cache=True, parallel=True)
@@ -157,27 +152,12 @@ def adjacent_jumps(tables: ColourTables, profile: InkProfile) -> dict:
 
 def printable_lab(profile: InkProfile, steps: int = 24) -> NDArray[np.float64]:
     """CIELAB of all five-ink mixtures with concentrations in multiples of 1/steps."""
-    combos = [c for c in itertools.product(range(steps + 1), repeat=N_COLOUR_INKS - 1)
-              if sum(c) <= steps]
-    a = np.asarray(combos, dtype=np.float64)
-    conc = np.concatenate([a, steps - a.sum(axis=1, keepdims=True)], axis=1) / steps
-    return mixtures_lab(forward_model(profile), conc)
+    return mixtures_lab(forward_model(profile), simplex_lattice(steps))
 
 
 def srgb_lab(profile: InkProfile, steps: int = 33) -> NDArray[np.float64]:
     """CIELAB of the sRGB cube's six faces (steps x steps each)."""
-    a = np.linspace(0.0, 1.0, steps)
-    u, v = (x.ravel() for x in np.meshgrid(a, a))
-    faces = []
-    for axis in range(3):
-        for value in (0.0, 1.0):
-            f = np.empty((u.size, 3))
-            others = [i for i in range(3) if i != axis]
-            f[:, axis] = value
-            f[:, others[0]] = u
-            f[:, others[1]] = v
-            faces.append(f)
-    return targets_for(forward_model(profile), "lab", np.concatenate(faces))
+    return targets_for(forward_model(profile), "lab", srgb_cube_faces(steps))
 
 
 def lab_volume(lab: NDArray) -> float:

@@ -104,14 +104,14 @@ def cam16_ucs_to_xyz(ucs: ArrayLike, white: ArrayLike) -> NDArray[np.float64]:
 
 
 def _simplex_lattice(steps: int) -> NDArray[np.float64]:
-    return _lattice(steps, N_COLOUR_INKS)
+    return simplex_lattice(steps)
 
 
 def _printable_samples() -> NDArray[np.float64]:
     """Mixtures that sample the printable gamut: a simplex lattice, and dense lattices on every
     three-ink face of the simplex (where the boundary of the gamut of a 5-ink mixture lies for
     a map into 3-D colour that is locally linear)."""
-    tri = _lattice(_TRIANGLE_STEPS, 3)
+    tri = simplex_lattice(_TRIANGLE_STEPS, 3)
     parts = [_simplex_lattice(_LATTICE_STEPS)]
     for inks in itertools.combinations(range(N_COLOUR_INKS), 3):
         c = np.zeros((tri.shape[0], N_COLOUR_INKS))
@@ -120,13 +120,15 @@ def _printable_samples() -> NDArray[np.float64]:
     return np.concatenate(parts)
 
 
-def _lattice(steps: int, n: int) -> NDArray[np.float64]:
+def simplex_lattice(steps: int, n: int = N_COLOUR_INKS) -> NDArray[np.float64]:
+    """All ``n``-part mixtures (rows summing to 1) in multiples of ``1 / steps``."""
     combos = [c for c in itertools.product(range(steps + 1), repeat=n - 1) if sum(c) <= steps]
     a = np.asarray(combos, dtype=np.float64)
     return np.concatenate([a, steps - a.sum(axis=1, keepdims=True)], axis=1) / steps
 
 
-def _srgb_surface(steps: int) -> NDArray[np.float64]:
+def srgb_cube_faces(steps: int) -> NDArray[np.float64]:
+    """sRGB colours on the cube's six faces, ``steps x steps`` per face."""
     a = np.linspace(0.0, 1.0, steps)
     u, v = (x.ravel() for x in np.meshgrid(a, a))
     faces = []
@@ -189,7 +191,7 @@ class PerceptualMap:
         j_cusp = 0.25 * np.roll(j_cusp, 1) + 0.5 * j_cusp + 0.25 * np.roll(j_cusp, -1)
         proto = cls(white, j_src, j_print, j_cusp, np.zeros((1, 1)), np.zeros((1, 1)))
         d_print = proto._hull_boundary(pr, j_print)
-        surface = srgb_to_xyz(model, _srgb_surface(_SRGB_FACE_STEPS))
+        surface = srgb_to_xyz(model, srgb_cube_faces(_SRGB_FACE_STEPS))
         src = proto._lightness(cam16_ucs(surface, white), _lab(surface, white))
         d_src = proto._hull_boundary(src, j_print)  # grey: full lightness compression
         return cls(white, j_src, j_print, j_cusp, BOUNDARY_MARGIN * d_print,

@@ -88,16 +88,7 @@ def _axis_like(values: Sequence[float]) -> bool:
 
 
 def read_plain_csv(text: str, path: str) -> RawSpectra:
-    comments: list[str] = []
-    content: list[tuple[int, str]] = []
-    for lineno, line in enumerate(text.splitlines(), 1):
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            comments.append(s.lstrip("#").strip())
-        else:
-            content.append((lineno, line))
+    comments, content = _content(text)
     if not content:
         raise DreamPrintError("no data lines (only comments or blank lines)", path)
     delim = _delimiter([ln for _, ln in content])
