@@ -111,24 +111,29 @@ _MAX_ENTRIES = 1_000_000
 
 
 class _Header:
-    """Bounds-checked little-endian reads of a .vdb's first bytes."""
+    """Bounds-checked little-endian reads of a .vdb's header, through a window of the file
+    (grid descriptors lie after each grid's data: the reads jump over the grids)."""
 
     def __init__(self, path: Path, data: bytes, size: int) -> None:
         self.path, self.data, self.size, self.pos = path, data, size, 0
+        self.base = 0  # file offset of data[0]
 
     def fail(self, what: str):
         raise DreamPrintError(what, self.path)
 
     def take(self, n: int, what: str) -> bytes:
-        if self.pos + n > len(self.data):
-            if len(self.data) < self.size:  # not read yet: read more of the file
+        lo = self.pos - self.base
+        if lo < 0 or lo + n > len(self.data):
+            if self.pos + n <= self.size:  # not in the window: read the file from pos on
                 with open(self.path, "rb") as f:
-                    f.seek(len(self.data))
-                    self.data += f.read(max(n, 1 << 20))
-            if self.pos + n > len(self.data):
+                    f.seek(self.pos)
+                    self.data = f.read(max(n, 1 << 16))
+                self.base = self.pos
+                lo = 0
+            if lo + n > len(self.data):
                 self.fail(f"truncated: {what} needs bytes {self.pos:,}..{self.pos + n:,}, the "
                           f"file has {self.size:,}")
-        out = self.data[self.pos:self.pos + n]
+        out = self.data[lo:lo + n]
         self.pos += n
         return out
 

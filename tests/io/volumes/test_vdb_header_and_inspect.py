@@ -76,6 +76,34 @@ def test_descriptors_written_to_the_spec(tmp_path, no_helper, capsys):
     assert capsys.readouterr().err.strip() == f"dreamprint: error: {f}: empty file"
 
 
+def _descriptor(name, gtype, g, b, e):
+    out = b""
+    for s in (name.encode(), gtype.encode(), b""):
+        out += struct.pack("<I", len(s)) + s
+    return out + struct.pack("<qqq", g, b, e)
+
+
+def test_second_descriptor_after_megabytes_of_grid_data(tmp_path, no_helper):
+    """Each descriptor follows its grid's data (io/File.cc): a reader must jump over a large
+    first grid (a real density + colour export) to the second descriptor."""
+    head = _header(grids=())[:-4] + struct.pack("<i", 2)
+    d1 = _descriptor("density", "Tree_float_5_4_3", 0, 0, 0)
+    first_end = len(head) + len(d1) + 5_000_000            # 5 MB of grid data
+    d1 = _descriptor("density", "Tree_float_5_4_3", len(head) + len(d1),
+                     len(head) + len(d1) + 100, first_end)
+    d2 = _descriptor("color", "Tree_vec3s_5_4_3", first_end + 60, first_end + 160,
+                     first_end + 2_000_000)
+    f = tmp_path / "two.vdb"
+    f.write_bytes(head + d1 + bytes(5_000_000) + d2 + bytes(2_000_000 - len(d2)))
+    grids = check_header(f)["grids"]
+    assert [(g["name"], g["type"], g["end"]) for g in grids] == [
+        ("density", "Tree_float_5_4_3", first_end),
+        ("color", "Tree_vec3s_5_4_3", first_end + 2_000_000)]
+    f.write_bytes(head + d1 + bytes(5_000_000) + d2[:7])   # cut inside the second descriptor
+    with pytest.raises(DreamPrintError, match="truncated: grid descriptor 2 of 2 needs bytes"):
+        check_header(f)
+
+
 def test_inspect_vector_grid_ranges_and_units(vdbs, capsys):
     assert main(["inspect", "--json", str(vdbs / "box_half_cd.vdb")]) == 0
     info = json.loads(capsys.readouterr().out)
