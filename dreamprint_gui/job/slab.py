@@ -29,14 +29,14 @@ from ..errors import DreamPrintError
 from .plan import ConvertSettings, JobCancelled, JobContext, prepare_job
 from .sample_label.dense_job import dense_slab_labels, window_slab_labels
 from .sample_label.layer_kernel import slab_labels
-from .sample_label.leaf_grid_job import leaf_grid_slab_labels
+from .sample_label.leaf_grid_job import leaf_grid_colour_slab_labels, leaf_grid_slab_labels
 
 __all__ = ["run_slab", "halftone_layer"]
 
 # A source's ``layer_kind`` -> the compiled call that samples and labels its layers (the
 # arguments: the source's ``layer_plan``, one layer's rgb and density arrays, z0, the kernel's).
 _LAYER_KERNELS = {"dense": dense_slab_labels, "leaf_grid": leaf_grid_slab_labels,
-                  "window": window_slab_labels}
+                  "leaf_grid_colour": leaf_grid_colour_slab_labels, "window": window_slab_labels}
 
 
 def _labels_of_slab(ctx: JobContext, rgb: np.ndarray, dens: np.ndarray, z0: int,

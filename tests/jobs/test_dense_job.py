@@ -68,13 +68,17 @@ def _assert_same(a, b):
 ])
 @pytest.mark.parametrize("threshold, background, halftone", [
     (None, "clear", "blue-noise"), (0.0, "empty", "random")])
+@pytest.mark.parametrize("encoding", ["srgb", "linear"])
 def test_fused_path_equals_sample_then_label(tmp_path, shape, channels, threshold, background,
-                                            halftone):
+                                            halftone, encoding):
+    """Linear colour (an EXR stack, a radiance grid marked linear) is sRGB-encoded by both
+    paths with the same kernel (io/volumes/srgb_encode.py)."""
     ctx = prepare_job(ConvertSettings(source="demo", output=tmp_path / "J", height_mm=0.5,
                                       table_size=17, seed=2, halftone=halftone,
                                       background=background, density_threshold=threshold,
                                       density_scale=0.7))
-    source = DenseSource("cloud", "test", _cloud(shape, channels), uniform_colour=(0.9, 0.2, 0.4))
+    source = DenseSource("cloud", "test", _cloud(shape, channels), uniform_colour=(0.9, 0.2, 0.4),
+                         colour_encoding=encoding)
     ctx.source = source
     nz = ctx.shape_xyz[2]
     thr = float(ctx.kernel_args()[0])
@@ -88,20 +92,6 @@ def test_fused_path_equals_sample_then_label(tmp_path, shape, channels, threshol
     np.testing.assert_array_equal(sum(p[1] for p in parts), whole[1])
     np.testing.assert_array_equal(np.concatenate([p[2] for p in parts]).view(np.uint8),
                                   whole[2].view(np.uint8))
-
-
-def test_linear_colour_takes_the_general_path(tmp_path):
-    """Linear colour needs sample_slab's conversion to sRGB: no layer plan, and the job's slices
-    are those of the general path."""
-    vol = _cloud((5, 6, 7), 4)
-    source = DenseSource("cloud", "test", vol, colour_encoding="linear")
-    assert source.layer_plan(_grid(tmp_path), 0, 2) is None
-    assert DenseSource("c", "test", _cloud((5, 6, 7), 4)).layer_plan(_grid(tmp_path), 0, 2)
-
-
-def _grid(tmp_path):
-    return prepare_job(ConvertSettings(source="demo", output=tmp_path / "G", height_mm=0.5,
-                                       table_size=17)).grid
 
 
 @pytest.mark.parametrize("window, colormap", [((2.0, 40.0), None), ((-3.0, 25.0), "viridis")])

@@ -173,16 +173,15 @@ class DenseSource:
     def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
                    ) -> tuple | None:
         """The arguments of :func:`...job.sample_label.dense_job.dense_slab_labels` before its layer
-        arrays, for layers z0..z1-1: the samples :meth:`sample_slab` gives, a layer at a time.
-        None for linear colour (its conversion to sRGB is :meth:`sample_slab`'s)."""
+        arrays, for layers z0..z1-1: the samples :meth:`sample_slab` gives, a layer at a time
+        (linear colour sRGB-encoded by the same :mod:`.srgb_encode`)."""
         check_slab(grid, z0, z1)
         vol = self.volume
-        if vol.data.shape[3] == 4 and self.colour_encoding == "linear":
-            return None
         u = vol._indices(grid, z0, z1)
         plan = DenseLayers(vol.data, u[2], u[1], u[0], vol.pad)
         return (vol.data, vol.rows_with_data(), *plan.args(),
-                np.float32(density_scale / grid.mm_per_unit), self.uniform_colour)
+                np.float32(density_scale / grid.mm_per_unit), self.uniform_colour,
+                self.colour_encoding == "linear")
 
     def info(self) -> dict:
         return {"format": self.format, "grids": self._grids_info}

@@ -483,19 +483,50 @@ class VdbSource:
                     g.make_dense()
             self._dense_tried = True
 
-    # A fog volume with one uniform colour is sampled and labelled a layer at a time from a
-    # dense copy of its leaves (job.sample_label.leaf_grid_job), bit-identical to sample_slab.
-    layer_kind = "leaf_grid"
+    # A fog volume is sampled and labelled a layer at a time from a dense copy of its leaves
+    # (job.sample_label.leaf_grid_job), bit-identical to sample_slab: with its one uniform
+    # colour ("leaf_grid") or with a vec3 colour grid densified the same way
+    # ("leaf_grid_colour").
+    @property
+    def layer_kind(self) -> str:
+        return "leaf_grid_colour" if self.colour_grids else "leaf_grid"
+
+    def _colour_dense(self):
+        """The densified copy of the one vec3 colour grid (made once), or None if the source
+        has another layout of colour grids or the copy would exceed :data:`DENSE_BUDGET`."""
+        if len(self.colour_grids) != 1 or self.colour_grids[0].blocks.nc != 3:
+            return None
+        g = self.colour_grids[0]
+        with self._dense_lock:
+            if g._dense is None and 0 < g.dense_values() <= DENSE_BUDGET:
+                g.make_dense()
+        return g._dense
 
     def layer_plan(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0
                    ) -> tuple | None:
         """The arguments of :func:`...job.sample_label.leaf_grid_job.leaf_grid_slab_labels`
-        before its layer arrays (:class:`.leaf_grid.LeafGridPlan`), or None: a level set,
-        colour grids or a grid too large to densify take :meth:`sample_slab`."""
+        (uniform colour) or ``leaf_grid_colour_slab_labels`` (one vec3 colour grid) before
+        their layer arrays (:class:`.leaf_grid.LeafGridPlan`), or None: a level set, three
+        scalar colour grids or grids too large to densify take :meth:`sample_slab`."""
         check_slab(grid, z0, z1)
-        if self.is_level_set or self.colour_grids:
+        if self.is_level_set:
             return None
-        return self._leaf_plan.args(grid, z0, z1, density_scale, self.uniform_colour)
+        if not self.colour_grids:
+            return self._leaf_plan.args(grid, z0, z1, density_scale, self.uniform_colour)
+        colour = self._colour_dense()
+        plan = None if colour is None else self._leaf_plan.args(grid, z0, z1, density_scale,
+                                                                 self.uniform_colour)
+        if plan is None:
+            return None
+        cdense, lo, rows = colour
+        g = self.colour_grids[0]
+        u = [(voxel_centres(grid, a, *((z0, z1) if a == 2 else (0, None))) - g.origin[a])
+             / g.scale[a] for a in range(3)]
+        k0, wk = index_axis(u[2], lo[2])
+        j0, wj = index_axis(u[1], lo[1])
+        i0, wi = index_axis(u[0], lo[0])
+        return (*plan[:-1], cdense, rows, k0, wk, j0, wj, i0, wi,
+                np.empty((3, cdense.shape[2]), np.float32), self.colour_encoding == "linear")
 
     def close(self) -> None:
         """Delete the extracted blocks now (otherwise when the source is collected), unless

@@ -19,6 +19,7 @@ from numba import njit
 
 from ...io.volumes.dense import _window_kernel
 from ...io.volumes.dense_sampler import COLOUR, COLOUR_WHERE_DENSE, DENSITY, RAW, dense_layer
+from ...io.volumes.srgb_encode import encode_where
 from .layer_kernel import layer_labels
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]
@@ -26,14 +27,17 @@ __all__ = ["dense_slab_labels", "window_slab_labels"]
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
-                      srows, planes, planes_nz, plane_layer, row, cpl, scale, uniform, rgb, dens,
-                      z0, threshold, bg_label, flat, n, rho_k, sigma_clear, method, mask, ox, oy,
-                      oz, seed, order, labels, counts, sums, stats):
+                      srows, planes, planes_nz, plane_layer, row, cpl, scale, uniform, linear,
+                      rgb, dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear, method,
+                      mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
     """Labels (L, ny, nx) of layers ``z0 .. z0 + L - 1`` of a dense grid ``vol`` (channel 0
-    density, 1-3 premultiplied sRGB colour if it has 4 channels, else ``uniform`` colour (3,)):
+    density, 1-3 premultiplied colour if it has 4 channels, else ``uniform`` sRGB colour (3,)):
     the slab's plan (:class:`..io.volumes.dense_sampler.DenseLayers` ``.args()``), density
-    ``scale`` (1/mm per source unit), one layer's working arrays ``rgb`` (ny * nx, 3) and
-    ``dens`` (ny * nx,), then the arguments of :func:`.layer_kernel.slab_labels` after ``z0``."""
+    ``scale`` (1/mm per source unit), ``linear`` (the colour channels hold linear values: each
+    voxel the labelling reads is sRGB-encoded, :func:`..io.volumes.srgb_encode.encode_where`,
+    the values :meth:`..io.volumes.dense.DenseSource.sample_slab` gives), one layer's working
+    arrays ``rgb`` (ny * nx, 3) and ``dens`` (ny * nx,), then the arguments of
+    :func:`.layer_kernel.slab_labels` after ``z0``."""
     colour = vol.shape[3] == 4
     if colour:
         # The kernel reads colour only where the density reaches a positive threshold: rows
@@ -48,6 +52,8 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                     srows, planes, planes_nz, plane_layer, row, cpl, rgb_flat, rgb_flat, dens,
                     mode, scale)
+        if colour and linear:
+            encode_where(rgb, dens, threshold, labels.shape[2])
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
 

@@ -5,17 +5,20 @@ NanoVDB fog volume densified over its leaves (:func:`..io.volumes.leaf_grid.leaf
 the reconstruction step of the paper's sec. 4.1, bit-identical to the sparse sampler) go into
 one layer's density array, which :func:`.layer_kernel.layer_labels` turns into labels straight
 away (background test -> lookup -> alignment -> halftone, paper Fig. 2), in one compiled call
-(nogil), as :mod:`.dense_job` does for dense grids. Colour is the source's one uniform colour.
+(nogil), as :mod:`.dense_job` does for dense grids. Colour is the source's one uniform colour
+(:func:`leaf_grid_slab_labels`) or a densified vec3 colour grid sampled the same way
+(:func:`leaf_grid_colour_slab_labels`, e.g. Houdini's ``Cd``).
 """
 
 from __future__ import annotations
 
 from numba import njit
 
-from ...io.volumes.leaf_grid import leaf_grid_layer
+from ...io.volumes.leaf_grid import leaf_grid_layer, leaf_grid_values
+from ...io.volumes.srgb_encode import clip_where, encode_where
 from .layer_kernel import layer_labels
 
-__all__ = ["leaf_grid_slab_labels"]
+__all__ = ["leaf_grid_slab_labels", "leaf_grid_colour_slab_labels"]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -31,5 +34,31 @@ def leaf_grid_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, 
         rgb[:, c] = uniform[c]
     for k in range(labels.shape[0]):
         leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens)
+        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def leaf_grid_colour_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, cdense,
+                                 crows_nz, ck0, cwk, cj0, cwj, ci0, cwi, cplane, linear, rgb,
+                                 dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear,
+                                 method, mask, ox, oy, oz, seed, order, labels, counts, sums,
+                                 stats):
+    """As :func:`leaf_grid_slab_labels`, the colour sampled per layer from a densified vec3
+    grid ``cdense`` (nk, nj, ni, 3) with its own corners and weights (``ck0``, ``cwk`` per
+    layer, ``cj0``/``cwj``, ``ci0``/``cwi``; ``cplane`` (3, ni) scratch;
+    :func:`..io.volumes.leaf_grid.leaf_grid_values`), then sRGB-encoded if ``linear`` (else
+    clipped to [0, 1]) where the labelling reads it: the values of
+    :meth:`..io.volumes.openvdb.VdbSource.sample_slab`, a layer at a time."""
+    ny, nx = labels.shape[1:]
+    out = rgb.reshape((1, ny, nx, 3))
+    for k in range(labels.shape[0]):
+        leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens)
+        leaf_grid_values(cdense, crows_nz, ck0[k:k + 1], cwk[k:k + 1], cj0, cwj, ci0, cwi,
+                         cplane, out)
+        if linear:
+            encode_where(rgb, dens, threshold, nx)
+        else:
+            clip_where(rgb, dens, threshold, nx)
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)

@@ -113,13 +113,50 @@ def test_fused_path_writes_what_the_general_path_writes(tmp_path, monkeypatch, t
         assert a[1][:6].sum() > 0                                  # some foreground labelled
 
 
-def test_vdb_files_take_the_fused_path_unless_coloured(vdbs):
+def test_vdb_files_take_the_fused_path_unless_three_colour_grids(vdbs):
     g = None
-    for name, fused in (("ramp", True), ("bigtile", True), ("box_half_cd", False),
-                        ("far", True)):
+    for name, kind in (("ramp", "leaf_grid"), ("bigtile", "leaf_grid"),
+                       ("box_half_cd", "leaf_grid_colour"), ("box_rgb3", None),
+                       ("far", "leaf_grid")):
         s = open_source(vdbs / f"{name}.vdb")
         g = grid_for_source(s, (0.13, 0.07, 0.11), size_mm=(5, 5, 5))
-        assert (s.layer_plan(g, 0, 1) is not None) == fused, name
+        assert (s.layer_plan(g, 0, 1) is not None) == (kind is not None), name
+        assert kind is None or s.layer_kind == kind
+
+
+@pytest.mark.parametrize("encoding, threshold", [("linear", None), ("srgb", None),
+                                                 ("linear", 0.0)])
+def test_colour_grid_fused_path_writes_what_the_general_path_writes(vdbs, tmp_path,
+                                                                    monkeypatch, encoding,
+                                                                    threshold):
+    """A density + vec3 colour (Cd) file: the fused layer path (colour grid densified,
+    sRGB-encoded or clipped where labelled) gives the general path's labels, counts, sums and
+    clamp report bit for bit, for any slab."""
+    from dreamprint_gui.job import plan
+    from dreamprint_gui.job.sample_label.leaf_grid_job import leaf_grid_colour_slab_labels
+
+    src = open_source(vdbs / "box_half_cd.vdb", colour_encoding=encoding)
+    monkeypatch.setattr(plan, "_open_source", lambda spec, options, *_: src)
+    ctx = prepare_job(ConvertSettings(source="vdb-cd", output=tmp_path / "j",
+                                      size_mm=(6, 6, 6), density_threshold=threshold,
+                                      density_scale=0.02))
+    nx, ny, nz = ctx.shape_xyz
+    for z0, z1 in ((0, nz), (3, 4), (nz // 2, nz)):
+        buf = SlabBuffers(colour_where_dense=ctx.kernel_args()[0] > 0)
+        rgb, dens = src.sample_slab(ctx.grid, z0, z1, out=buf)
+        a = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
+             np.zeros((z1 - z0, 7)), np.zeros(4))
+        _labels_of_slab(ctx, rgb, dens, z0, *a)
+        b = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
+             np.zeros((z1 - z0, 7)), np.zeros(4))
+        leaf_grid_colour_slab_labels(*src.layer_plan(ctx.grid, z0, z1),
+                                     np.full((ny * nx, 3), np.nan, np.float32),
+                                     np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(),
+                                     *b)
+        for x, y in zip(a, b, strict=True):
+            np.testing.assert_array_equal(x.view(np.uint8), y.view(np.uint8))
+        if (z0, z1) == (0, nz):
+            assert len(np.unique(a[0])) > 2                  # several materials, not uniform
 
 
 @pytest.mark.parametrize("channels", [1, 3])

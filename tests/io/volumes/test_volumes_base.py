@@ -164,20 +164,3 @@ def test_dense_sampler_outside_the_source_writes_zeros():
         assert not d.any() and not rgb.any()
 
 
-@pytest.mark.parametrize("n, rows", [(1, 4), (7, 4), (1000, 64), (3 * 4097, 1000)])
-def test_linear_to_srgb_inplace_gives_the_same_bits(n, rows):
-    """The in-place, chunked conversion is linear_to_srgb value for value (chunk edges, NaN,
-    -0.0, values around the 0.0031308 knee, out-of-range values)."""
-    from dreamprint_gui.io.volumes.base import linear_to_srgb, linear_to_srgb_inplace
-
-    rng = np.random.default_rng(n)
-    x = rng.uniform(-0.2, 1.3, n).astype(np.float32)
-    x[:3] = [np.nan, -0.0, 0.0031308][:min(n, 3)] if n >= 3 else x[:3]
-    if n > 100:
-        x[50:60] = np.float32(0.0031308) + np.arange(10, dtype=np.float32) * np.float32(1e-9)
-    with np.errstate(invalid="ignore"):
-        want = linear_to_srgb(x)
-        got = linear_to_srgb_inplace(x.copy(), rows=rows)
-    np.testing.assert_array_equal(got.view(np.uint32), want.view(np.uint32))
-    with pytest.raises(ValueError):
-        linear_to_srgb_inplace(np.zeros((4, 4), np.float32)[:, ::2])

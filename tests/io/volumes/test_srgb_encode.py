@@ -1,0 +1,63 @@
+"""Linear -> sRGB encoding (io/volumes/srgb_encode.py): against a correctly rounded reference,
+in place and masked variants, the edge values."""
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.io.volumes.base import linear_to_srgb, linear_to_srgb_inplace
+from dreamprint_gui.io.volumes.srgb_encode import clip_where, encode_where
+
+
+def _reference(x: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1 in float32 steps, the power correctly rounded (float64 ** -> float32)."""
+    x = np.clip(x.astype(np.float32), 0, 1)
+    p = (x.astype(np.float64) ** np.float64(np.float32(1 / 2.4))).astype(np.float32)
+    enc = p * np.float32(1.055) - np.float32(0.055)
+    return np.where(x <= np.float32(0.0031308), x * np.float32(12.92), enc).astype(np.float32)
+
+
+def test_every_float_of_a_binade_against_a_correctly_rounded_power():
+    """All 8,388,608 float32 values of [0.25, 0.5): the power may differ from the correctly
+    rounded one (by one unit in its last place, two of the encoded value's) only where float64
+    exp2(log2) lands within 1e-10 of a rounding midpoint."""
+    lo, hi = np.float32(0.25).view(np.uint32), np.float32(0.5).view(np.uint32)
+    x = np.arange(lo, hi, dtype=np.uint32).view(np.float32)
+    got, want = linear_to_srgb(x), _reference(x)
+    ulps = np.abs(got.view(np.int32).astype(np.int64) - want.view(np.int32))
+    assert ulps.max() <= 2 and np.count_nonzero(ulps) / x.size < 1e-4
+
+
+def test_edges_and_out_of_range():
+    x = np.array([np.nan, -1.0, -0.0, 0.0, 0.0031308, np.nextafter(np.float32(0.0031308),
+                                                                    np.float32(1)),
+                  1.0, 7.0, np.inf, -np.inf], np.float32)
+    got = linear_to_srgb(x)
+    assert np.isnan(got[0])
+    np.testing.assert_array_equal(got[1:4], 0.0)
+    assert got[4] == np.float32(0.0031308) * np.float32(12.92)
+    assert got[5] == _reference(x[5:6])[0]
+    np.testing.assert_array_equal(got[6:9], np.float32(1.055) - np.float32(0.055))  # f32 steps
+    assert got[9] == 0.0
+
+
+@pytest.mark.parametrize("rows, nx", [(1, 1), (1, 7), (40, 25), (3, 4097)])
+def test_in_place_and_row_variants_agree(rows, nx):
+    """encode_where / clip_where convert exactly the rows holding a voxel at or above the
+    threshold, with linear_to_srgb's bits / np.clip's; other rows are left as they were."""
+    n = rows * nx
+    rng = np.random.default_rng(n)
+    x = rng.uniform(-0.2, 1.3, (n, 3)).astype(np.float32)
+    x[0, 0] = np.nan
+    want = linear_to_srgb(x)
+    np.testing.assert_array_equal(linear_to_srgb_inplace(x.copy()).view(np.uint32),
+                                  want.view(np.uint32))
+    dens = rng.uniform(0, 0.49, n).astype(np.float32)
+    dens[rng.integers(0, n, max(1, rows // 3))] = 0.5             # some rows reach it
+    hit = np.repeat((dens >= 0.5).reshape(rows, nx).any(axis=1), nx)
+    for fn, ref in ((encode_where, want), (clip_where, np.clip(x, 0, 1))):
+        y = x.copy()
+        fn(y, dens, np.float32(0.5), nx)
+        np.testing.assert_array_equal(y[hit].view(np.uint32), ref[hit].view(np.uint32))
+        np.testing.assert_array_equal(y[~hit].view(np.uint32), x[~hit].view(np.uint32))
+    with pytest.raises(ValueError):
+        linear_to_srgb_inplace(np.zeros((4, 4), np.float32)[:, ::2])
