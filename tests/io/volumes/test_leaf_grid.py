@@ -87,16 +87,12 @@ def test_densify_refuses_what_it_cannot_reproduce():
     assert densify(far.origins, far.values, far.background) is None  # too large
 
 
-@pytest.mark.parametrize("threshold", [None, 0.0])
-def test_fused_path_writes_what_the_general_path_writes(tmp_path, monkeypatch, threshold):
-    src = _Blocks(_random_blocks(seed=8))
-    from dreamprint_gui.job import plan
-
-    monkeypatch.setattr(plan, "_open_source", lambda spec, options, *_: src)
-    s = ConvertSettings(source="vdb-like", output=tmp_path / "j", size_mm=(6, 6, 6),
-                        density_threshold=threshold)
-    ctx = prepare_job(s)
+def _general_and_fused(ctx, src, kernel):
+    """Labels, counts, sums and clamp report of three slabs through the general path (sample,
+    then label) and through ``kernel`` (the fused layer path): the same bits. Returns the
+    whole job's labels."""
     nx, ny, nz = ctx.shape_xyz
+    whole = None
     for z0, z1 in ((0, nz), (3, 4), (nz // 2, nz)):
         buf = SlabBuffers(colour_where_dense=ctx.kernel_args()[0] > 0)
         rgb, dens = src.sample_slab(ctx.grid, z0, z1, out=buf)
@@ -105,12 +101,24 @@ def test_fused_path_writes_what_the_general_path_writes(tmp_path, monkeypatch, t
         _labels_of_slab(ctx, rgb, dens, z0, *a)
         b = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
              np.zeros((z1 - z0, 7)), np.zeros(4))
-        leaf_grid_slab_labels(*src.layer_plan(ctx.grid, z0, z1), np.full((ny * nx, 3), np.nan,
-                                                                         np.float32),
-                              np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *b)
+        kernel(*src.layer_plan(ctx.grid, z0, z1), np.full((ny * nx, 3), np.nan, np.float32),
+               np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *b)
         for x, y in zip(a, b, strict=True):
             np.testing.assert_array_equal(x.view(np.uint8), y.view(np.uint8))
-        assert a[1][:6].sum() > 0                                  # some foreground labelled
+        whole = a if whole is None else whole
+    return whole
+
+
+@pytest.mark.parametrize("threshold", [None, 0.0])
+def test_fused_path_writes_what_the_general_path_writes(tmp_path, monkeypatch, threshold):
+    src = _Blocks(_random_blocks(seed=8))
+    from dreamprint_gui.job import plan
+
+    monkeypatch.setattr(plan, "_open_source", lambda spec, options, *_: src)
+    s = ConvertSettings(source="vdb-like", output=tmp_path / "j", size_mm=(6, 6, 6),
+                        density_threshold=threshold)
+    whole = _general_and_fused(prepare_job(s), src, leaf_grid_slab_labels)
+    assert whole[1][:6].sum() > 0                                  # some foreground labelled
 
 
 def test_vdb_files_take_the_fused_path_unless_three_colour_grids(vdbs):
@@ -140,23 +148,8 @@ def test_colour_grid_fused_path_writes_what_the_general_path_writes(vdbs, tmp_pa
     ctx = prepare_job(ConvertSettings(source="vdb-cd", output=tmp_path / "j",
                                       size_mm=(6, 6, 6), density_threshold=threshold,
                                       density_scale=0.02))
-    nx, ny, nz = ctx.shape_xyz
-    for z0, z1 in ((0, nz), (3, 4), (nz // 2, nz)):
-        buf = SlabBuffers(colour_where_dense=ctx.kernel_args()[0] > 0)
-        rgb, dens = src.sample_slab(ctx.grid, z0, z1, out=buf)
-        a = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
-             np.zeros((z1 - z0, 7)), np.zeros(4))
-        _labels_of_slab(ctx, rgb, dens, z0, *a)
-        b = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
-             np.zeros((z1 - z0, 7)), np.zeros(4))
-        leaf_grid_colour_slab_labels(*src.layer_plan(ctx.grid, z0, z1),
-                                     np.full((ny * nx, 3), np.nan, np.float32),
-                                     np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(),
-                                     *b)
-        for x, y in zip(a, b, strict=True):
-            np.testing.assert_array_equal(x.view(np.uint8), y.view(np.uint8))
-        if (z0, z1) == (0, nz):
-            assert len(np.unique(a[0])) > 2                  # several materials, not uniform
+    whole = _general_and_fused(ctx, src, leaf_grid_colour_slab_labels)
+    assert len(np.unique(whole[0])) > 2                      # several materials, not uniform
 
 
 @pytest.mark.parametrize("channels", [1, 3])
