@@ -9,9 +9,12 @@ How it stays fast:
 * The slab is cut into fixed tiles of TILE_Z x TILE_Y x TILE_X voxels; each Gaussian is binned
   into the tiles its 3-sigma box overlaps, and a tile sums its Gaussians into a float64
   accumulator small enough to stay in cache, then writes colour / density once.
-* Per voxel row (fixed y, z) the support ``q <= 9`` is an interval in x (q is a convex
-  quadratic in x): it is solved in closed form and its end points confirmed with the same q
-  test voxel by voxel, so voxels outside the ellipsoid are never visited.
+* Per voxel row (fixed y, z) the support ``q <= 9`` is one run of voxels in x (q is a convex
+  quadratic in x), found by testing q voxel by voxel along the Gaussian's 3-sigma box: at
+  printer resolution that box is 2-5 voxels wide in x (the coarsest axis), where the test is
+  cheaper than solving for the interval (a square root) and correcting its ends (the same
+  slices; 1e6-Gaussian scene, sampling alone: 202 -> 166 ns/voxel at 1e8 voxels, 95 -> 88 at
+  1e9). Rows (y) are limited by the (y, z) marginal ellipse, solved in closed form.
 * Along a row ``q(x_{i+1}) - q(x_i)`` is linear in i, so ``exp(-q/2)`` follows the recurrence
   ``w <- w r``, ``r <- r exp(-a h^2)`` (a = inverse-covariance xx term, h = voxel pitch); it is
   re-evaluated exactly at the first voxel of every row segment.  A segment never crosses a
@@ -103,7 +106,6 @@ def _splat_kernel(idx, mean, inv_cov, peak, rgb, half, xs, ys, zs, scale, rgb_ou
                     fill[tile] += 1
 
     h = (xs[nx - 1] - xs[0]) / (nx - 1) if nx > 1 else 1.0
-    inv_h = 1.0 / h
     inv_hy = (ny - 1) / (ys[ny - 1] - ys[0]) if ny > 1 else 1.0
     acc = np.zeros((TILE_Z, TILE_Y, TILE_X, 4), np.float64)
     for tz in range(ntz):
@@ -136,7 +138,6 @@ def _splat_kernel(idx, mean, inv_cov, peak, rgb, half, xs, ys, zs, scale, rgb_ou
                     cg = rgb[g, 1]
                     cb = rgb[g, 2]
                     step = math.exp(-a * h * h)
-                    inv_2a = 0.5 / a
                     s_yy = b - d * d / a
                     sy_z = f - d * e / a
                     s_zz = c - e * e / a
@@ -164,19 +165,12 @@ def _splat_kernel(idx, mean, inv_cov, peak, rgb, half, xs, ys, zs, scale, rgb_ou
                             dy = ys[j] - my
                             qyz = b * dy * dy + 2.0 * f * dy * dz + c * dz * dz
                             lin = 2.0 * (d * dy + e * dz)
-                            # x interval where q <= 9, then its ends checked with q itself
-                            centre = mx - lin * inv_2a
-                            disc = lin * lin - 4.0 * a * (qyz - 9.0)
-                            hw = math.sqrt(disc) * inv_2a if disc > 0.0 else 0.0
-                            # first/last centres inside, from the even pitch (rounding is
-                            # corrected by the q checks below)
-                            lo, hi = _span(centre - hw, centre + hw, xs[0], inv_h, 0, bx0, bx1)
-                            while lo < hi and _q(xs[lo], mx, a, lin, qyz) > 9.0:
+                            # the run of voxels where q <= 9 (q is convex in x: one run),
+                            # found by testing q along the box's row
+                            lo = bx0
+                            while lo < bx1 and _q(xs[lo], mx, a, lin, qyz) > 9.0:
                                 lo += 1
-                            while hi > lo and _q(xs[hi - 1], mx, a, lin, qyz) > 9.0:
-                                hi -= 1
-                            while lo > bx0 and _q(xs[lo - 1], mx, a, lin, qyz) <= 9.0:
-                                lo -= 1
+                            hi = lo
                             while hi < bx1 and _q(xs[hi], mx, a, lin, qyz) <= 9.0:
                                 hi += 1
                             if lo >= hi:
