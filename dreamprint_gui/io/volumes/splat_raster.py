@@ -35,6 +35,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .base import SlabBuffers
+
 __all__ = ["rasterise_splats", "TILE_X", "TILE_Y", "TILE_Z"]
 
 TILE_X = 128
@@ -203,18 +205,28 @@ def _splat_kernel(idx, mean, inv_cov, peak, rgb, half, xs, ys, zs, scale, rgb_ou
 
 def rasterise_splats(idx: np.ndarray, mean: np.ndarray, inv_cov: np.ndarray, peak: np.ndarray,
                      rgb: np.ndarray, half: np.ndarray, xs: np.ndarray, ys: np.ndarray,
-                     zs: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
+                     zs: np.ndarray, scale: float, out: SlabBuffers | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """Colour and density of the Gaussians ``idx`` (ascending) at voxel centres ``xs, ys, zs``.
 
     ``xs``, ``ys``, ``zs``: ascending, evenly spaced voxel centres (source units) of the whole
     grid in x and y and of the slab in z.  ``inv_cov`` rows are (xx, yy, zz, xy, xz, yz) of the
     inverse covariance, ``peak`` the centre density, ``half`` the 3-sigma half-extent per axis.
     Returns (colour (nz, ny, nx, 3) = density-weighted mean of ``rgb`` clipped to [0, 1], 0 where
-    no Gaussian reaches; density * ``scale`` (nz, ny, nx)), both float32.
+    no Gaussian reaches; density * ``scale`` (nz, ny, nx)), both float32. ``out``: a worker's
+    :class:`.base.SlabBuffers` to write into instead of new arrays (a fresh slab's page faults
+    cost as much as a tenth of the rasteriser); with ``out.colour_where_dense`` the colour
+    where no Gaussian reaches is left as it was.
     """
     shape = (len(zs), len(ys), len(xs))
-    rgb_out = np.zeros(shape + (3,), np.float32)
-    sigma_out = np.zeros(shape, np.float32)
+    if out is None:
+        rgb_out = np.zeros(shape + (3,), np.float32)
+        sigma_out = np.zeros(shape, np.float32)
+    else:
+        rgb_out, sigma_out = out.take(shape)
+        sigma_out.fill(0.0)
+        if not out.colour_where_dense:
+            rgb_out.fill(0.0)
     if len(idx) and all(shape):
         _splat_kernel(np.ascontiguousarray(idx, np.int64), mean, inv_cov, peak, rgb, half,
                       np.ascontiguousarray(xs, np.float64), np.ascontiguousarray(ys, np.float64),

@@ -156,7 +156,7 @@ class GaussianCloud:
         cand = self._order[:n]
         cand = np.sort(cand[self._zmax[cand] >= zs[0]])      # fixed order: deterministic sums
         return rasterise_splats(cand, self.mean, self.inv_cov, self.peak, self.rgb, self.half,
-                                xs, ys, zs, density_scale / grid.mm_per_unit)
+                                xs, ys, zs, density_scale / grid.mm_per_unit, out)
 
     def info(self) -> dict:
         return {"format": self.format, "gaussians": int(self.n_total),
