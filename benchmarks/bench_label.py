@@ -1,0 +1,93 @@
+"""Where a print job's time goes per source kind: sampling vs labelling, and the rate that
+labelling alone allows.
+
+For each kind (:mod:`bench_sources`) a job of about ``--voxels`` voxels is planned as
+``dreamprint convert`` plans it; ``--slabs`` slabs of ``--layers`` layers spread evenly over
+its height are sampled (the source's ``sample_slab``, the general path) and labelled
+(:func:`dreamprint_gui.job.sample_label.layer_kernel.slab_labels`: background test, table
+lookup, density alignment, halftone), each timed on one thread, best of ``--repeat``. Printed
+per kind: the foreground share (voxels at or above the background threshold, the only ones the
+lookup and alignment run on), ns per voxel of sampling and of labelling, labelling's ns per
+foreground voxel, and ``label-bound Mvox/s``: the rate that two cores would reach if labelling
+were the only cost (2 / label ns per voxel). A kind whose label-bound rate is below 1e8
+voxels/s cannot reach the conversion target on this machine whatever its sampling costs,
+without changing the labels' arithmetic (and so the slices).
+
+    PYTHONPATH=. python benchmarks/bench_label.py                    # every kind, 1e9-voxel jobs
+    PYTHONPATH=. python benchmarks/bench_label.py --kinds demo,metaimage --voxels 1e8
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_sources import KINDS, source_path  # noqa: E402
+from job_hashes import height_for  # noqa: E402
+
+VOXEL = (0.084, 0.028, 0.014)  # j850-paper
+
+
+def measure(kind: str, n_voxels: float, slabs: int, layers: int, repeat: int) -> dict:
+    from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+    from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
+
+    src = source_path(kind)
+    h = (height_for(src, n_voxels) if src != "demo"
+         else (n_voxels * VOXEL[0] * VOXEL[1] * VOXEL[2]) ** (1 / 3))
+    ctx = prepare_job(ConvertSettings(source=src, output="unused", height_mm=h, workers=1))
+    nx, ny, nz = ctx.shape_xyz
+    args = ctx.kernel_args()
+    threshold = float(args[0])
+    t_sample = t_label = 0.0
+    voxels = fg = 0
+    for z0 in np.linspace(0, max(0, nz - layers), slabs).astype(int):
+        z1 = min(nz, z0 + layers)
+        best_s = best_l = np.inf
+        for _ in range(repeat):
+            t = time.perf_counter()
+            rgb, dens = ctx.source.sample_slab(ctx.grid, int(z0), int(z1))
+            best_s = min(best_s, time.perf_counter() - t)
+            n = z1 - z0
+            rgb = np.ascontiguousarray(rgb.reshape(n, -1, 3), np.float32)
+            dens = np.ascontiguousarray(dens.reshape(n, -1), np.float32)
+            labels = np.empty((n, ny, nx), np.uint8)
+            t = time.perf_counter()
+            slab_labels(rgb, dens, int(z0), *args, labels, np.zeros(7, np.int64),
+                        np.zeros((n, 7)), np.zeros(4))
+            best_l = min(best_l, time.perf_counter() - t)
+        t_sample += best_s
+        t_label += best_l
+        voxels += dens.size
+        fg += int(np.count_nonzero(dens >= threshold))
+    label_ns = t_label / voxels * 1e9
+    return {"kind": kind, "grid": (nx, ny, nz), "fg": fg / voxels,
+            "sample_ns": t_sample / voxels * 1e9, "label_ns": label_ns,
+            "label_ns_fg": t_label / max(fg, 1) * 1e9, "bound": 2e3 / label_ns}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--kinds", default=",".join(KINDS))
+    ap.add_argument("--voxels", type=float, default=1e9)
+    ap.add_argument("--slabs", type=int, default=8)
+    ap.add_argument("--layers", type=int, default=4)
+    ap.add_argument("--repeat", type=int, default=2)
+    a = ap.parse_args()
+    print(f"{'kind':>16} {'grid (x,y,z)':>20} {'fg share':>8} {'sample ns':>9} "
+          f"{'label ns':>8} {'label ns/fg':>11} {'label-bound Mvox/s':>18}")
+    for kind in a.kinds.split(","):
+        r = measure(kind, a.voxels, a.slabs, a.layers, a.repeat)
+        print(f"{kind:>16} {str(r['grid']):>20} {r['fg']:>8.3f} {r['sample_ns']:>9.1f} "
+              f"{r['label_ns']:>8.1f} {r['label_ns_fg']:>11.1f} {r['bound']:>18.0f}",
+              flush=True)
+
+
+if __name__ == "__main__":
+    main()
