@@ -41,8 +41,10 @@ halftone), sample+label (the fused layer-at-a-time path, one figure for both), e
 write; and "end to end" voxels per second over the whole conversion including load and
 preparation. ``--scale-out`` converts one job (``--scale-size``, default 1e9 voxels) through a
 ``dask.distributed`` LocalCluster of 1 and then 2 worker processes (one thread each), passed to
-the conversion as ``--scheduler tcp://...`` exactly as a cluster of machines would be, and
-prints the speed-up.
+the conversion as ``--scheduler tcp://...`` exactly as a cluster of machines would be, twice per
+cluster (a first job on new worker processes, which load the kernels, source and tables, and a
+second one on the same workers), with the CPU seconds of the workers, of the scheduler and
+nannies and of the client, and prints the speed-ups.
 
 Before the first job the benchmark waits (at most 7 minutes, saying so) until creating a file
 where the jobs go is fast again (:func:`wait_for_disk`); ``--no-wait`` starts at once.
@@ -318,6 +320,12 @@ def _peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
+def _cpu_s() -> float:
+    """CPU seconds (user + system) of the calling process so far."""
+    ru = resource.getrusage(resource.RUSAGE_SELF)
+    return ru.ru_utime + ru.ru_stime
+
+
 def scale_out(kind: str, n: float, halftone: str) -> None:
     """The same job through a LocalCluster of 1 and of 2 worker processes (one thread each),
     given to the conversion as its ``--scheduler`` address; prints both rates and the
@@ -333,16 +341,22 @@ def scale_out(kind: str, n: float, halftone: str) -> None:
             # source and the tables in each worker (per process, in parallel: a fixed cost
             # that more workers do not shorten); a cluster's workers live on, so a second
             # job finds its kernels loaded (and, for the same source, its source and tables).
+            # CPU seconds: on this one machine the scheduler and the nannies (threads of this
+            # process) and the converting client share the cores with the workers.
             for run in ("first", "second"):
+                w0 = sum(client.run(_cpu_s).values())
+                s0 = _cpu_s()
                 r = child(n, n_workers, halftone, cluster.scheduler_address, kind)
+                sched_s = _cpu_s() - s0
+                work_s = sum(client.run(_cpu_s).values()) - w0
                 worker_mb = max(client.run(_peak_rss_mb).values())
                 rates[run].append(r["voxels_per_s"])
                 print(f"{kind}: {r['voxels']:,} voxels on a LocalCluster of {n_workers} worker "
                       f"process(es) via --scheduler {cluster.scheduler_address}, {run} job: "
                       f"{r['wall_s']:.1f} s, {r['voxels_per_s'] / 1e6:.1f} Mvox/s, peak RSS "
                       f"client {r['peak_rss_mb']:.0f} MB, worker {worker_mb:.0f} MB; 1-min "
-                      f"load before {r['load_before']:.1f}; cores busy (client) "
-                      f"{r['cpu_s'] / r['wall_s']:.2f}", flush=True)
+                      f"load before {r['load_before']:.1f}; CPU s: workers {work_s:.1f}, "
+                      f"scheduler and nannies {sched_s:.1f}, client {r['cpu_s']:.1f}", flush=True)
     for run, rr in rates.items():
         print(f"{kind}: speed-up 1 -> 2 worker processes, {run} job on the cluster: "
               f"{rr[1] / rr[0]:.2f}x", flush=True)
