@@ -4,9 +4,11 @@ bit-identical results whatever the slab boundaries or threads."""
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import pytest
 
 from dreamprint_gui.io.volumes import grid_for_source
 from dreamprint_gui.io.volumes.base import voxel_centres
+from dreamprint_gui.io.volumes.splat_raster import SCAN_X
 from dreamprint_gui.io.volumes.splats import GaussianCloud, peak_density
 
 
@@ -47,11 +49,17 @@ def _direct(means, sig, quats, opac, rgb, g, cut):
     return dens, col
 
 
-def test_support_and_values_match_a_direct_sum():
+@pytest.mark.parametrize("voxel_x, scan", [(0.012, False), (0.15, True)])
+def test_support_and_values_match_a_direct_sum(voxel_x, scan):
     cloud = _cloud()
     s = GaussianCloud("c", "t", *cloud, bounds=((-1, -1, -1), (1, 1, 1)))
-    g = grid_for_source(s, (0.012, 0.04, 0.05), size_mm=(2, 2, 2))  # 167 x 50 x 40: many tiles
+    g = grid_for_source(s, (voxel_x, 0.04, 0.05), size_mm=(2, 2, 2))  # 167 (13) x 50 x 40
     rgb, d = s.sample_slab(g, 0, g.shape_xyz[2])
+    # The rasteriser finds a row's run of voxels inside the ellipsoid by testing q along rows
+    # of boxes at most SCAN_X voxels wide in x, by the closed-form interval in wider ones: the
+    # fine grid has only wide boxes, the coarse one mostly narrow ones.
+    width = 2 * s.half[:, 0] / voxel_x
+    assert np.mean(width <= SCAN_X) > 0.5 if scan else np.all(width > SCAN_X)
     # the cut is q <= 9: voxels within rounding of the boundary may fall either side
     lo, _ = _direct(*cloud, g, 9.0 - 1e-9)
     hi, col = _direct(*cloud, g, 9.0 + 1e-9)
