@@ -328,9 +328,10 @@ def _cpu_s() -> float:
 
 def scale_out(kind: str, n: float, halftone: str) -> None:
     """The same job through a LocalCluster of 1 and of 2 worker processes (one thread each),
-    given to the conversion as its ``--scheduler`` address; prints both rates and the
-    speed-up. The workers open the source and write the slices themselves, as on a cluster of
-    machines sharing the job folder (docs/print-jobs.md)."""
+    given to the conversion as its ``--scheduler`` address, twice per cluster; prints the
+    rates, the speed-ups and CPU seconds per process (the workers' peak RSS is over their life,
+    so the second job's includes the first). The workers open the source and write the slices
+    themselves, as on a cluster of machines sharing the job folder (docs/print-jobs.md)."""
     from distributed import Client, LocalCluster
 
     rates: dict[str, list[float]] = {"first": [], "second": []}
@@ -356,7 +357,8 @@ def scale_out(kind: str, n: float, halftone: str) -> None:
                       f"{r['wall_s']:.1f} s, {r['voxels_per_s'] / 1e6:.1f} Mvox/s, peak RSS "
                       f"client {r['peak_rss_mb']:.0f} MB, worker {worker_mb:.0f} MB; 1-min "
                       f"load before {r['load_before']:.1f}; CPU s: workers {work_s:.1f}, "
-                      f"scheduler and nannies {sched_s:.1f}, client {r['cpu_s']:.1f}", flush=True)
+                      f"this process (scheduler, nannies, the benchmark's file probe and "
+                      f"clean-up) {sched_s:.1f}, client {r['cpu_s']:.1f}", flush=True)
     for run, rr in rates.items():
         print(f"{kind}: speed-up 1 -> 2 worker processes, {run} job on the cluster: "
               f"{rr[1] / rr[0]:.2f}x", flush=True)

@@ -8,10 +8,15 @@ its height are sampled (the source's ``sample_slab``, the general path) and labe
 lookup, density alignment, halftone), each timed on one thread, best of ``--repeat``. Printed
 per kind: the foreground share (voxels at or above the background threshold, the only ones the
 lookup and alignment run on), ns per voxel of sampling and of labelling, labelling's ns per
-foreground voxel, and ``label-bound Mvox/s``: the rate that two cores would reach if labelling
-were the only cost (2 / label ns per voxel). A kind whose label-bound rate is below 1e8
-voxels/s cannot reach the conversion target on this machine whatever its sampling costs,
-without changing the labels' arithmetic (and so the slices).
+foreground voxel (all of labelling's time, the background voxels' share included, over the
+foreground voxels: a kind with little foreground shows more), and ``label-bound Mvox/s``: the
+rate that two cores would reach if labelling were the only cost (2 / label ns per voxel).
+Sampling is timed through ``sample_slab`` into fresh arrays (the general path), not through the
+fused layer-at-a-time path that dense grids, OpenVDB / NanoVDB leaves and scalar images take in
+a job: for those kinds a job samples faster than this column says (NanoVDB most of all). A
+kind whose label-bound rate is below 1e8 voxels/s cannot reach the conversion target on this
+machine whatever its sampling costs, without changing the labels' arithmetic (and so the
+slices).
 
     PYTHONPATH=. python benchmarks/bench_label.py                    # every kind, 1e9-voxel jobs
     PYTHONPATH=. python benchmarks/bench_label.py --kinds demo,metaimage --voxels 1e8

@@ -50,7 +50,7 @@ __all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measure
            "BENCHMARK_RATE", "MOSTLY_CLEAR", "OUT_OF_GAMUT_WARN"]
 
 # Voxels per second of `convert` on the 2-core development machine at 1e8 voxels (the demo,
-# benchmarks/bench_convert.py): 27.7-45.6 Mvox/s in docs/print-jobs.md's rounds; the lower.
+# benchmarks/bench_convert.py): 27.7-45.6 Mvox/s in docs/speed-history.md's rounds; the lower.
 BENCHMARK_RATE = 27.7e6
 MOSTLY_CLEAR = 0.98      # warn when Clear + empty exceed this fraction of the job
 OUT_OF_GAMUT_WARN = 0.01  # warn when more than this fraction of printed voxels is out of gamut

@@ -164,9 +164,9 @@ class JobContext:
         if self.source is not None and self.tables is not None:
             return self.source, self.tables
         s = self.settings
-        key = (s.source, repr(sorted(s.source_options.items())), str(s.profile),
-               self.printer.layer_thickness_mm, s.objective, s.table_size, s.content,
-               s.sampling, s.intent)
+        key = (s.source, _stamp(s.source), repr(sorted(s.source_options.items())),
+               str(s.profile), self.printer.layer_thickness_mm, s.objective, s.table_size,
+               s.content, s.sampling, s.intent)
         with _WORKER_LOCK:
             if key not in _WORKER_CACHE:
                 from ..engine.content import apply_content
@@ -179,6 +179,19 @@ class JobContext:
                 _WORKER_CACHE.clear()  # one job per worker process at a time
                 _WORKER_CACHE[key] = (src, tables)
             return _WORKER_CACHE[key]
+
+
+def _stamp(spec: str) -> tuple:
+    """Size and modification time of a source file, or of a source folder's entries, so that a
+    long-lived worker (a cluster's) reopens a source edited in place since its last job."""
+    try:
+        st = os.stat(spec)
+        if not os.path.isdir(spec):
+            return (st.st_size, st.st_mtime_ns)
+        with os.scandir(spec) as it:
+            return tuple(sorted((e.name, e.stat().st_size, e.stat().st_mtime_ns) for e in it))
+    except OSError:
+        return ()  # "demo", or a path this worker cannot see (opening it says so)
 
 
 def _clear_sigma(profile) -> float:

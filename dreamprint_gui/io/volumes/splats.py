@@ -117,20 +117,28 @@ class GaussianCloud:
         ok = (np.all(np.isfinite(means), 1) & np.all(np.isfinite(sigmas), 1)
               & np.all(sigmas > 0, 1) & np.isfinite(opacity) & (opacity > 0)
               & np.all(np.isfinite(rgb), 1))
+        quats = np.asarray(quats, float).reshape(-1, 4)
+        inv_cov = np.empty((len(means), 6))
+        half = np.empty((len(means), 3))
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            _frames(np.ascontiguousarray(quats), np.ascontiguousarray(sigmas ** 2),
+                    np.ascontiguousarray(sigmas ** -2.0), inv_cov, half)
+        # a scale so small (or large) that the inverse covariance or the extent overflows, or a
+        # non-finite rotation, has no printable kernel: skipped like a zero opacity (its NaN
+        # would otherwise blank the voxels of every Gaussian it overlaps)
+        ok &= (np.all(np.isfinite(inv_cov), 1) & np.all(np.isfinite(half), 1)
+               & np.all(np.isfinite(quats), 1))
         self.n_total = len(means)
         self.n_skipped = int(self.n_total - np.count_nonzero(ok))
         if bounds is None and self.n_skipped == self.n_total:
             raise DreamPrintError(
                 "no Gaussians in the file" if not self.n_total else
                 f"none of the {self.n_total:,} Gaussians can be printed: each has zero opacity, "
-                "a zero scale or a non-finite value", name)
+                "a zero or extreme scale or a non-finite value", name)
         means, sigmas, opacity, rgb = means[ok], sigmas[ok], opacity[ok], rgb[ok]
-        quats = np.ascontiguousarray(np.asarray(quats, float).reshape(-1, 4)[ok])
         self.mean = np.ascontiguousarray(means)
-        self.inv_cov = np.empty((len(means), 6))
-        self.half = np.empty((len(means), 3))
-        _frames(quats, np.ascontiguousarray(sigmas ** 2), np.ascontiguousarray(sigmas ** -2.0),
-                self.inv_cov, self.half)
+        self.inv_cov = np.ascontiguousarray(inv_cov[ok])
+        self.half = np.ascontiguousarray(half[ok])
         self.peak = np.ascontiguousarray(peak_density(opacity, sigmas))
         self.rgb = np.ascontiguousarray(rgb)
         zmin = self.mean[:, 2] - self.half[:, 2]

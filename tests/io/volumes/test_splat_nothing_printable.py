@@ -49,3 +49,25 @@ def test_inspect_counts_skipped(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "20 Gaussians" in out and "(1 skipped" in out
     assert open_source(str(p)).info()["skipped"] == 1
+
+
+def test_overflowing_scale_is_skipped_not_spread():
+    """A Gaussian whose inverse covariance overflows (log-scale -400: sigma ~1e-174) is skipped
+    and counted; it must not blank the voxels of the Gaussians it overlaps (a NaN kernel)."""
+    import numpy as np
+
+    from dreamprint_gui.io.volumes import grid_for_source
+    from dreamprint_gui.io.volumes.splats import GaussianCloud
+
+    means = np.zeros((2, 3))
+    sig = np.array([[0.3, 0.3, 0.3], [1e-174, 0.3, 0.3]])
+    quats = np.array([[1.0, 0, 0, 0], [1.0, 0, 0, 0]])
+    both = GaussianCloud("c", "t", means, sig, quats, [0.5, 0.5], [[1, 0, 0], [0, 1, 0]],
+                         bounds=((-1, -1, -1), (1, 1, 1)))
+    one = GaussianCloud("c", "t", means[:1], sig[:1], quats[:1], [0.5], [[1, 0, 0]],
+                        bounds=((-1, -1, -1), (1, 1, 1)))
+    assert (both.n_skipped, one.n_skipped) == (1, 0)
+    g = grid_for_source(one, (0.1, 0.1, 0.1), size_mm=(2, 2, 2))
+    for a, b in zip(both.sample_slab(g, 0, 20), one.sample_slab(g, 0, 20), strict=True):
+        assert np.array_equal(a, b)
+    assert one.sample_slab(g, 0, 20)[1].max() > 0

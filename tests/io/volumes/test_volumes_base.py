@@ -114,7 +114,8 @@ def test_reused_slab_buffers_give_what_fresh_arrays_give(shared_data):
     from dreamprint_gui.io.volumes.base import SlabBuffers
 
     for f in ("demo", shared_data / "volumes" / "ironProt.vtk",
-              shared_data / "voxels" / "magicavoxel_chr_knight.vox"):
+              shared_data / "voxels" / "magicavoxel_chr_knight.vox",
+              shared_data / "splats" / "inria3dgs_iter7000_sh3_9080.ply"):
         s = open_source(f)
         g = grid_for_source(s, (0.2, 0.2, 0.1), height_mm=6)
         nx, ny, nz = g.shape_xyz
