@@ -36,17 +36,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_sources import KINDS, source_path  # noqa: E402
 from job_hashes import height_for  # noqa: E402
 
-VOXEL = (0.084, 0.028, 0.014)  # j850-paper
-
 
 def measure(kind: str, n_voxels: float, slabs: int, layers: int, repeat: int) -> dict:
     from dreamprint_gui.job.plan import ConvertSettings, prepare_job
     from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
 
     src = source_path(kind)
-    h = (height_for(src, n_voxels) if src != "demo"
-         else (n_voxels * VOXEL[0] * VOXEL[1] * VOXEL[2]) ** (1 / 3))
-    ctx = prepare_job(ConvertSettings(source=src, output="unused", height_mm=h, workers=1))
+    ctx = prepare_job(ConvertSettings(source=src, output="unused",
+                                      height_mm=height_for(src, n_voxels), workers=1))
     nx, ny, nz = ctx.shape_xyz
     args = ctx.kernel_args()
     threshold = float(args[0])

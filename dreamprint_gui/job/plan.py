@@ -134,6 +134,9 @@ class JobContext:
     source: Any = None
     tables: Any = None
     content: Any = None  # engine.content.ContentChoice (None: fog)
+    # the source file's size and mtime when the job was planned (:func:`_stamp`): part of a
+    # worker's cache key, so a long-lived worker reopens a source edited since its last job
+    source_stamp: tuple = ()
 
     @property
     def shape_xyz(self) -> tuple[int, int, int]:
@@ -164,7 +167,7 @@ class JobContext:
         if self.source is not None and self.tables is not None:
             return self.source, self.tables
         s = self.settings
-        key = (s.source, _stamp(s.source), repr(sorted(s.source_options.items())),
+        key = (s.source, self.source_stamp, repr(sorted(s.source_options.items())),
                str(s.profile), self.printer.layer_thickness_mm, s.objective, s.table_size,
                s.content, s.sampling, s.intent)
         with _WORKER_LOCK:
@@ -182,16 +185,16 @@ class JobContext:
 
 
 def _stamp(spec: str) -> tuple:
-    """Size and modification time of a source file, or of a source folder's entries, so that a
-    long-lived worker (a cluster's) reopens a source edited in place since its last job."""
+    """Size and modification time of a source file, or of a source folder's entries (taken
+    once, when the job is planned)."""
     try:
         st = os.stat(spec)
         if not os.path.isdir(spec):
             return (st.st_size, st.st_mtime_ns)
         with os.scandir(spec) as it:
-            return tuple(sorted((e.name, e.stat().st_size, e.stat().st_mtime_ns) for e in it))
+            return tuple(sorted((e.name, _stamp(e.path)) for e in it))
     except OSError:
-        return ()  # "demo", or a path this worker cannot see (opening it says so)
+        return ()  # "demo", or a path that cannot be read (opening it says so)
 
 
 def _clear_sigma(profile) -> float:
@@ -250,7 +253,7 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
                      palette=printer.palette(), profile_name=profile.name,
                      profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
-                     content=content)
+                     content=content, source_stamp=_stamp(s.source))
     _load_kernels(ctx)
     return ctx
 

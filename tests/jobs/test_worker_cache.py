@@ -19,16 +19,16 @@ def _grid(path, value):
 def test_worker_reopens_a_source_changed_since_its_last_job(tmp_path):
     src = tmp_path / "grid.npz"
     _grid(src, 1.0)
-    ctx = prepare_job(ConvertSettings(source=str(src), output=str(tmp_path / "JOB"),
-                                      height_mm=2.0))
+    settings = ConvertSettings(source=str(src), output=str(tmp_path / "JOB"), height_mm=2.0)
+    ctx = prepare_job(settings)
     shipped = pickle.dumps(ctx)  # what a worker receives: no source, no tables
     first, _ = pickle.loads(shipped).resources()
-    again, _ = pickle.loads(shipped).resources()
+    again, _ = pickle.loads(pickle.dumps(prepare_job(settings))).resources()  # the next job
     assert again is first  # the same file: kept
     _grid(src, 3.0)
     st = os.stat(src)
     os.utime(src, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
-    changed, _ = pickle.loads(shipped).resources()
+    changed, _ = pickle.loads(pickle.dumps(prepare_job(settings))).resources()
     assert changed is not first
     g = ctx.grid
     assert changed.sample_slab(g, 0, 1)[1].max() > first.sample_slab(g, 0, 1)[1].max()
