@@ -30,6 +30,7 @@ from dreamprint_gui.gamut.optimise import canonical_objective
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.registry import reader_options
 from dreamprint_gui.job.content import CONTENT_MODES, apply_content
+from dreamprint_gui.job.correction import check_correction, load_correction
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner
 from dreamprint_gui.physics.density import scalar_sigma
 
@@ -66,6 +67,7 @@ class ConvertSettings:
     source_options: dict[str, Any] = field(default_factory=dict)
     content: str = "auto"                 # "fog" | "solid" | "auto" (job.content)
     sampling: str | None = None           # None: the reader's default; "nearest" | "linear"
+    compensation: str | os.PathLike | None = None  # a correction file (job.correction)
 
 
 @dataclass(frozen=True)
@@ -140,6 +142,9 @@ class JobContext:
     # the source file's size and mtime when the job was planned (:func:`_stamp`): part of a
     # worker's cache key, so a long-lived worker reopens a source edited since its last job
     source_stamp: tuple = ()
+    # job.correction.Correction applied to the samples before the table lookup (None: none);
+    # a small read-only field that pickles with the context to every worker
+    correction: Any = None
 
     @property
     def shape_xyz(self) -> tuple[int, int, int]:
@@ -251,6 +256,14 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
                      palette=printer.palette(), profile_name=profile.name,
                      profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
                      content=content, source_stamp=_stamp(s.source))
+    if s.compensation is not None:
+        corr = load_correction(s.compensation)
+        check_correction(corr, s.compensation, source=s.source,
+                         print_size_mm=tuple(n * v for n, v in zip(shape, printer.voxel_mm,
+                                                                    strict=True)),
+                         printer=printer.name, profile_fingerprint=ctx.profile_fingerprint,
+                         background=s.background)
+        ctx.correction = corr
     return ctx
 
 # ----------------------------------------------------------------------------- scheduling

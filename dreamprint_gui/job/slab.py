@@ -28,6 +28,7 @@ import numpy as np
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes.base import SlabBuffers
+from dreamprint_gui.job.correction import apply_correction
 from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
 from dreamprint_gui.job.plan import (
     ConvertSettings,
@@ -77,8 +78,14 @@ def _slab_into(ctx: JobContext, grid: Any, z0: int, z1: int, labels: np.ndarray,
     ny, nx = labels.shape[1:]
     scale = ctx.settings.density_scale
     t0 = time.perf_counter()
+    corr = ctx.correction
+    if corr is not None and corr.is_identity:
+        corr = None
     planner = getattr(source, "layer_plan", None)
-    plan = planner(grid, z0, z1, density_scale=scale) if planner is not None else None
+    # A correction is applied between sampling and labelling: the fused sample+label calls
+    # have no such step, so a corrected job takes the general path (bench_compensate.py)
+    plan = (planner(grid, z0, z1, density_scale=scale)
+            if planner is not None and corr is None else None)
     if plan is not None:
         rgb, dens = _WORKSPACE.samples.take((1, ny, nx))
         kernel = _LAYER_KERNELS[getattr(source, "layer_kind", "dense")]
@@ -89,6 +96,12 @@ def _slab_into(ctx: JobContext, grid: Any, z0: int, z1: int, labels: np.ndarray,
     # sampler may then leave the colour of empty rows stale instead of zeroing it.
     _WORKSPACE.samples.colour_where_dense = bool(ctx.kernel_args()[0] > 0)
     rgb, dens = source.sample_slab(grid, z0, z1, density_scale=scale, out=_WORKSPACE.samples)
+    if corr is not None:
+        rgb = np.ascontiguousarray(rgb, np.float32)
+        dens = np.ascontiguousarray(dens, np.float32)
+        if not (rgb.flags.writeable and dens.flags.writeable):
+            rgb, dens = rgb.copy(), dens.copy()
+        apply_correction(corr.gain, ctx.shape_xyz, z0, rgb, dens)
     t1 = time.perf_counter()
     _labels_of_slab(ctx, rgb, dens, z0, labels, counts, sums, stats)
     return {"sample": t1 - t0, "lookup_halftone": time.perf_counter() - t1}
