@@ -7,6 +7,7 @@ import math
 import signal
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -76,6 +77,12 @@ def _fmt_time(s: float | None) -> str:
                    "profile's, else colorimetric).")
 @click.option("--table-size", type=int, default=100, hidden=True,
               help="Colour table nodes per axis (tests use small tables).")
+@click.option("--compensation", type=click.Path(), default=None,
+              help="Apply a correction file made by 'dreamprint compensate' (made for this "
+                   "source, size, printer, profile and background).")
+@click.option("--compensate", is_flag=True,
+              help="Optimise a correction first (dreamprint compensate's defaults; written "
+                   "beside the job as JOB.correction.npz), then convert with it.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the manifest (with the pre-flight estimate and warnings) as JSON.")
@@ -83,7 +90,8 @@ def _fmt_time(s: float | None) -> str:
               help="No pre-flight summary, warnings or progress on stderr.")
 def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
             workers, scheduler, background, density_threshold, slab_layers, source_options,
-            content, sampling, objective, intent, table_size, overwrite, as_json, quiet) -> None:
+            content, sampling, objective, intent, table_size, compensation, compensate,
+            overwrite, as_json, quiet) -> None:
     """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack.
 
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
@@ -104,7 +112,13 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         workers=workers, scheduler=scheduler, background=background,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
         objective=objective, intent=intent, table_size=table_size, source_options=opts,
-        content=content, sampling=sampling)
+        content=content, sampling=sampling, compensation=compensation)
+    made = None
+    if compensate:
+        if compensation is not None:
+            raise DreamPrintError("give --compensate or --compensation, not both")
+        made = _compensate_for(settings, quiet)
+        settings = replace(settings, compensation=str(made))
 
     def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
         raise KeyboardInterrupt()
@@ -129,8 +143,12 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
                 progress.update(p)
             elif p.message and p.stage not in ("done", "finishing") and not quiet:
                 click.echo(p.message, err=True)
-    except JobCancelled:
-        raise DreamPrintError("cancelled; the partial job was removed", output) from None
+    except BaseException as exc:
+        if made is not None:
+            made.unlink(missing_ok=True)
+        if isinstance(exc, JobCancelled):
+            raise DreamPrintError("cancelled; the partial job was removed", output) from None
+        raise
     finally:
         progress.close()
         gen.close()
@@ -148,6 +166,30 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
                    f"({size[0]:.2f} x {size[1]:.2f} x {size[2]:.2f} mm), "
                    f"{nx * ny * nz:,} voxels in {t['total']:.1f} s "
                    f"({t['voxels_per_second'] / 1e6:.1f} Mvox/s)")
+
+
+def _compensate_for(settings, quiet: bool) -> Path:
+    """``--compensate``: optimise a correction for ``settings`` (written as
+    ``OUTPUT.correction.npz`` beside the job); returns its path."""
+    from dreamprint_gui.cli.proof import _drive
+    from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
+
+    s = settings
+    out = Path(str(s.output).rstrip("/\\") + ".correction.npz")
+    cs = CompensateSettings(source=s.source, output=str(out), height_mm=s.height_mm,
+                            size_mm=s.size_mm, printer=s.printer, profile=s.profile,
+                            seed=s.seed, halftone=s.halftone, density_scale=s.density_scale,
+                            background=s.background, table_size=s.table_size,
+                            source_options=tuple(sorted(s.source_options.items())),
+                            overwrite=s.overwrite)
+    report = _drive(run_compensate(cs), prefix="[compensate] ", quiet=quiet)
+    if not quiet:
+        f = report["figures"]
+        click.echo(f"compensation: training dE2000 mean {f['before']['mean_de2000']:.2f} -> "
+                   f"{f['after']['mean_de2000']:.2f}, coverage error "
+                   f"{f['before']['coverage_error']:+.3f} -> {f['after']['coverage_error']:+.3f}"
+                   f" ({report['seconds']:.0f} s); wrote {out}", err=True)
+    return out
 
 
 def clamp_report(manifest: dict) -> str | None:

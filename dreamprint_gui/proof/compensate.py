@@ -374,11 +374,11 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         if is_cancelled():
             raise JobCancelled("the compensation was cancelled")
         tag = f"iteration {it}/{n_it}"
-        medium = yield from run(f"labels ({tag})", lambda p: loop.medium(gain, p))
+        medium = yield from run(f"labels ({tag})", lambda p, g=gain: loop.medium(g, p))
         if loop.src is None:
             loop.render_sources(medium)
         lins, alphas, figs = yield from run(f"print ({tag})",
-                                            lambda p: loop.proof(medium, s.seed, p))
+                                            lambda p, m=medium: loop.proof(m, s.seed, p))
         o = summarise(figs)
         history.append({"iteration": it, "elapsed_s": round(el(), 2),
                         **{k: o[k] for k in ("mean_de2000", "p95_de2000", "coverage_error",

@@ -77,6 +77,7 @@ class ProofSettings:
     overwrite: bool = False
     table_size: int = 100
     source_options: tuple[tuple[str, Any], ...] = ()
+    compensation: str | None = None  # a correction file (job.correction) the labels apply
 
 
 @dataclass(frozen=True)
@@ -105,6 +106,8 @@ def validate(s: ProofSettings) -> None:
                               f"{' or '.join(HALFTONE_METHODS)})")
     if s.background not in ("clear", "empty"):
         raise DreamPrintError(f"--background must be clear or empty, not '{s.background}'")
+    if s.compensation is not None and s.method != "paper":
+        raise DreamPrintError("--compensation applies to the paper's method (the job's own)")
     if not 4 <= int(s.max_cells) <= 512:
         raise DreamPrintError(f"--cells must be 4..512, got {s.max_cells}")
     if not 1 <= int(s.bands) <= 36:
@@ -235,9 +238,20 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
                      "key_light_irradiance": s.key_light, "floor": s.floor},
         "views": per_view,
         "overall": summarise(per_view),
+        "compensation": _compensation(lab),
         "timings_s": timings,
     }
     return {"report": report, "images": images}
+
+
+def _compensation(lab) -> dict | None:
+    """What proof.json says of a correction the labels applied: the file, its field and the
+    optimiser's before/after figures on its training cameras."""
+    corr = getattr(getattr(lab, "ctx", None), "correction", None)
+    if corr is None:
+        return None
+    return {"path": str(lab.settings.compensation), **corr.describe(),
+            "optimiser_figures": corr.report.get("figures")}
 
 
 def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool) -> np.ndarray:
