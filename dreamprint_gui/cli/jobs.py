@@ -171,7 +171,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
 def _compensate_for(settings, quiet: bool) -> Path:
     """``--compensate``: optimise a correction for ``settings`` (written as
     ``OUTPUT.correction.npz`` beside the job); returns its path."""
-    from dreamprint_gui.cli.proof import _drive
+    from dreamprint_gui.job.plan import JobCancelled
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
 
     s = settings
@@ -182,7 +182,21 @@ def _compensate_for(settings, quiet: bool) -> Path:
                             background=s.background, table_size=s.table_size,
                             source_options=tuple(sorted(s.source_options.items())),
                             overwrite=s.overwrite)
-    report = _drive(run_compensate(cs), prefix="[compensate] ", quiet=quiet)
+    gen = run_compensate(cs)
+    try:
+        while True:
+            try:
+                p = next(gen)
+            except StopIteration as stop:
+                report = stop.value
+                break
+            if p.stage == "iteration" and not quiet:
+                click.echo(f"[compensate] {p.message}  elapsed {_fmt_time(p.elapsed_s)}",
+                           err=True)
+    except JobCancelled:
+        raise DreamPrintError("cancelled; nothing was written", out) from None
+    finally:
+        gen.close()
     if not quiet:
         f = report["figures"]
         click.echo(f"compensation: training dE2000 mean {f['before']['mean_de2000']:.2f} -> "
