@@ -38,6 +38,39 @@ def drive(gen):
         return stop.value
 
 
+def floor_only(a) -> None:
+    """The gamut floor on the proof's cameras (:func:`..proof.runner.gamut_floor`)."""
+    import numpy as np
+
+    from dreamprint_gui.proof.cameras import orbit_views
+    from dreamprint_gui.proof.labels import EngineLabels
+    from dreamprint_gui.proof.medium import block_for_cell
+    from dreamprint_gui.proof.methods import _convert_settings
+    from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
+    from dreamprint_gui.proof.source_render import render_source, sample_source
+    from dreamprint_gui.proof.spectral import spectral_bands
+
+    for name in a.only.split(","):
+        for bg in a.backgrounds.split(","):
+            t0 = time.perf_counter()
+            ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm, views=4,
+                               resolution=a.resolution, background=bg, max_cells=a.cells)
+            lab = EngineLabels(_convert_settings(ps))
+            size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
+            block = block_for_cell(lab.voxel_mm, size, a.cells)
+            cells = tuple(-(-n // b) for n, b in zip(lab.shape_xyz, block, strict=True))
+            lo = -0.5 * np.asarray(size)
+            field = sample_source(lab.source, lab.grid, block, lab.density_scale, cells, lo)
+            views = orbit_views(size, 4)
+            src = [render_source(field, v, a.resolution) for v in views]
+            obs = spectral_bands(lab.profile, 12).observer
+            f = gamut_floor(lab, field, views, a.resolution, [x[0] for x in src],
+                            [x[1] for x in src], obs)
+            print(f"{name:7s} {bg:6s} gamut floor dE {f['mean_de2000']:5.2f}/"
+                  f"{f['p95_de2000']:5.2f} cov {f['coverage_error']:+.3f} "
+                  f"({time.perf_counter() - t0:.0f} s)", flush=True)
+
+
 def main() -> None:
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
     from dreamprint_gui.proof.runner import ProofSettings, render_proof
@@ -53,7 +86,12 @@ def main() -> None:
     ap.add_argument("--backgrounds", default="clear,empty")
     ap.add_argument("--only", default="knight,smoke,splat")
     ap.add_argument("--json", default=None, help="Also write the rows to this file.")
+    ap.add_argument("--floor-only", action="store_true",
+                    help="Only the gamut floor of each source (no labels, no print render).")
     a = ap.parse_args()
+    if a.floor_only:
+        floor_only(a)
+        return
     rows = []
     for name in a.only.split(","):
         src = SOURCES[name]
@@ -69,16 +107,20 @@ def main() -> None:
             rep = drive(run_compensate(cs))
             t_opt = time.perf_counter() - t0
             res = {}
+            floor = None
             for method, comp in (("paper", None), ("compensated", corr)):
                 ps = ProofSettings(source=src, height_mm=a.height_mm, views=4,
                                    resolution=a.resolution, spp=a.spp, seed=a.seed,
                                    background=bg, max_cells=a.cells, layers_per_block=1,
                                    compensation=comp)
-                res[method] = drive(render_proof(ps))["report"]["overall"]
+                rep_m = drive(render_proof(ps))["report"]
+                res[method] = rep_m["overall"]
+                floor = rep_m["gamut_floor"] or floor
             os.unlink(corr)
             load1 = open("/proc/loadavg").read().split()[:3]
             p, c = res["paper"], res["compensated"]
             row = {"source": name, "background": bg, "paper": p, "compensated": c,
+                   "gamut_floor": floor,
                    "reduction_de_mean": 1 - c["mean_de2000"] / p["mean_de2000"],
                    "optimise_s": round(t_opt, 1), "training": rep["figures"],
                    "load_before": load0, "load_after": load1}
@@ -86,7 +128,8 @@ def main() -> None:
             print(f"{name:7s} {bg:6s} paper dE {p['mean_de2000']:5.2f}/{p['p95_de2000']:5.2f} "
                   f"cov {p['coverage_error']:+.3f} | compensated dE {c['mean_de2000']:5.2f}/"
                   f"{c['p95_de2000']:5.2f} cov {c['coverage_error']:+.3f} | "
-                  f"{100 * row['reduction_de_mean']:+.0f}% dE mean | optimise {t_opt:.0f} s "
+                  f"{-100 * row['reduction_de_mean']:+.0f}% dE mean | floor dE "
+                  f"{floor['mean_de2000']:5.2f} | optimise {t_opt:.0f} s "
                   f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:

@@ -195,6 +195,7 @@ def evaluate_methods(source, methods, halftones, iterations, comp_views, **kw) -
     rows = []
     combos = [(m, h) for m in ms for h in hs]
     tmp = None
+    floor = None
     try:
         for k, (m, h) in enumerate(combos):
             kw2 = dict(kw, halftone=h)
@@ -216,12 +217,14 @@ def evaluate_methods(source, methods, halftones, iterations, comp_views, **kw) -
                 row["optimise_seconds"] = comp["seconds"]
                 row["training"] = comp["figures"]
             rows.append(row)
+            floor = floor or r.get("gamut_floor")
     finally:
         if tmp is not None:
             Path(tmp).unlink(missing_ok=True)
     table = {"source": source, "height_mm": kw["height_mm"], "size_mm": kw["size_mm"],
              "views": kw["views"], "resolution": kw["resolution"], "spp": kw["spp"],
-             "seed": kw["seed"], "background": kw["background"], "methods": rows}
+             "seed": kw["seed"], "background": kw["background"], "methods": rows,
+             "gamut_floor": floor}
     if kw["as_json"]:
         click.echo(json.dumps(table, indent=2))
         return
@@ -231,6 +234,11 @@ def evaluate_methods(source, methods, halftones, iterations, comp_views, **kw) -
         click.echo(f"{r['method']:14s} {r['halftone']:10s} {r['mean_de2000']:8.2f} "
                    f"{r['p95_de2000']:8.2f} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
                    f"{r['coverage_error']:+9.3f}")
+    if floor is not None:
+        click.echo(f"{'gamut floor':25s} {floor['mean_de2000']:8.2f} {floor['p95_de2000']:8.2f} "
+                   f"{floor['psnr_db']:6.1f} {floor['ssim']:6.3f} "
+                   f"{floor['coverage_error']:+9.3f}  (the source in the printable colours, "
+                   "no light transport)")
 
 
 def _held_out_correction(source, kw, prefix, iterations, views):
@@ -275,7 +283,7 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.option("--spp", type=int, default=4, show_default=True)
 @click.option("--cells", "max_cells", type=int, default=32, show_default=True,
               help="Proof cells along the print's longest axis.")
-@click.option("--field-cells", type=int, default=12, show_default=True,
+@click.option("--field-cells", type=int, default=16, show_default=True,
               help="Correction cells along the print's longest axis.")
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",
               show_default=True)

@@ -88,7 +88,7 @@ class CompensateSettings:
     resolution: int = 64
     spp: int = 4
     max_cells: int = 32            # proof cells on the longest axis
-    field_cells: int = 12          # correction cells on the longest axis
+    field_cells: int = 16          # correction cells on the longest axis
     step: float = 1.0
     halftone: str = "blue-noise"
     density_scale: float = 1.0
@@ -229,11 +229,13 @@ def pixel_log_ratios(src_lin: NDArray, src_alpha: NDArray, prn_lin: NDArray,
                      prn_alpha: NDArray) -> NDArray:
     """Per pixel (res, res, 4): log of the clipped ratios of object colour (3, linear sRGB,
     unpremultiplied over the white background) and of optical depth (1), source over print."""
-    a_s = np.clip(src_alpha, _ALPHA_MIN, 1.0)[..., None]
     a_p = np.clip(prn_alpha, _ALPHA_MIN, 1.0)[..., None]
-    s_obj = np.clip((src_lin - (1.0 - a_s)) / a_s, 0.0, None)
+    # the object colour the print needs at its own coverage for its pixel to equal the
+    # source's (over the white background): (S - (1 - a_p)) / a_p; a print more transparent
+    # than the source asks for a darker colour
+    t_obj = np.clip((src_lin - (1.0 - a_p)) / a_p, 0.0, None)
     p_obj = np.clip((prn_lin - (1.0 - a_p)) / a_p, 0.0, None)
-    rc = (s_obj + _EPS_COLOUR) / (p_obj + _EPS_COLOUR)
+    rc = (t_obj + _EPS_COLOUR) / (p_obj + _EPS_COLOUR)
     ta = np.clip(src_alpha, _ALPHA_MIN, 0.98)
     tp = np.clip(prn_alpha, _ALPHA_MIN, 0.98)
     rs = np.log1p(-ta) / np.log1p(-tp)

@@ -219,6 +219,10 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
                        "de2000": de})
         yield ProofProgress("compare", i + 1, len(views), el())
     timings["compare"] = time.perf_counter() - t3
+    t4 = time.perf_counter()
+    floor_fig = gamut_floor(lab, field, views, s.resolution, src_lin, src_alpha, obs,
+                            floor_rho)
+    timings["gamut_floor"] = time.perf_counter() - t4
     timings["total"] = el()
     report = {
         "format": "dreamprint-proof", "format_version": 1,
@@ -239,9 +243,44 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         "views": per_view,
         "overall": summarise(per_view),
         "compensation": _compensation(lab),
+        "gamut_floor": floor_fig,
         "timings_s": timings,
     }
     return {"report": report, "images": images}
+
+
+def gamut_floor(lab, field, views, resolution: int, src_lin: list, src_alpha: list, obs,
+                floor_rho: float | None = None) -> dict | None:
+    """The gamut floor: the source rendered (emission-absorption, the same cameras) with each
+    cell's colour and density replaced by what the job's tables deposit for them
+    (:func:`dreamprint_gui.gamut.alignment.predicted_appearance`: lookup, density alignment,
+    the mixture's KM colour at the reference thickness and its sigma; cells below the
+    background threshold empty), compared with the source render. No light transport between
+    voxels and no background block: what any method with these inks could at best show. None
+    for a job folder (no tables)."""
+    from dreamprint_gui.gamut.alignment import predicted_appearance
+    from dreamprint_gui.proof.source_render import SourceField
+
+    ctx = getattr(lab, "ctx", None)
+    if ctx is None or ctx.tables is None:
+        return None
+    rgb = np.clip(field.colour, 0, 1)
+    srgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * rgb ** (1 / 2.4) - 0.055)
+    pred, sig = predicted_appearance(ctx.tables, lab.profile, srgb.reshape(-1, 3),
+                                     field.sigma.reshape(-1))
+    pred = np.clip(pred.reshape(field.colour.shape), 0, 1)
+    lin = np.where(pred <= 0.04045, pred / 12.92, ((pred + 0.055) / 1.055) ** 2.4)
+    sig = np.where(field.sigma >= ctx.halftoner.threshold, sig.reshape(field.sigma.shape), 0)
+    floor_field = SourceField(np.ascontiguousarray(sig, np.float32),
+                              np.ascontiguousarray(lin, np.float32), field.lo_mm,
+                              field.cell_mm)
+    to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
+    per_view = []
+    for i, v in enumerate(views):
+        rgb_f, a_f = render_source(floor_field, v, resolution, floor_rho=floor_rho)
+        fig, _ = compare_view(src_lin[i] @ to_xyz.T, rgb_f @ to_xyz.T, src_alpha[i], a_f, obs)
+        per_view.append(fig)
+    return summarise(per_view)
 
 
 def _compensation(lab) -> dict | None:

@@ -85,3 +85,32 @@ def test_cancel_writes_nothing(tmp_path):
             if p.stage.startswith("print"):
                 cancel.set()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_gamut_floor_of_an_identity_table_is_the_source(monkeypatch):
+    """With tables that deposit exactly the asked colour and density the floor's render is the
+    source's own: dE2000 0 and coverage error 0 (the plumbing of runner.gamut_floor)."""
+    from dreamprint_gui.gamut import alignment
+    from dreamprint_gui.proof.cameras import orbit_views
+    from dreamprint_gui.proof.labels import EngineLabels
+    from dreamprint_gui.proof.methods import _convert_settings
+    from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
+    from dreamprint_gui.proof.source_render import render_source
+    from dreamprint_gui.proof.spectral import spectral_bands
+
+    lab = EngineLabels(_convert_settings(ProofSettings(source="demo", height_mm=2,
+                                                       table_size=17)))
+    rng = np.random.default_rng(0)
+    sigma = rng.uniform(0, 20, (6, 6, 6)).astype(np.float32)
+    sigma[sigma < 5] = 0.0
+    field = SourceField(sigma, rng.uniform(0, 1, (6, 6, 6, 3)).astype(np.float32),
+                        np.array([-1.0, -1, -1]), np.full(3, 2 / 6))
+    monkeypatch.setattr(alignment, "predicted_appearance",
+                        lambda tables, profile, rgb, s: (np.asarray(rgb), np.asarray(s)))
+    assert lab.ctx.halftoner.threshold < 5.0  # every non-empty cell is printed
+    views = orbit_views((2.0, 2.0, 2.0), 2)
+    src = [render_source(field, v, 16) for v in views]
+    obs = spectral_bands(lab.profile, 12).observer
+    f = gamut_floor(lab, field, views, 16, [s[0] for s in src], [s[1] for s in src], obs)
+    assert f["object_pixels"] > 0
+    assert f["mean_de2000"] < 0.05 and abs(f["coverage_error"]) < 1e-9
