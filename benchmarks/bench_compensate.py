@@ -38,6 +38,51 @@ def drive(gen):
         return stop.value
 
 
+def job_cost(a) -> None:
+    """Seconds of ``convert`` (one worker, a temporary folder) without a correction and with a
+    uniform one (colour x0.9, density x1.1): what leaving the fused sampling paths costs."""
+    import shutil
+
+    import numpy as np
+
+    from dreamprint_gui.job.correction import Correction, save_correction, source_fingerprint
+    from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+    from dreamprint_gui.job.run import run_conversion
+
+    for name in a.only.split(","):
+        src = SOURCES[name]
+        tmp = tempfile.mkdtemp()
+        try:
+            base = ConvertSettings(source=src, height_mm=a.height_mm, workers=1)
+            ctx = prepare_job(base)
+            size = tuple(n * v for n, v in zip(ctx.shape_xyz, ctx.printer.voxel_mm,
+                                               strict=True))
+            gain = np.empty((8, 8, 8, 4), np.float32)
+            gain[...] = (0.9, 0.9, 0.9, 1.1)
+            corr = os.path.join(tmp, "c.npz")
+            save_correction(Correction(gain, src, source_fingerprint(src), size,
+                                       ctx.printer.name, ctx.profile_fingerprint, "clear"),
+                            corr)
+            out = []
+            for tag, comp in (("plain", None), ("corrected", corr)):
+                s = ConvertSettings(source=src, height_mm=a.height_mm, workers=1,
+                                    output=os.path.join(tmp, tag), compensation=comp)
+                gen = run_conversion(s)
+                try:
+                    while True:
+                        next(gen)
+                except StopIteration as stop:
+                    t = stop.value["timings_s"]
+                out.append((tag, t["total"], t["voxels_per_second"]))
+            nx, ny, nz = ctx.shape_xyz
+            print(f"{name:7s} {a.height_mm:g} mm, {nx * ny * nz / 1e6:.0f} Mvox, 1 worker: " +
+                  "; ".join(f"{tag} {sec:.1f} s ({vps / 1e6:.1f} Mvox/s)"
+                            for tag, sec, vps in out) +
+                  f" (load {' '.join(open('/proc/loadavg').read().split()[:3])})", flush=True)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
 def floor_only(a) -> None:
     """The gamut floor on the proof's cameras (:func:`..proof.runner.gamut_floor`)."""
     import numpy as np
@@ -88,7 +133,13 @@ def main() -> None:
     ap.add_argument("--json", default=None, help="Also write the rows to this file.")
     ap.add_argument("--floor-only", action="store_true",
                     help="Only the gamut floor of each source (no labels, no print render).")
+    ap.add_argument("--job-cost", action="store_true",
+                    help="Only the conversion's speed without and with a correction (the "
+                         "general sampling path), one worker.")
     a = ap.parse_args()
+    if a.job_cost:
+        job_cost(a)
+        return
     if a.floor_only:
         floor_only(a)
         return

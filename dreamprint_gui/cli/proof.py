@@ -283,7 +283,7 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.option("--spp", type=int, default=4, show_default=True)
 @click.option("--cells", "max_cells", type=int, default=32, show_default=True,
               help="Proof cells along the print's longest axis.")
-@click.option("--field-cells", type=int, default=16, show_default=True,
+@click.option("--field-cells", type=int, default=32, show_default=True,
               help="Correction cells along the print's longest axis.")
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",
               show_default=True)

@@ -88,7 +88,7 @@ class CompensateSettings:
     resolution: int = 64
     spp: int = 4
     max_cells: int = 32            # proof cells on the longest axis
-    field_cells: int = 16          # correction cells on the longest axis
+    field_cells: int = 32          # correction cells on the longest axis
     step: float = 1.0
     halftone: str = "blue-noise"
     density_scale: float = 1.0
