@@ -114,3 +114,17 @@ def test_gamut_floor_of_an_identity_table_is_the_source(monkeypatch):
     f = gamut_floor(lab, field, views, 16, [s[0] for s in src], [s[1] for s in src], obs)
     assert f["object_pixels"] > 0
     assert f["mean_de2000"] < 0.05 and abs(f["coverage_error"]) < 1e-9
+
+
+def test_evaluate_methods_compensated_row_and_gamut_floor(capsys):
+    code = main(["evaluate", "methods", "demo", "--methods", "paper,compensated",
+                 "--height-mm", "3", "--views", "1", "--resolution", "16", "--spp", "2",
+                 "--cells", "12", "--table-size", "17", "--iterations", "1",
+                 "--training-views", "1", "--json"])
+    cap = capsys.readouterr()
+    assert code == 0, cap.err
+    t = json.loads(cap.out)
+    paper, comp = t["methods"]
+    assert (paper["method"], comp["method"]) == ("paper", "compensated")
+    assert len(comp["training"]["before"]) and comp["optimise_seconds"] > 0
+    assert t["gamut_floor"]["object_pixels"] > 0
