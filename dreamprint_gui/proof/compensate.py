@@ -372,6 +372,7 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
     history: list[dict] = []
     best = (math.inf, gain.copy(), None)
     n_it = int(s.iterations)
+    t_first = 0.0
     for it in range(n_it + 1):
         if is_cancelled():
             raise JobCancelled("the compensation was cancelled")
@@ -385,9 +386,13 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         history.append({"iteration": it, "elapsed_s": round(el(), 2),
                         **{k: o[k] for k in ("mean_de2000", "p95_de2000", "coverage_error",
                                              "coverage_abs_error")}})
+        if it == 0:
+            t_first = el()
+        left = "" if it == 0 or it == n_it else \
+            f", about {(el() - t_first) / it * (n_it - it):.0f} s left"
         yield ProofProgress("iteration", it + 1, n_it + 1, el(),
                             f"{tag}: dE2000 mean {o['mean_de2000']:.2f}, coverage error "
-                            f"{o['coverage_error']:+.3f}")
+                            f"{o['coverage_error']:+.3f}{left}")
         if _score(o) < best[0]:
             best = (_score(o), gain.copy(), o)
         if it == n_it:
