@@ -166,11 +166,12 @@ def check_header(path: Path) -> dict:
     for k in range(n_grids):
         name = h.string(f"grid descriptor {k + 1} of {n_grids}").split("\x1e")[0]
         gtype = h.string(f"the type of grid {name!r}")
-        if version >= 216:
-            h.string(f"the instance parent of grid {name!r}")
+        parent = h.string(f"the instance parent of grid {name!r}")
         grid_pos = h.i64(f"the offsets of grid {name!r}")
         block_pos = h.i64(f"the offsets of grid {name!r}")
         end_pos = h.i64(f"the offsets of grid {name!r}")
+        if parent:                        # an instance has no blocks (block offset 0)
+            block_pos = grid_pos
         if not (0 < grid_pos <= block_pos <= end_pos):
             h.fail(f"damaged: grid {name!r} has inconsistent offsets {grid_pos}, {block_pos}, "
                    f"{end_pos}")

@@ -206,6 +206,8 @@ def read_file(path: Path) -> VdbFile:
             ttype = ttype[:-len(HALF_SUFFIX)]
         parent = c.string("its instance parent")
         g, b, e = c.unpack("<qqq", "its offsets")
+        if parent:                        # an instance has no blocks (block offset 0)
+            b = g
         if not (c.pos == g <= b <= e <= c.size):
             raise VdbError(f"damaged or truncated: offsets {g:,}, {b:,}, {e:,} in a file of "
                            f"{c.size:,} bytes", name)
@@ -259,6 +261,22 @@ def _mask_bits(raw, count: int) -> np.ndarray:
     return np.unpackbits(np.frombuffer(raw, np.uint8), bitorder="little")[:count].view(bool)
 
 
+def _blosc(raw: bytes, nbytes: int) -> bytes:
+    """A blosc frame (bloscFromStream), after checking that its header announces ``nbytes``
+    (bytes 4..7: the uncompressed size) so that damaged data cannot ask for any size."""
+    import imagecodecs
+
+    if len(raw) < 16 or int.from_bytes(raw[4:8], "little") != nbytes:
+        raise ValueError("its blosc header does not announce the expected size")
+    return imagecodecs.blosc_decode(raw)
+
+
+def _unzip(raw: bytes, nbytes: int) -> bytes:
+    """A zlib stream (unzipFromStream), inflated to at most ``nbytes + 1`` bytes."""
+    d = zlib.decompressobj()
+    return d.decompress(raw, nbytes + 1)
+
+
 class _Values:
     """Reads ``readCompressedValues`` chunks of one grid (its flags, types and background)."""
 
@@ -272,17 +290,23 @@ class _Values:
         self.size = self.disk.itemsize * nc                # one stored value
         self.mask_c = bool(flags & COMPRESS_ACTIVE_MASK)
         self.bg = background
+        self.log: list | None = None        # (start, end, decoded bytes) of every chunk
         if flags & COMPRESS_BLOSC:
-            import imagecodecs
-
-            self.decode = imagecodecs.blosc_decode
+            self.decode = _blosc
         elif flags & COMPRESS_ZIP:
-            self.decode = zlib.decompress
+            self.decode = _unzip
         else:
             self.decode = None
 
     def chunk(self, c: _Cursor, count: int, what: str) -> bytes:
-        """``count`` stored values' bytes (readData / HalfReader)."""
+        """``count`` stored values' bytes (readData / HalfReader), logged when asked."""
+        start = c.pos
+        out = self._chunk(c, count, what)
+        if self.log is not None:
+            self.log.append((start, c.pos, out))
+        return out
+
+    def _chunk(self, c: _Cursor, count: int, what: str) -> bytes:
         nbytes = count * self.size
         if self.half and count < 1:
             return b""
@@ -296,7 +320,7 @@ class _Values:
             return c.take(nbytes, what)
         raw = c.take(n, what)
         try:
-            out = self.decode(raw)
+            out = self.decode(raw, nbytes)
         except Exception as exc:  # noqa: BLE001 - any codec failure is damaged data
             raise VdbError(f"damaged: {what} does not decompress ({exc})", self.grid) from None
         if len(out) != nbytes:
@@ -519,9 +543,12 @@ def _tree_type(ttype: str, name: str) -> tuple[str, str, int, bool]:
     return vt, dt, nc, real
 
 
-def read_grid(vf: VdbFile, gd: GridDescriptor, *, tree: bool = True) -> VdbGrid:
+def read_grid(vf: VdbFile, gd: GridDescriptor, *, tree: bool = True,
+              chunk_log: list | None = None) -> VdbGrid:
     """Read one grid of ``vf`` (with its tree unless ``tree`` is False). Raises
-    :class:`VdbError` naming the grid for anything it cannot read faithfully."""
+    :class:`VdbError` naming the grid for anything it cannot read faithfully. ``chunk_log``
+    (a list) receives (start, end, decoded bytes) of every compressed chunk (for tests that
+    re-encode a file)."""
     name = gd.name
     vt, dt, nc, real = _tree_type(gd.tree_type, name)
     if gd.instance_parent:
@@ -546,6 +573,7 @@ def read_grid(vf: VdbFile, gd: GridDescriptor, *, tree: bool = True) -> VdbGrid:
         raise VdbError(f"damaged: {buffers} buffers per node (1 expected)", name)
     bg = np.array(c.array(dt, nc, "the background value"))
     vals = _Values(flags, dt, nc, half, bg, name)
+    vals.log = chunk_log
     n_tiles, n_children = c.unpack("<II", "the root's tile and child counts")
     if n_tiles > (1 << 24) or n_children > (1 << 24):
         raise VdbError(f"damaged: the root claims {n_tiles:,} tiles and {n_children:,} "
