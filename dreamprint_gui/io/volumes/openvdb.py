@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .base import (
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import (
     PrintGrid,
     SlabBuffers,
     check_slab,
@@ -39,9 +39,9 @@ from .base import (
     uniform_rgb,
     voxel_centres,
 )
-from .leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
-from .sampling import SparseBlocks, sample_sparse
-from .vdb_file import VdbError, VdbGrid, read_file, read_grid
+from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
+from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
+from dreamprint_gui.io.volumes.vdb_file import VdbError, VdbGrid, read_file, read_grid
 
 __all__ = ["VdbSource", "open_path", "inspect_path", "check_header"]
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import open_source, openvdb
 from dreamprint_gui.io.volumes import vdb_file as V
 
