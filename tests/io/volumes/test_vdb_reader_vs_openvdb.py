@@ -380,3 +380,69 @@ def test_random_damage_never_crashes(written, tmp_path):
             assert str(exc).startswith(str(f)) and "\n" not in str(exc)
             errors += 1
     assert errors > 0
+
+
+# ---------------------------------------------------------- double and vec3d, by the spec
+def _spec_file(path, value_type: str, nc: int) -> None:
+    """A one-grid .vdb written to the layout of OpenVDB's io/Archive.cc, tree/RootNode.h,
+    InternalNode.h and LeafNode.h, uncompressed with all values stored (flags 0, metadata
+    code 6): an inactive root tile with a value, an active 128^3 tile, an active 8^3 tile, an
+    active/inactive leaf. pyopenvdb writes no double grids: this writer is checked against
+    OpenVDB with float / vec3s, then gives the same content as double / vec3d."""
+    dt = {"float": "<f4", "vec3s": "<f4", "double": "<f8", "vec3d": "<f8"}[value_type]
+
+    def val(*v):
+        return np.asarray(np.broadcast_to(np.asarray(v, np.float64), (nc,)), dt).tobytes()
+
+    def s(x: str) -> bytes:
+        return struct.pack("<I", len(x)) + x.encode()
+
+    def mask(n, on) -> bytes:
+        bits = np.zeros(n, bool)
+        bits[list(on)] = True
+        return np.packbits(bits, bitorder="little").tobytes()
+
+    leaf_vals = (np.arange(512 * nc, dtype=np.float64).reshape(512, nc) % 97) / 64 - 0.5
+    leaf_on = [n for n in range(512) if n % 5 != 0]
+    grid = struct.pack("<I", 0)                                   # flags: no compression
+    grid += struct.pack("<I", 2) + s("class") + s("string") + s("fog volume")
+    grid += s("name") + s("string") + s("density")
+    grid += s("ScaleTranslateMap") + struct.pack("<18d", 0.5, -1.0, 2.0, 0.1, 0.1, 0.1,
+                                                 *([0.1] * 3 + [10.0] * 3 + [100.0] * 3
+                                                   + [5.0] * 3))
+    grid += struct.pack("<i", 1) + val(0.0)                       # buffer count, background
+    grid += struct.pack("<II", 1, 1)                              # one tile, one child
+    grid += struct.pack("<3i", 4096, 0, 0) + val(0.375) + b"\x00"  # inactive root tile
+    grid += struct.pack("<3i", 0, 0, 0)
+    up = np.zeros((32768, nc))
+    up[1] = 0.25                                                  # slot 1: (0, 0, 128)
+    grid += mask(32768, [0]) + mask(32768, [1]) + b"\x06" + up.astype(dt).tobytes()
+    lo = np.zeros((4096, nc))
+    lo[1] = 0.75                                                  # slot 1: (0, 0, 8)
+    grid += mask(4096, [0]) + mask(4096, [1]) + b"\x06" + lo.astype(dt).tobytes()
+    grid += mask(512, leaf_on)                                    # the leaf's topology
+    block = len(grid)
+    grid += mask(512, leaf_on) + b"\x06" + leaf_vals.astype(dt).tobytes()
+    uuid = b"6f1d2c3a-8b4e-4f60-9a7b-2c5d8e9f0a1b"   # OpenVDB lists no grids for all-zero text
+    head = struct.pack("<qIIIb", V.MAGIC, 224, 10, 0, 1) + uuid + struct.pack("<Ii", 0, 1)
+    desc = s("density") + s(f"Tree_{value_type}_5_4_3") + s("")
+    g0 = len(head) + len(desc) + 24
+    path.write_bytes(head + desc + struct.pack("<qqq", g0, g0 + block, g0 + len(grid)) + grid)
+
+
+@pytest.mark.parametrize("single, double, nc", [("float", "double", 1), ("vec3s", "vec3d", 3)])
+def test_double_grids_by_the_spec(openvdb_python, tmp_path, single, double, nc):
+    a, b = tmp_path / f"{single}.vdb", tmp_path / f"{double}.vdb"
+    _spec_file(a, single, nc)
+    _spec_file(b, double, nc)
+    _compare(openvdb_python, a, tmp_path)        # the writer, checked by OpenVDB
+    ga, gb = (V.read_grid(V.read_file(f), V.read_file(f).grids[0]) for f in (a, b))
+    assert gb.value_type == double and gb.leaf_values.dtype == np.float64
+    sa, sb = ga.stats(), gb.stats()
+    assert sa["active_voxels"] == sb["active_voxels"] == 128 ** 3 + 512 + 409
+    assert sa["bbox"] == sb["bbox"] == [[0, 0, 0], [127, 127, 255]]
+    np.testing.assert_array_equal(sa["active_values"], sb["active_values"])
+    np.testing.assert_array_equal(_mine(ga, 0.0)[1], _mine(gb, 0.0)[1])
+    assert openvdb.inspect_path(b)["grids"][0]["dtype"] == double
+    if nc == 1:
+        assert open_source(b).density.blocks.n_leaves == 4096 + 1 + 1
