@@ -635,28 +635,79 @@ def _internal(c: _Cursor, org, log2: int, vals: _Values, upper, lower, leaf_mask
 
 
 def _leaf_buffers(c: _Cursor, vals: _Values, active: np.ndarray, name: str) -> np.ndarray:
-    """LeafNode::readBuffers of every leaf (in buffer order): their 512 values each."""
+    """LeafNode::readBuffers of every leaf (in buffer order): their 512 values each. The loop
+    over leaves only cuts the stream into chunks (the common case, code 0 and a blosc / zip /
+    raw chunk, inline); values are placed for all leaves at once."""
     n_leaves = len(active)
     nc, dtype = vals.nc, vals.dtype
     counts = active.sum(axis=1).tolist()
-    buf = c.buf
+    buf, size = c.buf, c.size
     chunks = []
     full = np.zeros(n_leaves, bool)
     fill0 = np.empty((n_leaves, nc), dtype)
-    fill1 = np.empty((n_leaves, nc), dtype)
+    fill0[:] = vals.bg
+    fill1 = fill0.copy()
     sel_rows, sel_masks = [], []
-    mask_c = vals.mask_c
+    mask_c, esize, half = vals.mask_c, vals.size, vals.half
+    decode, log = vals.decode, vals.log
+    size_at = struct.Struct("<q").unpack_from
+    what = "a leaf's values"
     for n in range(n_leaves):
-        c.need(64, "a leaf's value mask")            # the mask again: the topology's is used
-        meta, iv0, iv1 = vals.header(c, "a leaf's values")
-        fill0[n] = iv0
-        fill1[n] = iv1
-        if meta in (3, 4, 5):
-            sel_rows.append(n)
-            sel_masks.append(buf[c.need(64, "a leaf's selection mask"):c.pos])
+        p = c.pos + 64                               # the mask again: the topology's is used
+        if p >= size:
+            c.need(65, what)                         # raises: truncated
+        meta = buf[p]
+        c.pos = p + 1
+        if meta:
+            hc = _Cursor(buf, p, name)
+            meta, iv0, iv1 = vals.header(hc, what)
+            c.pos = hc.pos
+            fill0[n] = iv0
+            fill1[n] = iv1
+            if meta in (3, 4, 5):
+                sel_rows.append(n)
+                sel_masks.append(buf[c.need(64, "a leaf's selection mask"):c.pos])
         count = counts[n] if (mask_c and meta != 6) else 512
-        full[n] = count == 512
-        chunks.append(vals.chunk(c, count, "a leaf's values"))
+        if count == 512:
+            full[n] = True
+        nbytes = count * esize
+        start = c.pos
+        if decode is None or (half and count == 0):
+            if not (half and count == 0):
+                if start + nbytes > size:
+                    c.need(nbytes, what)
+                chunks.append(buf[start:start + nbytes])
+                c.pos = start + nbytes
+        else:
+            if start + 8 > size:
+                c.need(8, what)
+            k = size_at(buf, start)[0]
+            q = start + 8
+            if k <= 0:
+                if -k != nbytes:
+                    raise VdbError(f"damaged: {what} holds {-k:,} bytes, expected {nbytes:,}",
+                                   name)
+                if q + nbytes > size:
+                    c.pos = q
+                    c.need(nbytes, what)
+                chunks.append(buf[q:q + nbytes])
+                c.pos = q + nbytes
+            else:
+                if q + k > size:
+                    c.pos = q
+                    c.need(k, what)
+                try:
+                    out = decode(buf[q:q + k], nbytes)
+                except Exception as exc:  # noqa: BLE001 - any codec failure is damaged data
+                    raise VdbError(f"damaged: {what} does not decompress ({exc})",
+                                   name) from None
+                if len(out) != nbytes:
+                    raise VdbError(f"damaged: {what} decompresses to {len(out):,} bytes, "
+                                   f"expected {nbytes:,}", name)
+                chunks.append(out)
+                c.pos = q + k
+        if log is not None:
+            log.append((start, c.pos, chunks[-1] if c.pos > start else b""))
     data = np.frombuffer(b"".join(chunks), vals.disk).reshape(-1, nc)
     out = np.empty((n_leaves, 512, nc), dtype)
     part = ~full
