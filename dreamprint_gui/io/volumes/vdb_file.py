@@ -429,11 +429,13 @@ class VdbGrid:
             a = act[any_leaf].reshape(-1, 8, 8, 8)
             org = self.leaf_origins[any_leaf]
             for ax, others in ((0, (2, 3)), (1, (1, 3)), (2, (1, 2))):
-                occ = a.any(axis=others)                       # (L', 8)
-                first = np.argmax(occ, axis=1)
-                last = 7 - np.argmax(occ[:, ::-1], axis=1)
-                lo[ax] = min(lo[ax], int((org[:, ax] + first).min()))
-                hi[ax] = max(hi[ax], int((org[:, ax] + last).max()))
+                # only the leaves at the least / greatest origin can hold the extreme voxel
+                for_lo = org[:, ax] == org[:, ax].min()
+                for_hi = org[:, ax] == org[:, ax].max()
+                first = np.argmax(a[for_lo].any(axis=others), axis=1)
+                last = 7 - np.argmax(a[for_hi].any(axis=others)[:, ::-1], axis=1)
+                lo[ax] = min(lo[ax], int(org[for_lo, ax][0] + first.min()))
+                hi[ax] = max(hi[ax], int(org[for_hi, ax][0] + last.max()))
         if len(to):
             lo = np.minimum(lo, to.min(axis=0))
             hi = np.maximum(hi, (to + ts[:, None] - 1).max(axis=0))
@@ -647,6 +649,7 @@ def _leaf_buffers(c: _Cursor, vals: _Values, active: np.ndarray, name: str) -> n
     fill0 = np.empty((n_leaves, nc), dtype)
     fill0[:] = vals.bg
     fill1 = fill0.copy()
+    special = False                                  # any code other than 0 seen
     sel_rows, sel_masks = [], []
     mask_c, esize, half = vals.mask_c, vals.size, vals.half
     decode, log = vals.decode, vals.log
@@ -659,6 +662,7 @@ def _leaf_buffers(c: _Cursor, vals: _Values, active: np.ndarray, name: str) -> n
         meta = buf[p]
         c.pos = p + 1
         if meta:
+            special = True
             hc = _Cursor(buf, p, name)
             meta, iv0, iv1 = vals.header(hc, what)
             c.pos = hc.pos
@@ -711,7 +715,9 @@ def _leaf_buffers(c: _Cursor, vals: _Values, active: np.ndarray, name: str) -> n
     data = np.frombuffer(b"".join(chunks), vals.disk).reshape(-1, nc)
     out = np.empty((n_leaves, 512, nc), dtype)
     part = ~full
-    if part.any():
+    if part.all() and not special:
+        out[...] = vals.bg                           # every inactive voxel: the background
+    elif part.any():
         out[part] = fill0[part][:, None, :]
         if sel_rows:
             sel = np.unpackbits(np.frombuffer(b"".join(sel_masks), np.uint8),
