@@ -99,8 +99,9 @@ def _old_tree(rev: str | None) -> Path:
 def _run(tree: Path, f: str, cache: str = "0") -> tuple[float, float, float, float, int]:
     env = dict(os.environ, PYTHONPATH=str(tree), DREAMPRINT_VDB_CACHE=cache)
     t = time.perf_counter()
+    # cwd=tree: ``python -c`` puts the working folder first on sys.path
     r = subprocess.run([sys.executable, "-c", RUN, f], env=env, capture_output=True,
-                       text=True, check=False)
+                       text=True, check=False, cwd=str(tree))
     wall = time.perf_counter() - t
     if r.returncode:
         raise SystemExit(f"{tree}: {f}: {r.stderr.strip()[-2000:]}")
