@@ -1,8 +1,11 @@
-"""The ``dreamprint`` command line: thin over the engine and the readers.
+"""The ``dreamprint`` command line: thin over the layers below (proof, job, gamut, physics, io).
 
 Every command reports a problem the same way: exit status 2 and one line
 ``dreamprint: error: <file>: <problem>`` on stderr, no traceback (``--debug`` shows one).
-Command groups live in sibling modules, each registering its commands on :data:`cli`.
+Command groups live in sibling modules, each registering its commands on :data:`cli`. A
+command imports the layers it calls inside its function, so that ``dreamprint --help`` and a
+mistyped option answer at once, without loading numba, colour-science and the colour tables
+(the one reason for an import of the package's own modules inside a function).
 """
 
 from __future__ import annotations
