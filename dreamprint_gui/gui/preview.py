@@ -153,8 +153,8 @@ class PreviewPage(QWidget):
         body = QHBoxLayout()
         body.addWidget(self.slice_view, 1)
         legend_col = QVBoxLayout()
-        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(colours as in the "
-                                    "slice files)"))
+        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(slice file codes; "
+                                    "Clear shown<br>light blue for legibility)"))
         legend_col.addWidget(self.legend)
         legend_col.addStretch(1)
         body.addLayout(legend_col)

@@ -270,7 +270,8 @@ def _load_kernels(ctx: JobContext) -> None:
     labels = np.empty((1, 1, 1), np.uint8)
     _slab_into(ctx, one_voxel, 0, 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
                np.zeros(4))
-    encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+    encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode,
+                       ctx.printer.pixels_per_metre())
     if _scheduler_kind(ctx.settings) != "distributed":
         import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s
 
