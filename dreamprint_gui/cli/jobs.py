@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 
 from ..errors import DreamPrintError
-from . import cli, evaluate
+from . import cli, evaluate, placement_options, placement_values
 
 
 def _size(text: str | None) -> tuple[float, float, float] | None:
@@ -82,9 +82,11 @@ def _fmt_time(s: float | None) -> str:
               help="Print the manifest (with the pre-flight estimate and warnings) as JSON.")
 @click.option("-q", "--quiet", is_flag=True,
               help="No pre-flight summary, warnings or progress on stderr.")
+@placement_options
 def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
             workers, scheduler, background, density_threshold, slab_layers, source_options,
-            content, sampling, objective, intent, table_size, overwrite, as_json, quiet) -> None:
+            content, sampling, objective, intent, table_size, overwrite, as_json, quiet,
+            up, rotate, fit) -> None:
     """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack.
 
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
@@ -93,6 +95,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     from ..job.plan import ConvertSettings, JobCancelled
     from ..job.run import run_conversion
 
+    up_axis, turn = placement_values(up, rotate)
     opts = {}
     for kv in source_options:
         if "=" not in kv:
@@ -105,7 +108,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         workers=workers, scheduler=scheduler, background=background,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
         objective=objective, intent=intent, table_size=table_size, source_options=opts,
-        content=content, sampling=sampling)
+        content=content, sampling=sampling, up=up_axis, rotate=turn, fit=fit)
 
     def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
         raise KeyboardInterrupt()
