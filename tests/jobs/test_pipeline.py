@@ -61,7 +61,8 @@ def test_job_layout_and_manifest(reference_job):
     assert names == [f"{z:05d}.png" for z in range(nz)]
     on_disk = json.loads((job / "manifest.json").read_text())
     assert on_disk == json.loads(json.dumps(manifest))
-    for key in ("software", "source", "profile", "printer", "physical_size_mm", "voxel_mm",
+    for key in ("software", "source", "profile", "printer", "placement", "physical_size_mm",
+                "voxel_mm",
                 "grid_dimensions", "seed", "halftoning", "voxel_counts", "clamped_density",
                 "timings_s"):
         assert key in manifest
