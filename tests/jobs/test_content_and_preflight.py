@@ -71,7 +71,11 @@ def test_knight_cli_auto_job_interior_mostly_ink(knight, tmp_path, capsys):
     n = m["total_voxels"]
     ink = sum(m["voxel_counts"][k] for k in ("C", "M", "Y", "K", "W"))
     src = open_source(knight)
-    grid = grid_for_source(src, load_printer().voxel_mm, height_mm=3.0)
+    from dreamprint_gui.io.volumes.orient import occupied_bounds
+
+    # the job covers the knight's filled voxels (--fit occupied, the default)
+    grid = grid_for_source(src, load_printer().voxel_mm, height_mm=3.0,
+                           bounds=occupied_bounds(src))
     _, d = src.sample_slab(grid, 0, grid.shape_xyz[2])
     occupied = int(np.count_nonzero(d))
     # the job's ink voxels are its occupied voxels: its interior is ink, not Clear
