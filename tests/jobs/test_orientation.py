@@ -9,8 +9,13 @@ import pytest
 from dreamprint_gui.cli import main
 from dreamprint_gui.errors import DreamPrintError
 from dreamprint_gui.io.volumes.base import grid_for_source, voxel_centres
-from dreamprint_gui.io.volumes.orient import (UP_AXES, choose_orientation, occupied_bounds,
-                                              orient_source, orientation_matrix)
+from dreamprint_gui.io.volumes.orient import (
+    UP_AXES,
+    choose_orientation,
+    occupied_bounds,
+    orient_source,
+    orientation_matrix,
+)
 
 
 class Corner:
