@@ -146,6 +146,12 @@ class JobContext:
     orientation: Any = None  # io.volumes.orient.Orientation (resolved: never "auto")
     fit: dict = field(default_factory=dict)  # placement_json()'s "fit"
 
+    @property
+    def fit_bounds(self):
+        """The bounds the grid covers: the occupied ones (``--fit occupied``), or None for the
+        source's declared box."""
+        return self.fit.get("bounds") if self.fit.get("mode") == "occupied" else None
+
     def placement_json(self) -> dict[str, Any]:
         """The orientation and fit of the job (manifest ``placement``, pre-flight)."""
         o = self.orientation

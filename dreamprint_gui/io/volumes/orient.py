@@ -94,12 +94,11 @@ def auto_up(source) -> tuple[str, str]:
     fmt = str(getattr(source, "format", ""))
     low = fmt.lower()
     if "spz" in low:
-        return "y", "Niantic SPZ stores RUB coordinates (y up)"
+        return "y", "SPZ stores RUB coordinates, y up"
     if low.startswith("splats") or hasattr(source, "n_total"):
-        return "-y", ("Gaussian splats keep COLMAP's frame (3DGS PLY: right, down, front): "
-                      "y down")
+        return "-y", "3DGS splats keep COLMAP's frame, y down"
     if "instantngp" in low:
-        return "z", "InstantNGP transforms.json coordinates (NeRF convention: z up)"
+        return "z", "InstantNGP's transforms.json frame, z up"
     return "z", "the file's z"
 
 
