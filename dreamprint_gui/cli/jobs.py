@@ -11,8 +11,8 @@ from pathlib import Path
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli, evaluate, placement_options, placement_values
+from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
+from dreamprint_gui.core.errors import DreamPrintError
 
 
 def _size(text: str | None) -> tuple[float, float, float] | None:
@@ -92,8 +92,8 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
     warnings (mostly Clear, clamping, out of gamut) go to stderr; after the job, how many voxels
     were clamped. --quiet silences both; --json adds them to the printed manifest."""
-    from ..job.plan import ConvertSettings, JobCancelled
-    from ..job.run import run_conversion
+    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled
+    from dreamprint_gui.job.run import run_conversion
 
     up_axis, turn = placement_values(up, rotate)
     opts = {}
@@ -241,7 +241,7 @@ def evaluate_job(job, printer, as_json) -> None:
     """Read a finished JOB back and check it against its printer (voxel size, image size,
     dpi, material codes, layer count, tray) and its manifest (counts; fractions vs intended
     concentrations); report each material's volume (ml) and mass (g)."""
-    from ..job.check import Z_LIMIT, check_job
+    from dreamprint_gui.job.check import Z_LIMIT, check_job
 
     report = check_job(Path(job), printer)
     if as_json:

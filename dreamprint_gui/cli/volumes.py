@@ -7,8 +7,8 @@ import json
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli, placement_options, placement_values
+from dreamprint_gui.cli import cli, placement_options, placement_values
+from dreamprint_gui.core.errors import DreamPrintError
 
 
 def _fmt_num(v) -> str:
@@ -159,8 +159,8 @@ def describe(file: str, up: str | None = None, rotate: int = 0, fit: str = "occu
     """The ``inspect`` description of ``file`` plus ``content`` (what ``--content auto``
     picks) and ``placement``: the orientation (``up`` None: auto), the declared and the
     occupied bounds in print coordinates (source units) and the bounds ``fit`` sizes."""
-    from ..engine.content import choose_content, content_of_info
-    from ..io.volumes.registry import inspect_source
+    from dreamprint_gui.io.volumes.registry import inspect_source
+    from dreamprint_gui.job.content import choose_content, content_of_info
 
     info, src = inspect_source(file)
     mode, reason = choose_content(src) if src is not None else content_of_info(info)
@@ -171,8 +171,8 @@ def describe(file: str, up: str | None = None, rotate: int = 0, fit: str = "occu
 
 
 def _placement(file: str, src, up: str | None, rotate: int, fit: str) -> dict | None:
-    from ..io.volumes.orient import choose_orientation, occupied_bounds, orient_source
-    from ..io.volumes.registry import open_source
+    from dreamprint_gui.io.volumes.orient import choose_orientation, occupied_bounds, orient_source
+    from dreamprint_gui.io.volumes.registry import open_source
 
     if src is None:
         try:
@@ -231,7 +231,7 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     MagicaVoxel file, InstantNGP snapshot (.ingp/.msgpack) or volume export (RGBA PNG slice
     folder, WxHxD_C.bin), or "demo".
     """
-    from .jobs import _size
+    from dreamprint_gui.cli.jobs import _size
 
     if height_mm is not None and size_mm is not None:
         raise DreamPrintError("give at most one of --height-mm and --size-mm")

@@ -29,10 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.printer import PrinterProfile, load_printer, printer_from_dict
-from ..errors import DreamPrintError
-from .encode.png_slices import read_png_labels, read_png_phys
-from .write import MANIFEST, SLICES, slice_name
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.printer import PrinterProfile, load_printer, printer_from_dict
+from dreamprint_gui.job.encode.png_slices import read_png_labels, read_png_phys
+from dreamprint_gui.job.write import MANIFEST, SLICES, slice_name
 
 __all__ = ["check_job", "Z_LIMIT", "RESIN_DENSITY_G_CM3", "RESIN_DENSITY_SOURCE"]
 

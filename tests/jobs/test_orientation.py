@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes.base import grid_for_source, voxel_centres
 from dreamprint_gui.io.volumes.orient import (
     UP_AXES,

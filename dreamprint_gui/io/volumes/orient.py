@@ -40,8 +40,8 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers
 
 __all__ = ["UP_AXES", "ROTATIONS", "FIT_MODES", "orientation_matrix", "Orientation",
            "auto_up", "choose_orientation", "orient_source", "OrientedSource",
