@@ -185,7 +185,7 @@ def child(n: float, workers: int, halftone: str, scheduler: str | None, source: 
     path = source_file(source)
     cmd = [sys.executable, __file__, "--one", str(n), "--workers", str(workers),
            "--out", os.path.join(tmp, "JOB"), "--halftone", halftone, "--source", path,
-           "--up", _UP[0]]
+           f"--up={_UP[0]}"]
     if path != "demo":
         cmd += ["--height", repr(height_of(path, n))]
     if scheduler:
