@@ -35,10 +35,12 @@ from __future__ import annotations
 
 import copy
 import math
+import threading
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers
@@ -177,6 +179,9 @@ class OrientedSource:
         self.format = inner.format
         self.colour_encoding = inner.colour_encoding
         self.bounds = _turned_bounds(inner.bounds, self.m)
+        # each thread's buffers for the inner source's box (reused slab after slab: a fresh
+        # array's page faults cost as much as the transposing copy)
+        self._local = threading.local()
 
     def __getattr__(self, name: str):  # reader attributes (solid_density, volume, ...)
         if name == "inner":
@@ -200,7 +205,11 @@ class OrientedSource:
             vox_s[a] = grid.voxel_mm[b]
             org_s[a] = o if s > 0 else -(o + shape_p[b] * step)
         inner_grid = PrintGrid(tuple(n_s), tuple(vox_s), tuple(org_s), grid.mm_per_unit)
-        rgb, sigma = self.inner.sample_slab(inner_grid, 0, n_s[2], density_scale=density_scale)
+        buf = getattr(self._local, "buffers", None)
+        if buf is None:
+            buf = self._local.buffers = SlabBuffers()
+        rgb, sigma = self.inner.sample_slab(inner_grid, 0, n_s[2], density_scale=density_scale,
+                                            out=buf)
         # array axis of print axis b is 2 - b; it comes from the inner array's axis 2 - a
         perm = [2 - axes[2 - k][0] for k in range(3)]
         sig = np.transpose(sigma, perm)
@@ -214,8 +223,12 @@ class OrientedSource:
         else:
             r_out = np.empty((shape_p[2], shape_p[1], shape_p[0], 3), np.float32)
             s_out = np.empty((shape_p[2], shape_p[1], shape_p[0]), np.float32)
-        np.copyto(s_out, sig)
-        np.copyto(r_out, col)
+        if perm == [2, 1, 0]:  # x <-> z: a tiled copy (numpy's gathers along the slow axis)
+            _swap_xz_copy(sig, s_out)
+            _swap_xz_copy_rgb(col, r_out)
+        else:
+            np.copyto(s_out, sig)
+            np.copyto(r_out, col)
         return r_out, s_out
 
     def occupied_bounds(self):
@@ -225,6 +238,32 @@ class OrientedSource:
 
     def info(self) -> dict:
         return self.inner.info()
+
+
+@njit(cache=True, nogil=True)
+def _swap_xz_copy(view, out):
+    """``out[a, b, c] = view[a, b, c]`` where ``view`` is an x <-> z transposed (and possibly
+    flipped) view: copied in 16 x 16 tiles of (a, c) so reads and writes both stay in cache."""
+    na, nb, nc = out.shape
+    for b in range(nb):
+        for a0 in range(0, na, 16):
+            for c0 in range(0, nc, 16):
+                for a in range(a0, min(na, a0 + 16)):
+                    for c in range(c0, min(nc, c0 + 16)):
+                        out[a, b, c] = view[a, b, c]
+
+
+@njit(cache=True, nogil=True)
+def _swap_xz_copy_rgb(view, out):
+    """:func:`_swap_xz_copy` of (a, b, c, 3) colour arrays."""
+    na, nb, nc, _ = out.shape
+    for b in range(nb):
+        for a0 in range(0, na, 16):
+            for c0 in range(0, nc, 16):
+                for a in range(a0, min(na, a0 + 16)):
+                    for c in range(c0, min(nc, c0 + 16)):
+                        for k in range(3):
+                            out[a, b, c, k] = view[a, b, c, k]
 
 
 def _turned_gaussians(cloud, m: np.ndarray):
