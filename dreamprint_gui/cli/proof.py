@@ -10,7 +10,7 @@ import time
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
 from dreamprint_gui.cli.jobs import _fmt_time, _option_value, _size
 from dreamprint_gui.core.errors import DreamPrintError
 
@@ -74,7 +74,7 @@ def _common(f):
         click.option("--height-mm", type=float, default=None, help="Height (z) of the print."),
         click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm."),
         click.option("--printer", default=None, help="Printer name or .toml (default "
-                     "j850-paper)."),
+                     "voxelprint-27um)."),
         click.option("--profile", default=None, help="Ink profile JSON (default: built-in)."),
         click.option("--views", type=int, default=4, show_default=True),
         click.option("--resolution", type=int, default=256, show_default=True,
@@ -105,7 +105,7 @@ def _common(f):
     ]
     for o in reversed(opts):
         f = o(f)
-    return f
+    return placement_options(f)
 
 
 def _settings(source, output, method, kw, overwrite=False):
@@ -119,7 +119,9 @@ def _settings(source, output, method, kw, overwrite=False):
         max_cells=kw["max_cells"], layers_per_block=kw["layers_per_block"], bands=kw["bands"],
         max_depth=kw["max_depth"], key_light=kw["key_light"], floor=kw["floor"],
         overwrite=overwrite, table_size=kw["table_size"],
-        source_options=_options(kw["source_options"]))
+        source_options=_options(kw["source_options"]),
+        up=placement_values(kw["up"], kw["rotate"])[0],
+        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"])
 
 
 def _check_source(source: str) -> None:

@@ -77,6 +77,9 @@ class ProofSettings:
     overwrite: bool = False
     table_size: int = 100
     source_options: tuple[tuple[str, Any], ...] = ()
+    up: str | None = None            # source axis that becomes +z (None: auto)
+    rotate: int = 0                  # degrees about the print's z
+    fit: str = "occupied"            # "occupied" or "box"
 
 
 @dataclass(frozen=True)

@@ -113,9 +113,9 @@ def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     assert dlg.summary.horizontalScrollBar().maximum() == 0
     for lab, info in manifest["labels"].items():
         assert info["material"] in text, lab
-    assert PRINTER_NAMES["j850-paper"] in text and "j850-paper" not in text
+    assert PRINTER_NAMES["voxelprint-27um"] in text and "voxelprint-27um" not in text
     assert "Clear resin" in text
-    assert manifest["printer"]["name"] == "j850-paper"  # the id stays in the file
+    assert manifest["printer"]["name"] == "voxelprint-27um"  # the default; the id stays in the file
     # the pre-flight the dialog showed is the one the manifest records, warnings in the summary
     assert manifest["preflight"]["material_fractions"] == dlg.preflight.fractions
     for w in manifest["preflight"]["warnings"]:
