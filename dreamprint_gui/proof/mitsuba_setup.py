@@ -11,7 +11,7 @@ LLVM 17, 18, 19 and 23 render; Debian 12's LLVM 14 and 15 abort the process whil
 than :data:`MIN_LLVM` is never given to Dr.Jit. Looked for, in this order:
 
 1. ``DRJIT_LIBLLVM_PATH`` (the operator's choice, used as given);
-2. the desktop bundle's own copy (``llvm/`` in a PyInstaller bundle, ``packaging/``);
+2. the desktop bundle's own copy (under ``llvm/`` in a PyInstaller bundle, ``packaging/``);
 3. the ``karellen-llvm-core`` wheel (a dependency on Linux x86_64: ``libLLVM.so.23.1`` under
    the environment's ``lib/``);
 4. the platform's usual installs, newest first: Linux distribution packages
@@ -113,9 +113,9 @@ def libllvm_candidates() -> list[tuple[Path, int | None, str]]:
     are tried (bundle, wheel, then the system's, newest version first)."""
     out: list[tuple[Path, int | None, str]] = []
     if hasattr(sys, "_MEIPASS"):
-        for f in sorted(glob.glob(str(Path(sys._MEIPASS) / "llvm" / "*"))):
-            if re.match(r"libLLVM\.so\.\d+|libLLVM\.dylib$|LLVM-C\.dll$", Path(f).name):
-                out.append((Path(f), llvm_major(f), "the bundle"))
+        for f in sorted((Path(sys._MEIPASS) / "llvm").rglob("*")):
+            if re.fullmatch(r"libLLVM\.so\.\d+\.\d+|libLLVM\.dylib|LLVM-C\.dll", f.name):
+                out.append((f, llvm_major(f), "the bundle"))
     out += [(p, v, f"the {_WHEEL} wheel") for p, v in _wheel_library()]
     system = [(Path(f), llvm_major(f), "the system") for f in _system_libraries()]
     system.sort(key=lambda c: -(c[1] if c[1] is not None else MIN_LLVM - 0.5))

@@ -96,3 +96,16 @@ def test_the_wheels_libllvm_renders_without_any_setting():
     wheel = [str(p) for p, _ in mitsuba_setup._wheel_library()]
     assert out["lib"] and out["lib"][0] in wheel, (out, wheel)   # the wheel's, not Debian's
     assert 0 < out["mean"] < 1.5     # an image came back (white environment, radiance <= 1)
+
+
+def test_the_bundles_own_copy_comes_first(monkeypatch, tmp_path):
+    """A PyInstaller bundle carries the wheel's tree under llvm/ (packaging/dreamprint.spec)."""
+    lib = tmp_path / "llvm" / "lib" / "libLLVM.so.23.1"
+    lib.parent.mkdir(parents=True)
+    lib.write_bytes(b"")
+    (tmp_path / "llvm" / "lib" / "libLTO.so.23.1").write_bytes(b"")
+    monkeypatch.setattr(sys, "_MEIPASS", str(tmp_path), raising=False)
+    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
+    first = mitsuba_setup.libllvm_candidates()[0]
+    assert first == (lib, 23, "the bundle")
+    assert mitsuba_setup.find_libllvm() == (str(lib), "the bundle")
