@@ -10,6 +10,7 @@ labels (one cell per printer voxel) and from blocks of the default 40 mm job's s
 voxels): prints dE2000 between the two print images (mean, 95th percentile over the object).
 
     python benchmarks/bench_proof.py [--height-mm 40] [--resolution 256] [--spp 16]
+    python benchmarks/bench_proof.py --variant scalar   # Mitsuba's scalar_rgb (no libLLVM)
     python benchmarks/bench_proof.py --block-error
 """
 
@@ -48,10 +49,13 @@ def speed(args) -> None:
     from dreamprint_gui.proof.cameras import orbit_views
     from dreamprint_gui.proof.medium import block_for_cell
     from dreamprint_gui.proof.methods import method_labels
+    from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
     from dreamprint_gui.proof.runner import ProofSettings
     from dreamprint_gui.proof.source_render import render_source, sample_source
     from dreamprint_gui.proof.spectral import spectral_bands
 
+    _, _, note = load_mitsuba(args.variant)
+    print(note)
     s = ProofSettings(source="demo", height_mm=args.height_mm, spp=args.spp,
                       resolution=args.resolution)
     print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {args.spp},"
@@ -129,6 +133,9 @@ def main() -> None:
     ap.add_argument("--resolution", type=int, default=256)
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--block-error", action="store_true")
+    ap.add_argument("--variant", choices=("llvm", "scalar"), default="llvm",
+                    help="Mitsuba's LLVM variant (default, when a libLLVM is found) or the "
+                         "scalar fallback")
     args = ap.parse_args()
     if args.block_error:
         block_error(args)
