@@ -80,6 +80,14 @@ class _Channel:
     file = None  # SpectraFile
     values: np.ndarray | None = None  # resampled onto the profile grid
     error: str = ""
+    file_quantity: str | None = None  # what the operator says the file holds (None: the file)
+
+
+# What a file holds, as the operator may state it (the CLI's --file-quantity): None = as the file
+# says (a file that does not say is read as the column's quantity).
+FILE_QUANTITIES = (("file says", None), ("reflectance", "reflectance"),
+                   ("transmittance", "transmittance"), ("absorbance", "absorbance"))
+QUANTITY_NAMES = {"R": "reflectance", "T": "transmittance"}
 
 
 class _InkRow:
@@ -90,26 +98,40 @@ class _InkRow:
         self.channels = {"R": _Channel(), "T": _Channel()}
         self.edits: dict[str, QLineEdit] = {}
         self.combos: dict[str, QComboBox] = {}
+        self.holds: dict[str, QComboBox] = {}
         name = QLabel(f"<b>{ink}</b>")
         grid.addWidget(name, row, 0)
         col = 1
         for q in ("R", "T"):
             edit = QLineEdit()
-            edit.setPlaceholderText(f"{ink} {'reflectance' if q == 'R' else 'transmittance'} file")
+            edit.setPlaceholderText(f"{ink} {QUANTITY_NAMES[q]} file")
             edit.editingFinished.connect(lambda q=q: self.load(q, self.edits[q].text()))
             browse = QPushButton("...")
             browse.setMaximumWidth(32)
             browse.clicked.connect(lambda _=False, q=q: self.browse(q))
             combo = QComboBox()
-            combo.setMinimumWidth(120)
+            combo.setMinimumWidth(110)
+            combo.setToolTip("the sample of the file that is this ink's "
+                             f"{QUANTITY_NAMES[q]}")
             combo.currentIndexChanged.connect(lambda _i, q=q: self.sample_changed(q))
-            self.edits[q], self.combos[q] = edit, combo
+            holds = QComboBox()
+            for text, _ in FILE_QUANTITIES:
+                holds.addItem(text)
+            holds.setToolTip("what the file holds, when it does not say (like the CLI's "
+                             "--file-quantity): an absorbance file is read as T = 10^-A")
+            holds.currentIndexChanged.connect(lambda _i, q=q: self.quantity_changed(q))
+            self.edits[q], self.combos[q], self.holds[q] = edit, combo, holds
             grid.addWidget(edit, row, col)
             grid.addWidget(browse, row, col + 1)
             grid.addWidget(combo, row, col + 2)
-            col += 3
-        self.thickness = QDoubleSpinBox(decimals=3, minimum=0.001, maximum=100.0, value=1.0,
+            grid.addWidget(holds, row, col + 3)
+            col += 4
+        # No default: a thickness the operator did not enter would silently scale K and S.
+        self.thickness = QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, value=0.0,
                                         suffix=" mm", singleStep=0.1)
+        self.thickness.setSpecialValueText("thickness?")
+        self.thickness.setToolTip("the measured swatch's thickness (required for every ink "
+                                  "with a measurement)")
         self.thickness.valueChanged.connect(page.changed)
         grid.addWidget(self.thickness, row, col)
         self.error = QLabel("")
@@ -120,20 +142,36 @@ class _InkRow:
 
     def browse(self, q: str) -> None:
         path, _ = QFileDialog.getOpenFileName(
-            self.page, f"{self.ink}: {'reflectance' if q == 'R' else 'transmittance'}",
+            self.page, f"{self.ink}: {QUANTITY_NAMES[q]}",
             self.page.settings.last_folder("spectra"), SPECTRA_FILTER)
         if path:
             self.page.settings.set_last_folder("spectra", path)
             self.edits[q].setText(path)
             self.load(q, path)
 
-    def load(self, q: str, path: str, sample: str | int | None = None) -> None:
-        """Read ``path`` as the ink's R or T; a problem is shown on this row."""
+    def set_file_quantity(self, q: str, quantity: str | None) -> None:
+        """State what the R or T file holds (``None``: as the file says); the file is re-read."""
+        self.holds[q].setCurrentIndex([v for _, v in FILE_QUANTITIES].index(quantity))
+
+    def quantity_changed(self, q: str) -> None:
+        ch = self.channels[q]
+        if ch.path:
+            self.load(q, ch.path, sample=ch.sample, force=True)
+
+    def load(self, q: str, path: str, sample: str | int | None = None,
+             force: bool = False) -> None:
+        """Read ``path`` as the ink's R or T; a problem is shown on this row.
+
+        ``sample`` (name or 0-based index) is the one to pick; by default the one named after
+        the ink, else the file's first usable one.
+        """
         ch = self.channels[q]
         path = path.strip()
-        if path == ch.path and sample is None and ch.file is not None:
+        file_quantity = FILE_QUANTITIES[self.holds[q].currentIndex()][1]
+        if (path == ch.path and sample is None and ch.file is not None and not force
+                and file_quantity == ch.file_quantity):
             return
-        self.channels[q] = ch = _Channel(path=path)
+        self.channels[q] = ch = _Channel(path=path, file_quantity=file_quantity)
         combo = self.combos[q]
         combo.blockSignals(True)
         combo.clear()
@@ -144,8 +182,8 @@ class _InkRow:
             from ..io.spectra import read_spectra
 
             try:
-                ch.file = read_spectra(path, quantity="reflectance" if q == "R"
-                                       else "transmittance")
+                ch.file = read_spectra(path, quantity=QUANTITY_NAMES[q],
+                                       file_quantity=file_quantity)
                 ch.names = list(ch.file.names)
             except DreamPrintError as exc:
                 ch.error = str(exc)
@@ -156,9 +194,10 @@ class _InkRow:
                 combo.addItems(ch.names)
                 combo.blockSignals(False)
                 idx = 0
-                if sample is not None:
-                    idx = sample if isinstance(sample, int) else max(0, ch.names.index(sample)
-                                                                     if sample in ch.names else 0)
+                if isinstance(sample, int) and 0 <= sample < len(ch.names):
+                    idx = sample
+                elif isinstance(sample, str) and sample in ch.names:
+                    idx = ch.names.index(sample)
                 elif self.ink in ch.names:
                     idx = ch.names.index(self.ink)
                 elif not ch.file.usable[0] and any(ch.file.usable):
@@ -170,6 +209,9 @@ class _InkRow:
         self.page.changed()
 
     def sample_changed(self, q: str) -> None:
+        """Use the picked sample; only its own problems are its problems."""
+        from ..io.spectra.calibration_set import measured_values
+
         ch = self.channels[q]
         ch.error = ""
         ch.values = None
@@ -177,16 +219,9 @@ class _InkRow:
             i = self.combos[q].currentIndex()
             ch.sample = ch.names[i]
             try:
-                ch.values = np.asarray(ch.file.resample(i, self.page.wavelengths()))
+                ch.values = measured_values(ch.file, ch.file.sample(i), self.page.wavelengths())
             except DreamPrintError as exc:
                 ch.error = str(exc)
-            if ch.values is not None and ch.file.problems:
-                ch.error = "; ".join(ch.file.problems[:2])
-                bad = ~np.isfinite(ch.values) | (ch.values < 0) | (ch.values > 1)
-                if bad.any():
-                    ch.values = None
-                else:
-                    ch.error = ""
         self.show_errors()
         self.page.changed()
 
@@ -195,11 +230,17 @@ class _InkRow:
         self.error.setText("\n".join(errors))
         self.error.setVisible(bool(errors))
 
+    def has_data(self) -> bool:
+        return any(c.values is not None for c in self.channels.values())
+
+    def lacks_thickness(self) -> bool:
+        return self.has_data() and not self.thickness.value() > 0
+
     def measurement(self):
         from ..engine.calibration_types import LayerMeasurement
 
         R, T = self.channels["R"].values, self.channels["T"].values
-        if R is None and T is None:
+        if (R is None and T is None) or not self.thickness.value() > 0:
             return None
         src = "; ".join(f"{q}: {c.path} [{c.sample}]" for q, c in self.channels.items()
                         if c.values is not None)
@@ -220,11 +261,13 @@ class MeasurementsPage(QWizardPage):
         self.set_path: str | None = None
         self.setTitle("Ink measurements")
         self.setSubTitle("Choose, for each ink you measured, the file holding its reflectance "
-                         "(R) and transmittance (T) and the swatch thickness. Inks you leave "
-                         "empty keep the active profile's values. Or load a calibration set.")
+                         "(R) and transmittance (T), the sample in it, what the file holds if it "
+                         "does not say, and the swatch thickness. Inks you leave empty keep the "
+                         "active profile's values. Or load a calibration set (several "
+                         "thicknesses per ink).")
         grid = QGridLayout()
-        for c, text in enumerate(("ink", "R file", "", "R sample", "T file", "", "T sample",
-                                  "thickness")):
+        for c, text in enumerate(("ink", "R file", "", "R sample", "file holds", "T file", "",
+                                  "T sample", "file holds", "thickness")):
             grid.addWidget(QLabel(f"<i>{text}</i>"), 0, c)
         self.rows = {ink: _InkRow(self, ink, grid, 1 + 2 * i) for i, ink in enumerate(INKS)}
         set_row = QHBoxLayout()
@@ -237,10 +280,15 @@ class MeasurementsPage(QWizardPage):
         set_row.addWidget(self.set_button)
         set_row.addWidget(self.clear_set_button)
         set_row.addWidget(self.set_label, 1)
+        self.missing = QLabel("")
+        self.missing.setObjectName("missingThickness")
+        self.missing.setStyleSheet(ERROR_STYLE)
+        self.missing.setWordWrap(True)
         self.figure, self.canvas = _canvas((7, 3))
         self.canvas.setMinimumHeight(220)
         lay = QVBoxLayout(self)
         lay.addLayout(grid)
+        lay.addWidget(self.missing)
         lay.addLayout(set_row)
         lay.addWidget(self.canvas, 1)
         self.changed()
@@ -275,7 +323,8 @@ class MeasurementsPage(QWizardPage):
         else:
             self.set_label.setText("")
         for row in self.rows.values():
-            for w in (*row.edits.values(), *row.combos.values(), row.thickness):
+            for w in (*row.edits.values(), *row.combos.values(), *row.holds.values(),
+                      row.thickness):
                 w.setEnabled(self.set_measurements is None)
         self.changed()
 
@@ -284,24 +333,46 @@ class MeasurementsPage(QWizardPage):
             return list(self.set_measurements)
         return [m for m in (row.measurement() for row in self.rows.values()) if m is not None]
 
+    def lacking_thickness(self) -> list[str]:
+        """The inks with a measurement but no thickness (none when a set is loaded)."""
+        if self.set_measurements is not None:
+            return []
+        return [ink for ink, r in self.rows.items() if r.lacks_thickness()]
+
     def changed(self) -> None:
+        lacking = self.lacking_thickness()
+        self.missing.setText(
+            f"Enter the swatch thickness of {', '.join(lacking)}: the fit needs the thickness "
+            "of every measured layer (there is no default)." if lacking else "")
+        self.missing.setVisible(bool(lacking))
         self._plot()
         self.completeChanged.emit()
 
     def isComplete(self) -> bool:  # noqa: N802 - Qt override
         # Measurements are optional when a chart is given on the next page; a row with a
-        # problem must be fixed or cleared first.
+        # problem or without its thickness must be fixed or cleared first.
         return self.set_measurements is not None or not any(
-            r.has_error() for r in self.rows.values())
+            r.has_error() or r.lacks_thickness() for r in self.rows.values())
+
+    def _plotted(self) -> list:
+        """The measurements to plot: also those of rows still lacking their thickness."""
+        if self.set_measurements is not None:
+            return list(self.set_measurements)
+        from ..engine.calibration_types import LayerMeasurement
+
+        return [LayerMeasurement(r.ink, float(r.thickness.value()), r.channels["R"].values,
+                                 r.channels["T"].values) for r in self.rows.values()
+                if r.has_data()]
 
     def _plot(self) -> None:
         fig = self.figure
         fig.clear()
         ax_r, ax_t = fig.subplots(1, 2, sharex=True)
         wl = self.wavelengths()
-        for m in self.measurements():
+        for m in self._plotted():
             colour = INK_COLOURS[m.ink]
-            label = f"{m.ink} {m.thickness_mm:g} mm"
+            label = f"{m.ink} {m.thickness_mm:g} mm" if m.thickness_mm > 0 else \
+                f"{m.ink} (thickness?)"
             if m.R is not None:
                 ax_r.plot(wl, m.R, color=colour, label=label)
             if m.T is not None:
@@ -406,6 +477,55 @@ class ChartPage(QWizardPage):
         self.canvas.draw_idle()
 
 
+def _held_out(measurements: list, base) -> dict[str, tuple[list, list[str]]]:
+    """Leave-one-thickness-out of each ink with several thicknesses (worker thread)."""
+    from ..engine.calibration import leave_one_thickness_out
+
+    out = {}
+    for ink in INKS:
+        layers = [m for m in measurements if m.ink == ink]
+        if len({m.thickness_mm for m in layers}) > 1:
+            out[ink] = leave_one_thickness_out(layers, base.wavelengths_nm.size)
+    return out
+
+
+def _fmt_err(x: float | None) -> str:
+    return "-" if x is None else f"{x:.4f}"
+
+
+def _fit_line(fit, layers: list, held: list, notes: list[str]) -> str:
+    """What can be checked of one ink's fit, in one line of the fit page."""
+    from ..engine.calibration import exact_by_construction
+
+    ts = sorted({m.thickness_mm for m in layers})
+    t_text = ", ".join(f"{t:g}" for t in ts) + " mm"
+    head = f"<b>{fit.ink}</b> ({len(layers)} layer{'s' if len(layers) != 1 else ''}, {t_text})"
+    if exact_by_construction(layers):
+        return (f"{head}: K and S reproduce its R and T exactly by construction (two unknowns, "
+                "two measurements per wavelength), so the fit cannot be checked: measure a "
+                "second thickness to see a held-out error.")
+    if len(layers) == 1:
+        return (f"{head}: only {'T' if layers[0].R is None else 'R'} measured, one value per "
+                "wavelength for two unknowns: the fit matches it exactly and cannot be "
+                "checked, and K and S are not separable: measure both R and T.")
+    s = fit.summary()
+    fitted = f"fit residual worst rms R {_fmt_err(s['max_rms_R'])}, T {_fmt_err(s['max_rms_T'])}"
+    if held:
+        worst = max(held, key=lambda h: max(h.overall_R or 0.0, h.overall_T or 0.0))
+        per = "; ".join(f"{h.thickness_mm:g} mm: R {_fmt_err(h.overall_R)}, "
+                        f"T {_fmt_err(h.overall_T)}" for h in held)
+        text = (f"{head}: <b>held-out</b> rms error (each thickness predicted from the "
+                f"others) {per}; worst at {worst.thickness_mm:g} mm. {fitted}.")
+    elif len(ts) == 1:
+        text = (f"{head}: one thickness, so nothing can be held out; {fitted} (the spread of "
+                "the repeats).")
+    else:
+        text = f"{head}: {fitted}."
+    if notes:
+        text += " " + "; ".join(notes) + "."
+    return text
+
+
 class FitPage(QWizardPage):
     """Fits on a worker thread; plots measured vs fitted R and T, residuals, chart dE2000."""
 
@@ -415,6 +535,7 @@ class FitPage(QWizardPage):
         super().__init__()
         self.wiz = wizard
         self.result = None  # (profile, fits, chart_fit)
+        self.held_out: dict[str, tuple[list, list[str]]] = {}
         self.error_text = ""
         self._task: Task | None = None
         self.setTitle("Fit")
@@ -443,10 +564,12 @@ class FitPage(QWizardPage):
         self._clock.timeout.connect(self._tick)
         self.tabs = QTabWidget()
         self.fit_fig, self.fit_canvas = _canvas((8, 4.5))
+        self.ks_fig, self.ks_canvas = _canvas((8, 4.5))
         self.res_fig, self.res_canvas = _canvas((8, 3))
         self.chart_fig, self.chart_canvas = _canvas((8, 3))
         self.tabs.addTab(self.fit_canvas, "Measured vs fitted")
-        self.tabs.addTab(self.res_canvas, "Residuals")
+        self.tabs.addTab(self.ks_canvas, "Fitted K and S")
+        self.tabs.addTab(self.res_canvas, "Held-out and residual error")
         self.tabs.addTab(self.chart_canvas, "Chart dE2000")
         lay = QVBoxLayout(self)
         lay.addLayout(run_row)
@@ -509,11 +632,17 @@ class FitPage(QWizardPage):
             if not measurements and recipes is None:
                 raise DreamPrintError("nothing to fit: choose ink measurements (first page) or "
                                       "a mixture chart (second page)")
+            held: dict[str, tuple[list, list[str]]] = {}
             if measurements:
                 report("fitting K and S of each ink:")
                 profile, fits = abandonable(
                     lambda: calibrate_profile(measurements, base, name=name), cancel,
                     name="calibrate-profile")
+                if any(len({m.thickness_mm for m in measurements if m.ink == f.ink}) > 1
+                       for f in fits):
+                    report("holding out each thickness in turn:")
+                    held = abandonable(lambda: _held_out(measurements, base), cancel,
+                                       name="leave-one-thickness-out")
             else:
                 profile, fits = base.with_settings(name=name), []
             chart_fit = None
@@ -527,7 +656,7 @@ class FitPage(QWizardPage):
                     lambda: fit_chart(start, recipes, refl, name=name, folds=folds), cancel,
                     name="fit-chart")
                 profile = chart_fit.profile
-            return profile, fits, chart_fit, measurements
+            return profile, fits, chart_fit, measurements, held
 
         self.status.setText("")
         self.status.setStyleSheet("")
@@ -566,25 +695,21 @@ class FitPage(QWizardPage):
         self.status.setStyleSheet(ERROR_STYLE)
 
     def _done(self, result) -> None:
-        profile, fits, chart_fit, measurements = result
+        profile, fits, chart_fit, measurements, held = result
         self.result = (profile, fits, chart_fit)
-        lines = []
-        for f in fits:
-            s = f.summary()
-            parts = [f"<b>{f.ink}</b> ({s['method']})"]
-            for key in ("max_rms_R", "max_rms_T"):
-                if s.get(key) is not None:
-                    parts.append(f"worst rms {key[-1]} {s[key]:.4f}")
-            lines.append(", ".join(parts))
+        self.held_out = held
+        lines = [_fit_line(f, [m for m in measurements if m.ink == f.ink],
+                           *held.get(f.ink, ([], []))) for f in fits]
         if chart_fit is not None:
             cv = chart_fit.report()["cross_validated_dE2000"]
             lines.append(f"<b>chart</b>: cross-validated dE2000 mean {cv['mean']:.2f}, "
                          f"p95 {cv['p95']:.2f}, max {cv['max']:.2f}")
         self.status.setText("<br>".join(lines))
         self._plot_fit(profile, measurements)
-        self._plot_residuals(fits)
+        self._plot_ks(profile, [f.ink for f in fits])
+        self._plot_residuals(fits, held)
         self._plot_chart(chart_fit)
-        self.tabs.setTabEnabled(2, chart_fit is not None)
+        self.tabs.setTabEnabled(3, chart_fit is not None)
         self.fitted.emit(self.result)
 
     def _plot_fit(self, profile, measurements) -> None:
@@ -614,22 +739,54 @@ class FitPage(QWizardPage):
             ax.set_xlabel("nm", fontsize=7)
         self.fit_canvas.draw_idle()
 
-    def _plot_residuals(self, fits) -> None:
+    def _plot_ks(self, profile, inks: list[str]) -> None:
+        """The fitted K and S (1/mm) of each fitted ink, on a log scale."""
+        fig = self.ks_fig
+        fig.clear()
+        inks = [ink for ink in INKS if ink in inks]
+        if not inks:
+            self.ks_canvas.draw_idle()
+            return
+        axes = fig.subplots(1, len(inks), sharey=True, squeeze=False)[0]
+        wl = profile.wavelengths_nm
+        for ax, ink in zip(axes, inks, strict=True):
+            i = INKS.index(ink)
+            ax.plot(wl, profile.K[i], "-", color=INK_COLOURS[ink], lw=1.5, label="K")
+            ax.plot(wl, profile.S[i], "--", color="#555", lw=1.2, label="S")
+            ax.set_yscale("log")
+            ax.set_title(ink, fontsize=9)
+            ax.set_xlabel("wavelength (nm)", fontsize=7)
+            ax.tick_params(labelsize=6)
+            ax.legend(fontsize=7)
+        axes[0].set_ylabel("K (absorption), S (scattering): 1/mm", fontsize=7)
+        self.ks_canvas.draw_idle()
+
+    def _plot_residuals(self, fits, held) -> None:
+        """Held-out error per wavelength (solid) where there is one, else the fit residual
+        (dotted; exactly zero for one layer, which is said in the title)."""
         fig = self.res_fig
         fig.clear()
         ax_r, ax_t = fig.subplots(1, 2, sharey=True)
         wl = self.wiz.base_profile.wavelengths_nm
         for f in fits:
-            if np.isfinite(f.rms_R).any():
-                ax_r.plot(wl, f.rms_R, color=INK_COLOURS[f.ink], label=f.ink)
-            if np.isfinite(f.rms_T).any():
-                ax_t.plot(wl, f.rms_T, color=INK_COLOURS[f.ink], label=f.ink)
+            colour = INK_COLOURS[f.ink]
+            outs = held.get(f.ink, ([], []))[0]
+            for ax, q in ((ax_r, "R"), (ax_t, "T")):
+                curves = [getattr(h, f"rms_{q}") for h in outs
+                          if np.isfinite(getattr(h, f"rms_{q}")).any()]
+                if curves:
+                    with np.errstate(invalid="ignore"):
+                        ho = np.sqrt(np.nanmean(np.square(curves), axis=0))
+                    ax.plot(wl, ho, "-", color=colour, label=f"{f.ink} held out")
+                res = getattr(f, f"rms_{q}")
+                if np.isfinite(res).any():
+                    ax.plot(wl, res, ":", color=colour, label=f"{f.ink} fit residual")
         for ax, q in ((ax_r, "R"), (ax_t, "T")):
-            ax.set_title(f"rms residual of {q} per wavelength", fontsize=9)
+            ax.set_title(f"rms error of {q} per wavelength", fontsize=9)
             ax.set_xlabel("wavelength (nm)", fontsize=8)
             ax.tick_params(labelsize=7)
             if ax.lines:
-                ax.legend(fontsize=7)
+                ax.legend(fontsize=6)
         self.res_canvas.draw_idle()
 
     def _plot_chart(self, chart_fit) -> None:
