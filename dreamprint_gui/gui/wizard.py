@@ -490,40 +490,57 @@ def _held_out(measurements: list, base) -> dict[str, tuple[list, list[str]]]:
 
 
 def _fmt_err(x: float | None) -> str:
-    return "-" if x is None else f"{x:.4f}"
+    if x is None:
+        return "-"
+    return "&lt; 0.0001" if x < 5e-5 else f"{x:.4f}"
 
 
-def _fit_line(fit, layers: list, held: list, notes: list[str]) -> str:
-    """What can be checked of one ink's fit, in one line of the fit page."""
+FIT_TABLE_HEAD = ("<tr><th align='left'>ink</th><th align='left'>layers</th>"
+                  "<th>held-out rms R</th><th>held-out rms T</th><th>worst held out</th>"
+                  "<th>fit residual R / T</th><th align='left'>what this says</th></tr>")
+
+
+def _fit_row(fit, layers: list, held: list, notes: list[str]) -> str:
+    """One ink's row of the fit table: what can be checked of its fit.
+
+    Held-out error (leave-one-thickness-out) with several thicknesses; one layer with R and T
+    is fitted exactly by construction, which the row says instead of a zero residual.
+    """
     from ..engine.calibration import exact_by_construction
 
     ts = sorted({m.thickness_mm for m in layers})
-    t_text = ", ".join(f"{t:g}" for t in ts) + " mm"
-    head = f"<b>{fit.ink}</b> ({len(layers)} layer{'s' if len(layers) != 1 else ''}, {t_text})"
-    if exact_by_construction(layers):
-        return (f"{head}: K and S reproduce its R and T exactly by construction (two unknowns, "
-                "two measurements per wavelength), so the fit cannot be checked: measure a "
-                "second thickness to see a held-out error.")
-    if len(layers) == 1:
-        return (f"{head}: only {'T' if layers[0].R is None else 'R'} measured, one value per "
-                "wavelength for two unknowns: the fit matches it exactly and cannot be "
-                "checked, and K and S are not separable: measure both R and T.")
+    layer_text = f"{len(layers)} at {', '.join(f'{t:g}' for t in ts)} mm"
+    cells = [f"<b>{fit.ink}</b>", layer_text]
     s = fit.summary()
-    fitted = f"fit residual worst rms R {_fmt_err(s['max_rms_R'])}, T {_fmt_err(s['max_rms_T'])}"
-    if held:
+    residual = f"{_fmt_err(s['max_rms_R'])} / {_fmt_err(s['max_rms_T'])}"
+    if exact_by_construction(layers):
+        cells += ["-", "-", "-", "-",
+                  "exact by construction (one R and T pair, two unknowns per wavelength): "
+                  "nothing to check; measure a second thickness"]
+    elif len(layers) == 1:
+        q = "T" if layers[0].R is None else "R"
+        cells += ["-", "-", "-", "-",
+                  f"only {q}: matched exactly, K and S not separable; measure R and T"]
+    elif held:
         worst = max(held, key=lambda h: max(h.overall_R or 0.0, h.overall_T or 0.0))
+        rms = {q: [getattr(h, f"overall_{q}") for h in held] for q in "RT"}
+        agg = {q: (None if all(v is None for v in vals) else
+                   float(np.sqrt(np.mean([v * v for v in vals if v is not None]))))
+               for q, vals in rms.items()}
         per = "; ".join(f"{h.thickness_mm:g} mm: R {_fmt_err(h.overall_R)}, "
                         f"T {_fmt_err(h.overall_T)}" for h in held)
-        text = (f"{head}: <b>held-out</b> rms error (each thickness predicted from the "
-                f"others) {per}; worst at {worst.thickness_mm:g} mm. {fitted}.")
+        cells += [_fmt_err(agg["R"]), _fmt_err(agg["T"]), f"{worst.thickness_mm:g} mm",
+                  residual, f"each thickness predicted from the others ({per})"]
     elif len(ts) == 1:
-        text = (f"{head}: one thickness, so nothing can be held out; {fitted} (the spread of "
-                "the repeats).")
+        cells += ["-", "-", "-", residual,
+                  "one thickness: nothing to hold out; the residual is the repeats' spread"]
     else:
-        text = f"{head}: {fitted}."
+        cells += ["-", "-", "-", residual, ""]
     if notes:
-        text += " " + "; ".join(notes) + "."
-    return text
+        cells[-1] += ("; " if cells[-1] else "") + "; ".join(notes)
+    aligns = ["left", "left", "center", "center", "center", "center", "left"]
+    return "<tr>" + "".join(f"<td align='{a}'>{c}</td>" for a, c in
+                            zip(aligns, cells, strict=True)) + "</tr>"
 
 
 class FitPage(QWizardPage):
@@ -698,13 +715,17 @@ class FitPage(QWizardPage):
         profile, fits, chart_fit, measurements, held = result
         self.result = (profile, fits, chart_fit)
         self.held_out = held
-        lines = [_fit_line(f, [m for m in measurements if m.ink == f.ink],
-                           *held.get(f.ink, ([], []))) for f in fits]
+        text = ""
+        if fits:
+            rows = [_fit_row(f, [m for m in measurements if m.ink == f.ink],
+                             *held.get(f.ink, ([], []))) for f in fits]
+            text = ("<table cellspacing='0' cellpadding='3'>" + FIT_TABLE_HEAD + "".join(rows)
+                    + "</table>")
         if chart_fit is not None:
             cv = chart_fit.report()["cross_validated_dE2000"]
-            lines.append(f"<b>chart</b>: cross-validated dE2000 mean {cv['mean']:.2f}, "
-                         f"p95 {cv['p95']:.2f}, max {cv['max']:.2f}")
-        self.status.setText("<br>".join(lines))
+            text += (f"<b>chart</b>: cross-validated dE2000 mean {cv['mean']:.2f}, "
+                     f"p95 {cv['p95']:.2f}, max {cv['max']:.2f}")
+        self.status.setText(text)
         self._plot_fit(profile, measurements)
         self._plot_ks(profile, [f.ink for f in fits])
         self._plot_residuals(fits, held)

@@ -442,7 +442,7 @@ def test_fit_page_one_layer_says_exact_by_construction(qtbot, measurement_files)
         pass
     page = wiz.fit_page
     text = page.status.text()
-    assert text.count("exactly by construction") == 2 and "0.0000" not in text
+    assert text.count("exact by construction") == 2 and "0.0000" not in text
     assert page.held_out == {}
     # K and S per fitted ink, plotted (two curves each), and drawn in the ink's colour
     assert [ax.get_title() for ax in page.ks_fig.axes] == ["C", "Y"]
@@ -476,7 +476,7 @@ def test_fit_page_several_thicknesses_shows_held_out_error(qtbot):
         held, _ = page.held_out[ink]
         assert [h.thickness_mm for h in held] == [0.1, 0.3]
         assert all(h.overall_R < 2e-3 and h.overall_T < 2e-3 for h in held)
-    assert "held-out" in text and "0.1 mm: R" in text
+    assert "held-out rms R" in text and "0.1 mm: R &lt; 0.0001" in text
     # held-out curves (solid) in the error tab
     labels = [ln.get_label() for ax in page.res_fig.axes for ln in ax.lines]
     assert "C held out" in labels and "M held out" in labels
