@@ -133,16 +133,21 @@ def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
 
 
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
+    import time
+
+    from dreamprint_gui.gui.export import time_text
     from dreamprint_gui.gui.names import gui_wording
 
     dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
     qtbot.waitUntil(lambda: dlg.preflight is not None, timeout=120000)
     seen = []
+    t0 = time.monotonic()
     dlg.start()
     dlg.task.progress.connect(seen.append)
     with qtbot.waitSignal(dlg.task.done, timeout=180000):
         pass
     qtbot.waitUntil(lambda: dlg.manifest is not None or dlg.error.text(), timeout=5000)
+    waited = time.monotonic() - t0
     assert dlg.task.outcome == "succeeded", dlg.error.text()
     manifest = dlg.manifest
     nx, ny, nz = manifest["grid_dimensions"]
@@ -162,6 +167,13 @@ def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     assert PRINTER_NAMES["j850-paper"] in text and "j850-paper" not in text
     assert "Clear resin" in text
     assert manifest["printer"]["name"] == "j850-paper"  # the id stays in the file
+    # the time is the job's as the operator waited for it: the dialog's clock from Export to
+    # the finished job, which holds the manifest's own total (begun later, ended earlier)
+    t = manifest["timings_s"]
+    assert t["total"] <= dlg.elapsed_s <= waited
+    assert time_text(t, dlg.elapsed_s) in text
+    assert f"{dlg.elapsed_s:.1f} s from Export to the finished job" in text
+    assert f"converting {t['convert']:.1f} s" in text
     # the pre-flight the dialog showed is the one the manifest records, warnings in the summary
     assert manifest["preflight"]["material_fractions"] == dlg.preflight.fractions
     for w in manifest["preflight"]["warnings"]:
