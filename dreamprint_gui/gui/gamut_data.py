@@ -47,7 +47,7 @@ def printable_gamut_mesh(profile, steps: int = 12) -> GamutMesh:
     """Hull of the colours printable with C, M, Y, K, W (Clear adds no colour at R_inf)."""
     from scipy.spatial import ConvexHull
 
-    from ..engine.mixture import predict
+    from dreamprint_gui.physics.mixture import predict
 
     conc = simplex_lattice(5, steps)
     pred = predict(profile, conc)
@@ -62,7 +62,7 @@ def printable_gamut_mesh(profile, steps: int = 12) -> GamutMesh:
 
 def srgb_gamut_mesh(profile, n: int = 17) -> GamutMesh:
     """The sRGB cube's surface (n x n per face) in CIELAB under the profile's observer."""
-    from ..engine.colorimetry import observer_for, srgb_to_lab
+    from dreamprint_gui.physics.colorimetry import observer_for, srgb_to_lab
 
     t = np.linspace(0.0, 1.0, n)
     u, v = np.meshgrid(t, t, indexing="ij")
@@ -91,10 +91,10 @@ def pick_colour(profile, tables, rgb, density: float | None = None) -> dict:
     the mapping source -> printed colour); and, as ``dreamprint lookup`` reports them, the
     voxel's inks after density alignment (``aligned``: all six, Clear included) for a density
     ``density`` (1/mm; None: the mixture's own, so no Clear)."""
-    from ..engine.colorimetry import delta_E2000, observer_for, srgb_to_lab
-    from ..engine.gamut import align_density, lookup
-    from ..engine.mixture import predict
-    from ..engine.profile import COLOUR_INKS, INKS
+    from dreamprint_gui.core.profile import COLOUR_INKS, INKS
+    from dreamprint_gui.gamut import align_density, lookup
+    from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for, srgb_to_lab
+    from dreamprint_gui.physics.mixture import predict
 
     target = np.clip(np.asarray(rgb, dtype=np.float64).reshape(3), 0.0, 1.0)
     conc = np.asarray(lookup(tables, target.astype(np.float32)[None, :]),

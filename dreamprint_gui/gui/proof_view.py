@@ -2,7 +2,7 @@
 
 Defines :class:`ProofPage`. It takes the job settings the preview would export (source, profile,
 printer, height, density scale, background) from a callable, so the proof judges exactly what
-the operator is about to print; Render runs :func:`..engine.proof.runner.render_proof` on the
+the operator is about to print; Render runs :func:`dreamprint_gui.proof.runner.render_proof` on the
 background worker (:mod:`.workers`) with progress and Cancel; the result shows source | print |
 dE2000 map of the chosen view and the figures. Change the size, density or profile on the
 preview page and press Render again. The images scale with the page (:class:`ScaledImage`:
@@ -31,7 +31,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from .workers import Task, generator_job, run_task
+from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
 __all__ = ["ProofPage", "to_pixmap", "ScaledImage", "ColourBar"]
 
@@ -93,7 +93,7 @@ class ColourBar(QWidget):
 
     def __init__(self, vmax: float, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        from ..engine.proof.compare import de_heatmap
+        from dreamprint_gui.proof.compare import de_heatmap
 
         self.vmax = vmax
         ramp = de_heatmap(np.linspace(0.0, vmax, 256)[None, :].repeat(2, axis=0), vmax=vmax)
@@ -178,7 +178,7 @@ class ProofPage(QWidget):
         side.addWidget(self.progress)
         side.addWidget(self.status)
         side.addStretch(1)
-        from ..engine.proof.compare import DE_MAP_MAX
+        from dreamprint_gui.proof.compare import DE_MAP_MAX
 
         pics = QHBoxLayout()
         self.colour_bar = ColourBar(DE_MAP_MAX)
@@ -208,7 +208,7 @@ class ProofPage(QWidget):
 
     def proof_settings(self):
         """The proof settings from the job settings and this page's controls (or None)."""
-        from ..engine.proof.runner import ProofSettings
+        from dreamprint_gui.proof.runner import ProofSettings
 
         js = self._job_settings() if self._job_settings is not None else None
         if js is None or not getattr(js, "source", None):
@@ -227,7 +227,7 @@ class ProofPage(QWidget):
 
     def render(self, settings=None) -> None:
         """Start a render (of ``settings``, default :meth:`proof_settings`)."""
-        from ..engine.proof.runner import render_proof
+        from dreamprint_gui.proof.runner import render_proof
 
         s = settings if settings is not None else self.proof_settings()
         if s is None:
@@ -270,7 +270,7 @@ class ProofPage(QWidget):
         self._end("succeeded", "done")
 
     def _show_view(self, i: int) -> None:
-        from ..engine.proof.compare import de_heatmap, to_display
+        from dreamprint_gui.proof.compare import de_heatmap, to_display
 
         if not self.images or not 0 <= i < len(self.images):
             return

@@ -45,10 +45,10 @@ from PySide6.QtWidgets import (
     QWizardPage,
 )
 
-from ..engine.profile import INKS
-from ..errors import DreamPrintError
-from .settings import AppSettings
-from .workers import Task, abandonable, run_task
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.gui.settings import AppSettings
+from dreamprint_gui.gui.workers import Task, abandonable, run_task
 
 __all__ = ["CalibrationWizard", "MeasurementsPage", "ChartPage", "FitPage", "SavePage",
            "SPECTRA_FILTER"]
@@ -179,7 +179,7 @@ class _InkRow:
         if self.edits[q].text() != path:
             self.edits[q].setText(path)
         if path:
-            from ..io.spectra import read_spectra
+            from dreamprint_gui.io.spectra import read_spectra
 
             try:
                 ch.file = read_spectra(path, quantity=QUANTITY_NAMES[q],
@@ -210,7 +210,7 @@ class _InkRow:
 
     def sample_changed(self, q: str) -> None:
         """Use the picked sample; only its own problems are its problems."""
-        from ..io.spectra.calibration_set import measured_values
+        from dreamprint_gui.io.spectra.calibration_set import measured_values
 
         ch = self.channels[q]
         ch.error = ""
@@ -237,7 +237,7 @@ class _InkRow:
         return self.has_data() and not self.thickness.value() > 0
 
     def measurement(self):
-        from ..engine.calibration_types import LayerMeasurement
+        from dreamprint_gui.core.calibration_types import LayerMeasurement
 
         R, T = self.channels["R"].values, self.channels["T"].values
         if (R is None and T is None) or not self.thickness.value() > 0:
@@ -309,7 +309,7 @@ class MeasurementsPage(QWizardPage):
         self.set_measurements, self.set_path = None, None
         self.set_label.setStyleSheet("")
         if path:
-            from ..io.spectra.calibration_set import load_calibration_set
+            from dreamprint_gui.io.spectra.calibration_set import load_calibration_set
 
             try:
                 self.set_measurements = list(load_calibration_set(path, self.wavelengths()))
@@ -358,7 +358,7 @@ class MeasurementsPage(QWizardPage):
         """The measurements to plot: also those of rows still lacking their thickness."""
         if self.set_measurements is not None:
             return list(self.set_measurements)
-        from ..engine.calibration_types import LayerMeasurement
+        from dreamprint_gui.core.calibration_types import LayerMeasurement
 
         return [LayerMeasurement(r.ink, float(r.thickness.value()), r.channels["R"].values,
                                  r.channels["T"].values) for r in self.rows.values()
@@ -446,8 +446,8 @@ class ChartPage(QWizardPage):
             try:
                 if not (rp and sp):
                     raise DreamPrintError("give both the recipes and the reflectance file")
-                from ..io.recipes import read_recipes
-                from ..io.spectra import read_spectra
+                from dreamprint_gui.io.recipes import read_recipes
+                from dreamprint_gui.io.spectra import read_spectra
 
                 recipes = np.asarray(read_recipes(rp))
                 f = read_spectra(sp, quantity="reflectance")
@@ -479,7 +479,7 @@ class ChartPage(QWizardPage):
 
 def _held_out(measurements: list, base) -> dict[str, tuple[list, list[str]]]:
     """Leave-one-thickness-out of each ink with several thicknesses (worker thread)."""
-    from ..engine.calibration import leave_one_thickness_out
+    from dreamprint_gui.physics.calibration import leave_one_thickness_out
 
     out = {}
     for ink in INKS:
@@ -506,7 +506,7 @@ def _fit_row(fit, layers: list, held: list, notes: list[str]) -> str:
     Held-out error (leave-one-thickness-out) with several thicknesses; one layer with R and T
     is fitted exactly by construction, which the row says instead of a zero residual.
     """
-    from ..engine.calibration import exact_by_construction
+    from dreamprint_gui.physics.calibration import exact_by_construction
 
     ts = sorted({m.thickness_mm for m in layers})
     layer_text = f"{len(layers)} at {', '.join(f'{t:g}' for t in ts)} mm"
@@ -644,7 +644,7 @@ class FitPage(QWizardPage):
         name = self.wiz.default_name
 
         def job(report, cancel):
-            from ..engine.calibration import calibrate_profile
+            from dreamprint_gui.physics.calibration import calibrate_profile
 
             if not measurements and recipes is None:
                 raise DreamPrintError("nothing to fit: choose ink measurements (first page) or "
@@ -664,7 +664,7 @@ class FitPage(QWizardPage):
                 profile, fits = base.with_settings(name=name), []
             chart_fit = None
             if recipes is not None:
-                from ..engine.chart_calibration import fit_chart
+                from dreamprint_gui.physics.chart_calibration import fit_chart
 
                 report(f"refitting the inks to the chart's {len(recipes)} patches with "
                        f"{folds}-fold cross-validation (this can take a minute):")
@@ -734,7 +734,7 @@ class FitPage(QWizardPage):
         self.fitted.emit(self.result)
 
     def _plot_fit(self, profile, measurements) -> None:
-        from ..engine.kubelka_munk import reflectance_transmittance
+        from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
         fig = self.fit_fig
         fig.clear()
@@ -861,7 +861,7 @@ class SavePage(QWizardPage):
             self.path_edit.setText(path)
 
     def validatePage(self) -> bool:  # noqa: N802 - Qt override
-        from ..engine.profile import save_profile
+        from dreamprint_gui.core.profile import save_profile
 
         fit = self.wiz.fit_page.result
         if fit is None:
@@ -894,7 +894,7 @@ class CalibrationWizard(QWizard):
     def __init__(self, parent: QWidget | None = None, settings: AppSettings | None = None,
                  base_profile=None, calibration_set: str | None = None) -> None:
         super().__init__(parent)
-        from ..engine.profile import default_profile
+        from dreamprint_gui.core.profile import default_profile
 
         self.settings = settings or AppSettings()
         self.base_profile = base_profile or getattr(parent, "profile", None) or default_profile()

@@ -62,7 +62,7 @@ def _widget_pixels(widget) -> np.ndarray:
 def test_proof_images_scale_with_the_page_and_the_de_map_has_a_colour_bar(qtbot):
     """A 32 px result fills the enlarged page (each rendered pixel a block, no smoothing);
     the colour bar runs from the heat map's colour of 0 to that of 20 dE2000."""
-    from dreamprint_gui.engine.proof.compare import DE_MAP_MAX, de_heatmap
+    from dreamprint_gui.proof.compare import DE_MAP_MAX, de_heatmap
 
     page = ProofPage(job_settings=lambda: None)
     qtbot.addWidget(page)
