@@ -3,16 +3,23 @@
 Defines :class:`CalibrationWizard` (a QWizard) and its pages:
 
 1. :class:`MeasurementsPage`: per ink, the files holding its reflectance and transmittance (any
-   format ``io.spectra.read_spectra`` reads), the sample in each, and the swatch thickness; or a
-   calibration set (TOML, ``io.spectra.calibration_set``). Every parsed spectrum is plotted at
-   once, resampled onto the profile's grid; each file's problem shows on its own row.
+   format ``io.spectra.read_spectra`` reads), the sample in each (the picked one is the one used:
+   only its own impossible values refuse it, naming it; ``calibration_set.measured_values``),
+   what each file holds when it does not say (the CLI's ``--file-quantity``: an absorbance file
+   is read as T = 10^-A), and the swatch thickness, required (no default: the page names the
+   inks lacking it); or a calibration set (TOML, ``io.spectra.calibration_set``; several
+   thicknesses per ink). Every parsed spectrum is plotted at once, resampled onto the profile's
+   grid; each file's problem shows on its own row.
 2. :class:`ChartPage` (optional): a mixture chart, recipes (``--mix-file`` CSV) and the measured
    reflectance of each patch.
 3. :class:`FitPage`: runs ``calibration.calibrate_profile`` (and ``chart_calibration.fit_chart``)
    on a worker thread, showing the stage and the elapsed time, with a Stop button that returns
    the page at once (the fit has no cancel token: it is abandoned, ``workers.abandonable``,
-   and its result dropped); then plots measured vs fitted R and T per ink, the residuals, and
-   the chart's cross-validated dE2000.
+   and its result dropped); then a table of what can be checked per ink (with several
+   thicknesses, the held-out R/T error of ``calibration.leave_one_thickness_out``; with one R/T
+   pair, that the fit is exact by construction), and plots: measured vs fitted R and T, the
+   fitted K and S, the held-out and residual error per wavelength, the chart's cross-validated
+   dE2000.
 4. :class:`SavePage`: name and file; saving makes the profile active (``profileSaved``).
 """
 
