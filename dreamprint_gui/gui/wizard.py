@@ -100,14 +100,16 @@ QUANTITY_NAMES = {"R": "reflectance", "T": "transmittance"}
 class _InkRow:
     """The widgets of one ink on the measurements page."""
 
-    def __init__(self, page: MeasurementsPage, ink: str, grid: QGridLayout, row: int) -> None:
-        self.page, self.ink = page, ink
+    def __init__(self, page: MeasurementsPage, ink: str, extra: bool = False) -> None:
+        """``extra``: another thickness of ``ink`` (removable), not the ink's first row."""
+        self.page, self.ink, self.extra = page, ink, extra
         self.channels = {"R": _Channel(), "T": _Channel()}
         self.edits: dict[str, QLineEdit] = {}
         self.combos: dict[str, QComboBox] = {}
         self.holds: dict[str, QComboBox] = {}
-        name = QLabel(f"<b>{ink}</b>")
-        grid.addWidget(name, row, 0)
+        self.cells: list[tuple[QWidget, int]] = []  # (widget, column) of the row's line
+        name = QLabel(f"<b>{ink}</b>" if not extra else f"<b>{ink}</b> +")
+        self.cells.append((name, 0))
         col = 1
         for q in ("R", "T"):
             edit = QLineEdit()
@@ -128,10 +130,7 @@ class _InkRow:
                              "--file-quantity): an absorbance file is read as T = 10^-A")
             holds.currentIndexChanged.connect(lambda _i, q=q: self.quantity_changed(q))
             self.edits[q], self.combos[q], self.holds[q] = edit, combo, holds
-            grid.addWidget(edit, row, col)
-            grid.addWidget(browse, row, col + 1)
-            grid.addWidget(combo, row, col + 2)
-            grid.addWidget(holds, row, col + 3)
+            self.cells += [(edit, col), (browse, col + 1), (combo, col + 2), (holds, col + 3)]
             col += 4
         # No default: a thickness the operator did not enter would silently scale K and S.
         self.thickness = QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, value=0.0,
@@ -140,12 +139,29 @@ class _InkRow:
         self.thickness.setToolTip("the measured swatch's thickness (required for every ink "
                                   "with a measurement)")
         self.thickness.valueChanged.connect(page.changed)
-        grid.addWidget(self.thickness, row, col)
+        self.cells.append((self.thickness, col))
+        # another thickness of this ink (the held-out check needs two), or remove this one
+        self.more = QPushButton("-" if extra else "+")
+        self.more.setMaximumWidth(28)
+        self.more.setToolTip(f"remove this thickness of {ink}" if extra else
+                             f"add another thickness of {ink} (two or more let the fit page "
+                             "check the fit on a thickness it did not see)")
+        self.more.clicked.connect(lambda: page.remove_row(self) if extra else page.add_row(ink))
+        self.cells.append((self.more, col + 1))
+        self.columns = col + 1
         self.error = QLabel("")
         self.error.setStyleSheet(ERROR_STYLE)
         self.error.setWordWrap(True)
         self.error.setVisible(False)
-        grid.addWidget(self.error, row + 1, 1, 1, col)
+
+    def place(self, grid: QGridLayout, row: int) -> None:
+        """Put the row's widgets on grid line ``row`` (its problem on the line below)."""
+        for w, col in self.cells:
+            grid.addWidget(w, row, col)
+        grid.addWidget(self.error, row + 1, 1, 1, self.columns - 1)
+
+    def widgets(self) -> list[QWidget]:
+        return [w for w, _ in self.cells] + [self.error]
 
     def browse(self, q: str) -> None:
         path, _ = QFileDialog.getOpenFileName(
@@ -269,14 +285,18 @@ class MeasurementsPage(QWizardPage):
         self.setTitle("Ink measurements")
         self.setSubTitle("Choose, for each ink you measured, the file holding its reflectance "
                          "(R) and transmittance (T), the sample in it, what the file holds if it "
-                         "does not say, and the swatch thickness. Inks you leave empty keep the "
-                         "active profile's values. Or load a calibration set (several "
-                         "thicknesses per ink).")
+                         "does not say, and the swatch thickness; + adds another thickness of "
+                         "the ink (two or more let the fit be checked). Inks you leave empty "
+                         "keep the active profile's values. Or load a calibration set.")
         grid = QGridLayout()
         for c, text in enumerate(("ink", "R file", "", "R sample", "file holds", "T file", "",
                                   "T sample", "file holds", "thickness")):
             grid.addWidget(QLabel(f"<i>{text}</i>"), 0, c)
-        self.rows = {ink: _InkRow(self, ink, grid, 1 + 2 * i) for i, ink in enumerate(INKS)}
+        self.grid = grid
+        # every layer row, in page order; ``rows`` the first of each ink
+        self.layer_rows = [_InkRow(self, ink) for ink in INKS]
+        self.rows = {r.ink: r for r in self.layer_rows}
+        self._relayout()
         set_row = QHBoxLayout()
         self.set_button = QPushButton("Load a calibration set (TOML)...")
         self.set_button.clicked.connect(self._browse_set)
@@ -302,6 +322,35 @@ class MeasurementsPage(QWizardPage):
 
     def wavelengths(self) -> np.ndarray:
         return self.wiz.base_profile.wavelengths_nm
+
+    def _relayout(self) -> None:
+        for r in self.layer_rows:
+            for w in r.widgets():
+                self.grid.removeWidget(w)
+        for i, r in enumerate(self.layer_rows):
+            r.place(self.grid, 1 + 2 * i)
+
+    def add_row(self, ink: str) -> _InkRow:
+        """Another thickness of ``ink``: a row under the ink's last one."""
+        row = _InkRow(self, ink, extra=True)
+        last = max(i for i, r in enumerate(self.layer_rows) if r.ink == ink)
+        self.layer_rows.insert(last + 1, row)
+        self._relayout()
+        enabled = self.set_measurements is None
+        for w in row.widgets():
+            w.setEnabled(enabled)
+        self.changed()
+        return row
+
+    def remove_row(self, row: _InkRow) -> None:
+        if not row.extra:
+            return
+        self.layer_rows.remove(row)
+        for w in row.widgets():
+            self.grid.removeWidget(w)
+            w.deleteLater()
+        self._relayout()
+        self.changed()
 
     def _browse_set(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Calibration set",
@@ -329,22 +378,22 @@ class MeasurementsPage(QWizardPage):
                 self.set_label.setStyleSheet(ERROR_STYLE)
         else:
             self.set_label.setText("")
-        for row in self.rows.values():
+        for row in self.layer_rows:
             for w in (*row.edits.values(), *row.combos.values(), *row.holds.values(),
-                      row.thickness):
+                      row.thickness, row.more):
                 w.setEnabled(self.set_measurements is None)
         self.changed()
 
     def measurements(self) -> list:
         if self.set_measurements is not None:
             return list(self.set_measurements)
-        return [m for m in (row.measurement() for row in self.rows.values()) if m is not None]
+        return [m for m in (row.measurement() for row in self.layer_rows) if m is not None]
 
     def lacking_thickness(self) -> list[str]:
         """The inks with a measurement but no thickness (none when a set is loaded)."""
         if self.set_measurements is not None:
             return []
-        return [ink for ink, r in self.rows.items() if r.lacks_thickness()]
+        return list(dict.fromkeys(r.ink for r in self.layer_rows if r.lacks_thickness()))
 
     def changed(self) -> None:
         lacking = self.lacking_thickness()
@@ -359,7 +408,7 @@ class MeasurementsPage(QWizardPage):
         # Measurements are optional when a chart is given on the next page; a row with a
         # problem or without its thickness must be fixed or cleared first.
         return self.set_measurements is not None or not any(
-            r.has_error() or r.lacks_thickness() for r in self.rows.values())
+            r.has_error() or r.lacks_thickness() for r in self.layer_rows)
 
     def _plotted(self) -> list:
         """The measurements to plot: also those of rows still lacking their thickness."""
@@ -368,7 +417,7 @@ class MeasurementsPage(QWizardPage):
         from dreamprint_gui.core.calibration_types import LayerMeasurement
 
         return [LayerMeasurement(r.ink, float(r.thickness.value()), r.channels["R"].values,
-                                 r.channels["T"].values) for r in self.rows.values()
+                                 r.channels["T"].values) for r in self.layer_rows
                 if r.has_data()]
 
     def _plot(self) -> None:

@@ -4,8 +4,9 @@ Defines
 -------
 - :func:`invert_closed_form`: Kubelka's explicit inversion of one layer's R, T at thickness t.
 - :func:`fit_ink`: Levenberg-Marquardt over one or several layers (thicknesses, R and/or T;
-  an optically thick patch, thickness inf, contributes R_inf), started from the closed form;
-  per-wavelength residuals.
+  an optically thick patch, thickness inf, contributes R_inf), started from the closed form
+  with a faint pull towards that start (weight ``_PRIOR`` per unit of ln K, ln S: it decides
+  only where the data leave K and S free, e.g. layers all opaque); per-wavelength residuals.
 - :func:`calibrate_profile`: all measured inks -> an :class:`InkProfile` plus a fit report; inks
   without measurements keep the base profile's K and S (and the report says so).
 - :func:`leave_one_thickness_out`: what can be checked of a fit. One layer with R and T is
@@ -44,6 +45,7 @@ __all__ = ["invert_closed_form", "fit_ink", "InkFit", "calibrate_profile", "Laye
            "HeldOut", "leave_one_thickness_out", "exact_by_construction"]
 
 _T_FLOOR = 1e-12  # the smallest transmittance the starts invert (T = 0 has no finite K)
+_PRIOR = 1e-4  # weight of the pull towards the start, per unit of ln K or ln S (fit_ink)
 _FLOOR = 1e-9  # 1/mm: below this a coefficient is indistinguishable from 0 at mm thicknesses
 
 
@@ -167,14 +169,16 @@ def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
             K[j], S[j] = k0, s0
             continue
 
-        def residuals(x: NDArray, j: int = j) -> NDArray:
+        def residuals(x: NDArray, j: int = j, x0: NDArray = x0) -> NDArray:
             r, tt = reflectance_transmittance(np.exp(x[0]), np.exp(x[1]), t)
-            out = np.concatenate([(r - R[:, j])[hasR[:, j]], (tt - T[:, j])[hasT[:, j]]])
-            return out
+            # A faint pull towards the start: where the layers are all opaque, R fixes only
+            # K/S and T ~ 0 nothing else, so the data leave a flat valley along which LM
+            # wandered to K, S ~ 1e9 (refused by the profile); the pull keeps the start's
+            # scale there and moves a determined solution by ~ (_PRIOR / slope)^2, nothing.
+            return np.concatenate([(r - R[:, j])[hasR[:, j]], (tt - T[:, j])[hasT[:, j]],
+                                   _PRIOR * (x - x0)])
 
-        n_res = int(hasR[:, j].sum() + hasT[:, j].sum())
-        method = "lm" if n_res >= 2 else "trf"
-        sol = least_squares(residuals, x0, method=method, xtol=1e-15, ftol=1e-15, gtol=1e-15,
+        sol = least_squares(residuals, x0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15,
                             max_nfev=2000)
         K[j], S[j] = np.exp(sol.x)
     K = np.where(K <= _FLOOR * 1.000001, 0.0, K)

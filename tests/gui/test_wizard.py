@@ -480,3 +480,44 @@ def test_fit_page_several_thicknesses_shows_held_out_error(qtbot):
     # held-out curves (solid) in the error tab
     labels = [ln.get_label() for ax in page.res_fig.axes for ln in ax.lines]
     assert "C held out" in labels and "M held out" in labels
+
+
+def test_a_second_thickness_row_gives_a_held_out_error(qtbot, tmp_path, truth, measurement_files):
+    """C at 0.4 mm (exact) and, on a row added with +, at 0.8 mm with R offset by +0.01:
+    fitted from 0.4 mm alone (the closed form gives the true K and S), 0.8 mm is predicted
+    with an R error of exactly that offset and no T error."""
+    r_path, t_path = measurement_files
+    wl = truth.wavelengths_nm
+    R8, T8 = reflectance_transmittance(truth.K, truth.S, 0.8)
+    r8, t8 = tmp_path / "c_R_08.csv", tmp_path / "c_T_08.csv"
+    write_spectra(r8, [Sample("C", wl, R8[0] + 0.01)], quantity="reflectance")
+    write_spectra(t8, [Sample("C", wl, T8[0])], quantity="transmittance")
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    page = wiz.measurements_page
+    _load_rows(wiz, r_path, t_path, inks=("C",))
+    page.rows["C"].more.click()                       # + : another thickness of C
+    assert [r.ink for r in page.layer_rows] == ["C", "C", "M", "Y", "K", "W", "Cl"]
+    second = page.layer_rows[1]
+    assert second.extra and second.more.text() == "-"
+    second.load("R", str(r8))
+    second.load("T", str(t8))
+    assert not page.isComplete() and "of C:" in page.missing.text()  # its thickness first
+    second.thickness.setValue(0.8)
+    assert page.isComplete()
+    assert [m.thickness_mm for m in page.measurements()] == [0.4, 0.8]
+    wiz.next()
+    wiz.next()
+    with qtbot.waitSignal(wiz.fit_page.fitted, timeout=60000):
+        pass
+    held, _ = wiz.fit_page.held_out["C"]
+    h08 = next(h for h in held if h.thickness_mm == 0.8)
+    np.testing.assert_allclose(h08.rms_R, 0.01, rtol=1e-4)
+    assert h08.overall_T < 1e-6
+    assert "0.8 mm: R 0.0100, T &lt; 0.0001" in wiz.fit_page.status.text()
+    # removing the row takes its measurement away
+    wiz.back()
+    wiz.back()
+    second.more.click()
+    assert len(page.layer_rows) == len(INKS) and len(page.measurements()) == 1

@@ -113,3 +113,18 @@ def test_leave_one_thickness_out_predicts_each_thickness_from_the_others():
               LayerMeasurement("Y", 0.5, reflectance_transmittance(K_TRUE, S_TRUE, 0.5)[0], None)]
     held, notes = leave_one_thickness_out(r_only, 36)
     assert [h.thickness_mm for h in held] == [0.5] and "0.2 mm not held out" in notes[0]
+
+
+def test_inconsistent_opaque_layers_keep_k_and_s_finite():
+    """Two thicknesses both opaque at long wavelengths (T ~ 1e-13) with R disagreeing by 0.01:
+    the data fix K/S there and nothing else; the fit stays at the closed-form scale instead of
+    running off to K, S ~ 1e9 along the flat valley (the profile refused those)."""
+    K = np.linspace(1.0, 120.0, 36)
+    S = np.full(36, 1.5)
+    R4, T4 = reflectance_transmittance(K, S, 0.4)
+    R8, T8 = reflectance_transmittance(K, S, 0.8)
+    fit = fit_ink([LayerMeasurement("C", 0.4, R4, T4), LayerMeasurement("C", 0.8, R8 + 0.01, T8)],
+                  36)
+    assert np.all(np.isfinite(fit.K)) and np.all(np.isfinite(fit.S))
+    assert np.all(fit.K < 3 * K) and np.all(fit.K > K / 3)
+    assert np.all(fit.S < 10 * S)
