@@ -10,7 +10,7 @@ from ..job.halftone import (  # noqa: F401
     fg_threshold,
     fraction_variance_ratio,
     label_rows,
-    mask_columns,
+    tile_layout,
     mask_shape_for_voxel,
     pick_label,
     scatter_counts,
@@ -20,5 +20,5 @@ from ..job.halftone import (  # noqa: F401
 
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
            "pick_label", "label_rows", "fg_threshold", "scatter_labels", "scatter_counts",
-           "mask_columns", "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS",
+           "tile_layout", "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS",
            "MASK_VERSION"]
