@@ -240,6 +240,9 @@ def evaluate_job(job, as_json) -> None:
         return
     click.echo(f"{job}: {report['slices_found']} slices, grid {report['grid_dimensions']}, "
                f"consistent: {report['consistent']}")
+    click.echo("  per material: fraction = its share of the job's voxels in the slices; "
+               "intended = the mean concentration the job asked for (manifest); z = their "
+               "difference in binomial standard errors")
     for m, r in report["materials"].items():
         click.echo(f"  {m:5s} fraction {r['fraction']:.5f}  intended {r['intended']:.5f}  "
                    f"z {r['z_score']:+.2f}")

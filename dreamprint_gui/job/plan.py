@@ -26,7 +26,8 @@ from ..engine.profile import INKS
 from ..errors import DreamPrintError
 from .halftone import HALFTONE_METHODS, Halftoner
 
-__all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "JobCancelled",
+__all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
+           "JobCancelled",
            "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
@@ -205,10 +206,10 @@ def _clear_sigma(profile) -> float:
                               profile.density_samples))
 
 
-def prepare_job(settings: ConvertSettings) -> JobContext:
-    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables."""
-    from ..io.volumes import grid_for_source
-
+def check_settings(settings: ConvertSettings) -> None:
+    """The checks of a job's settings that need no file: a bad or missing choice (a missing
+    --height-mm / --size-mm included) is reported before the source is opened or any message
+    says it is being opened."""
     s = settings
     if s.halftone not in HALFTONE_METHODS:
         raise DreamPrintError(f"unknown halftoning '{s.halftone}' "
@@ -232,6 +233,14 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
         raise DreamPrintError(f"--workers must be at least 1, got {s.workers}")
     if s.content not in CONTENT_MODES:
         raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
+
+
+def prepare_job(settings: ConvertSettings) -> JobContext:
+    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables."""
+    from ..io.volumes import grid_for_source
+
+    s = settings
+    check_settings(s)
     printer = load_printer(s.printer)
     source = _open_source(s.source, s.source_options, s.content, s.sampling)
     grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,

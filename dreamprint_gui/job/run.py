@@ -35,6 +35,7 @@ from .plan import (
     JobContext,
     _scheduler_kind,
     _slabs,
+    check_settings,
     prepare_job,
 )
 from .slab import run_slab
@@ -226,6 +227,8 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     if settings.output is None:
         raise DreamPrintError("no output folder given (-o JOB)")
     check_target(settings.output, settings.overwrite)  # before any work
+    if context is None:
+        check_settings(settings)  # a missing size is reported before "opening the source"
     yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
     ctx = context if context is not None else prepare_job(settings)
     pf = None

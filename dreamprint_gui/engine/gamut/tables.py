@@ -279,7 +279,8 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
 
     ``objective``/``intent`` default to the profile's ``table`` settings, else to
     :data:`DEFAULT_OBJECTIVE` / ``colorimetric``. ``cache`` overrides the folder (default:
-    :func:`cache_dir`). ``progress(fraction)`` is called during a build.
+    :func:`cache_dir`). ``progress(fraction)`` is called during a build only (a table loaded
+    from the cache reports nothing: the caller would otherwise say "building").
     """
     objective, intent = resolve_choice(profile, objective, intent)
     folder = Path(cache) if cache is not None else cache_dir()
@@ -289,8 +290,6 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
     found = _load(path, fp, objective, size, intent)
     if found is not None:
         found.load_seconds = time.perf_counter() - t0
-        if progress is not None:
-            progress(1.0)
         return found
     tables = build_tables(profile, objective, size, progress, intent)
     try:
