@@ -94,6 +94,12 @@ class Preflight:
     background: str
     warnings: list[PreflightWarning] = field(default_factory=list)
     estimate_seconds: float = 0.0             # what this pre-flight took
+    printed_fraction: float = 0.0             # of the job, at or above the background threshold
+    clamped_printed_fraction: float = 0.0     # of the printed voxels, clamped high
+    # at safe_density_scale, the share of the printed voxels that would fall to the background
+    lost_at_safe_scale: float | None = None
+    # no clamping: the largest --density-scale that still clamps none of the sampled voxels
+    max_unclamped_density_scale: float | None = None
 
     @property
     def ink_fraction(self) -> float:
@@ -141,6 +147,10 @@ class Preflight:
             "content": dict(self.content), "background": self.background,
             "warnings": [w.to_json() for w in self.warnings],
             "estimate_seconds": self.estimate_seconds,
+            "printed_fraction": self.printed_fraction,
+            "clamped_printed_fraction": self.clamped_printed_fraction,
+            "printed_lost_at_safe_scale": self.lost_at_safe_scale,
+            "max_unclamped_density_scale": self.max_unclamped_density_scale,
         }
 
 
@@ -351,11 +361,20 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
     ftarget = dens.reshape(-1)[fg].astype(np.float64)
     reach, de = _node_fields(tables, frgb) if fg.any() else (np.zeros(0), np.zeros(0))
     clamped_frac = float(stats[1]) / n
-    safe = None
+    printed = int(fg.sum())
+    fog = ctx.content is None or ctx.content.mode == "fog"
+    safe = lost = up = None
     if stats[1] > 0 and s.density_scale > 0:
         over = ftarget > reach
         if over.any():
-            safe = float(s.density_scale * np.min(reach[over] / ftarget[over]))
+            f_safe = float(np.min(reach[over] / ftarget[over]))
+            safe = float(s.density_scale * f_safe)
+            # what the safe scale costs: printed voxels it would thin below the background
+            lost = float(np.mean(ftarget * f_safe < ctx.halftoner.threshold))
+    elif fog and printed and s.density_scale > 0:
+        pos = ftarget > 0
+        if pos.any():
+            up = float(s.density_scale * np.min(reach[pos] / ftarget[pos]))
     oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
     worst = float(de.max()) if len(de) else 0.0
     rate, rate_source = measured_rate()
@@ -369,36 +388,86 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
         clamped_fraction=clamped_frac, clamped_voxels=int(round(clamped_frac * total)),
         safe_density_scale=safe, out_of_gamut_fraction=oog, worst_dE2000=worst,
         seconds=total / rate, rate_voxels_per_s=rate, rate_source=rate_source,
-        content=content_json, density_scale=s.density_scale, background=s.background)
+        content=content_json, density_scale=s.density_scale, background=s.background,
+        printed_fraction=printed / n,
+        clamped_printed_fraction=float(stats[1]) / printed if printed else 0.0,
+        lost_at_safe_scale=lost, max_unclamped_density_scale=up)
     pf.warnings = _warnings(pf)
     pf.estimate_seconds = time.perf_counter() - t0
     return pf
 
 
+# A lower --density-scale is suggested against clamping only when it keeps the content's look:
+# at most this share of the printed voxels may fall to the background at the suggested scale,
+# and at most this share of them may be clamped now (more means the object is meant dense).
+KEEP_PRINTED = 0.05
+SUGGEST_BELOW_CLAMPED = 0.10
+
+
 def _warnings(pf: Preflight) -> list[PreflightWarning]:
+    """The warnings of a pre-flight, made together so that they never contradict each other:
+
+    - mostly Clear with clamped cores: only ``--content solid`` is suggested (a lower scale would
+      thin the haze further, a higher one clamp more), and the clamp warning then suggests no
+      scale;
+    - clamping: a scale that avoids it is suggested only if it keeps the content's look (at most
+      :data:`KEEP_PRINTED` of the printed voxels fall to the background, fewer than
+      :data:`SUGGEST_BELOW_CLAMPED` clamped now); otherwise the warning says why the scale is
+      kept (a dense object prints at the inks' densest) and what a lower one would do;
+    - a solid job gets no density-scale advice (its density is not the source's);
+    - a faint fog without clamping is told how far the scale can rise without clamping.
+    """
     out = []
+    fog = pf.content.get("mode", "fog") == "fog"
     clear = pf.fractions.get("Cl", 0.0) + pf.fractions.get("empty", 0.0)
-    if clear > MOSTLY_CLEAR:
-        if pf.content.get("mode") != "fog":
+    mostly_clear = clear > MOSTLY_CLEAR
+    clamped = pf.clamped_voxels > 0
+    if mostly_clear:
+        if not fog:
             hint = "little of the grid is occupied: check the source and its bounds"
-        elif pf.clamped_voxels > 0:  # a larger scale would clamp more: only solid helps
-            hint = "the source prints as a faint haze around clamped cores: try --content solid"
+        elif clamped:  # a lower scale thins the haze, a larger one clamps more: only solid helps
+            hint = ("the source prints as a faint haze around cores denser than the inks: "
+                    "try --content solid")
         else:
-            hint = ("the source prints as a faint haze: try --content solid, or a larger "
-                    "--density-scale")
+            up = pf.max_unclamped_density_scale
+            if up is not None and up > 1.5 * pf.density_scale:
+                hint = (f"the source prints as a faint haze: try --content solid, or a larger "
+                        f"--density-scale (up to {up:.3g} clamps none of the sampled voxels)")
+            else:
+                hint = "the source prints as a faint haze: try --content solid"
+        nums = {"clear_or_empty_fraction": clear, "ink_fraction": pf.ink_fraction}
+        if fog and not clamped and pf.max_unclamped_density_scale is not None:
+            nums["max_unclamped_density_scale"] = pf.max_unclamped_density_scale
         out.append(PreflightWarning(
             "mostly-clear", f"the job would be {100 * clear:.1f} % Clear or empty "
-            f"(ink {100 * pf.ink_fraction:.2f} %): {hint}",
-            {"clear_or_empty_fraction": clear, "ink_fraction": pf.ink_fraction}))
-    if pf.clamped_voxels > 0:
-        msg = (f"about {pf.clamped_voxels:,} voxels ({100 * pf.clamped_fraction:.2f} %) are "
-               "denser than the inks can print and will be clamped")
+            f"(ink {100 * pf.ink_fraction:.2f} %): {hint}", nums))
+    if clamped:
+        msg = (f"about {pf.clamped_voxels:,} voxels ({100 * pf.clamped_fraction:.2f} % of the job, "
+               f"{100 * pf.clamped_printed_fraction:.1f} % of the printed voxels) are denser "
+               "than the inks can print and will print at the inks' densest")
         nums = {"clamped_voxels": pf.clamped_voxels, "clamped_fraction": pf.clamped_fraction,
+                "clamped_printed_fraction": pf.clamped_printed_fraction,
                 "density_scale": pf.density_scale}
-        if pf.safe_density_scale is not None:
-            msg += (f"; --density-scale {pf.safe_density_scale:.3g} or less avoids it in the "
-                    "sampled voxels (the densest voxels may be unsampled: a little less is safer)")
-            nums["density_scale_without_clamping"] = pf.safe_density_scale
+        safe, lost = pf.safe_density_scale, pf.lost_at_safe_scale
+        if safe is not None:
+            nums["density_scale_without_clamping"] = safe
+        if lost is not None:
+            nums["printed_lost_at_that_scale"] = lost
+        if not fog:
+            pass  # a solid's density is not the source's: no scale to suggest
+        elif mostly_clear:
+            msg += " (see the Clear warning: --content solid, not a lower scale)"
+        elif safe is not None and lost is not None and lost <= KEEP_PRINTED \
+                and pf.clamped_printed_fraction < SUGGEST_BELOW_CLAMPED:
+            msg += (f"; --density-scale {safe:.3g} or less avoids it in the sampled voxels (the "
+                    "densest voxels may be unsampled: a little less is safer)")
+        elif safe is not None:
+            msg += ("; the dense parts read as solid, so the scale is kept: "
+                    f"--density-scale {safe:.3g} would avoid clamping but thin the whole object "
+                    f"{pf.density_scale / max(safe, 1e-300):.3g}-fold"
+                    + (f" ({100 * lost:.0f} % of its printed voxels would turn to background)"
+                       if lost else "")
+                    + "; --content solid prints it solid on purpose")
         out.append(PreflightWarning("clamped", msg, nums))
     if pf.out_of_gamut_fraction > OUT_OF_GAMUT_WARN:
         out.append(PreflightWarning(
@@ -408,4 +477,3 @@ def _warnings(pf: Preflight) -> list[PreflightWarning]:
             {"out_of_gamut_fraction": pf.out_of_gamut_fraction,
              "worst_dE2000": pf.worst_dE2000}))
     return out
-
