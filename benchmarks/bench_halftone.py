@@ -6,19 +6,19 @@ per ink the variance of its local fraction in boxes about 0.25 mm wide relative 
 variance of i.i.d. sampling (i.i.d. = 1.0, lower is smoother), the mean absolute bias of each
 ink's fraction with the i.i.d. standard error for scale, and the kernel speed.
 
-Lattice (``--lattice``, on by default): a uniform smoke-like colour whose magenta is rare
-(0.7 %) is halftoned over a block of whole mask tiles, three ways: ``random`` (i.i.d.),
-``one shift`` (the mask tiled with one offset for the whole job: the tiling before per-tile
-shifts, reproduced here in numpy) and ``blue-noise`` (the job's halftoner: a hashed shift per
-tile). For the rare ink's placement (indicator of its voxels) it prints the power spectrum at the
-tile period's fundamentals (harmonic index -1..1 per axis) relative to i.i.d. placement (the
-periodogram of i.i.d. placement is 1 at every frequency, its maximum over these 17 bins ~ 3.5: a lattice
-shows as a peak far above), the mean power over all the tile's harmonics relative to the mean
-over all frequencies (1 without a lattice: a lattice puts its power there), the largest share of the ink's
-voxels on one residue of the tile period (x mod mx, y mod my) in one layer (i.i.d. ~ a few
-voxels), the variance ratio in 0.25 mm and 1 mm boxes (low-frequency noise; below 1 = below
-i.i.d.) and the bias of its fraction. ``--picture FILE.png`` draws one layer's rare-ink voxels
-of the ``one shift`` and ``blue-noise`` halftones side by side, in mm.
+Lattice (always run; ``--no-quality`` runs only it): a uniform smoke-like colour whose magenta
+is rare (0.7 %) is halftoned over a block of whole mask tiles, three ways: ``random``
+(i.i.d.), ``one shift`` (the mask tiled with one offset for the whole job: the tiling before
+per-tile shifts, reproduced here in numpy) and ``blue-noise`` (the job's halftoner: a hashed
+shift per tile). For the rare ink's placement (indicator of its voxels) it prints: the power
+spectrum at the tile period's fundamentals (harmonic index -1..1 per axis) relative to i.i.d.
+placement (whose periodogram is 1 at every frequency, its maximum over these 17 bins ~ 3.5: a
+lattice shows as a peak far above); the mean power over all the tile's harmonics relative to
+the mean over all frequencies (1 without a lattice: a lattice puts its power there); the
+largest number of the ink's voxels of one layer on one residue of the tile period (x mod mx,
+y mod my) (i.i.d.: a few); the variance ratio in 0.25 mm and 1 mm boxes (low-frequency noise,
+below 1 = below i.i.d.) and the bias of its fraction. ``--picture FILE.png`` draws one layer's
+rare-ink voxels of the ``one shift`` and ``blue-noise`` halftones side by side, in mm.
 
     python benchmarks/bench_halftone.py [--no-quality] [--picture docs/halftone-lattice.png]
 """
@@ -112,9 +112,9 @@ def lattice(picture: str | None) -> None:
     n = int(np.prod(shape))
     c = float(RARE[RARE_INK])
     block = np.broadcast_to(RARE, (*shape, 6))
-    print(f"\nlattice: C M Y K W Cl = {[round(float(v), 4) for v in RARE]}, rare ink M {100 * c:.1f} %; mask "
-          f"{mx} x {my} x {mz} voxels (x, y, z); block {shape[2]} x {shape[1]} x {shape[0]} "
-          f"({n:,} voxels)")
+    print(f"\nlattice: C M Y K W Cl = {[round(float(v), 4) for v in RARE]}, rare ink M "
+          f"{100 * c:.1f} %; mask {mx} x {my} x {mz} voxels (x, y, z); block "
+          f"{shape[2]} x {shape[1]} x {shape[0]} ({n:,} voxels)")
     print("  method      fundamentals: max power / i.i.d. | all harmonics: mean power / mean "
           "of all frequencies | most on one residue of a layer | var ratio 0.25 mm, 1 mm | bias")
     runs = {"random": Halftoner.create("random", 7, VOX).block(block),

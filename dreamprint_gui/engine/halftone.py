@@ -10,11 +10,11 @@ from ..job.halftone import (  # noqa: F401
     fg_threshold,
     fraction_variance_ratio,
     label_rows,
-    tile_layout,
     mask_shape_for_voxel,
     pick_label,
     scatter_counts,
     scatter_labels,
+    tile_layout,
     uniform_hash,
 )
 

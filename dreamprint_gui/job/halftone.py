@@ -30,8 +30,8 @@ The per-tile shift is what keeps a rarely used ink (the lowest thresholds) from 
 same cell of every tile: with one shift for the whole job its voxels formed a regular lattice
 at the tile period (~1 mm); with a shift per tile they fall at independent places in each tile,
 and the mask being toroidal, inside a tile the pattern stays seamless blue noise
-(``benchmarks/bench_halftone.py --lattice`` measures the peak at the tile period). Voxels whose density is
-below the background threshold get the background label (Clear or empty) without drawing.
+(``benchmarks/bench_halftone.py`` measures the peak at the tile period). Voxels whose density
+is below the background threshold get the background label (Clear or empty) without drawing.
 """
 
 from __future__ import annotations
