@@ -13,12 +13,13 @@ from ..errors import DreamPrintError
 from . import cli
 
 _OBJECTIVES = click.Choice(["srgb", "cielab", "de2000"])
-_INTENTS = click.Choice(["colorimetric", "perceptual"])
+_INTENTS = click.Choice(["colorimetric", "relative", "perceptual"])
 _OBJECTIVE_HELP = ("Table objective: srgb (paper eq. 10), cielab (dE76) or de2000 (CIEDE2000). "
                    "Default: the profile's, else de2000 (see docs/physics.md).")
 _INTENT_HELP = ("Rendering intent for colours outside the printable gamut: colorimetric "
-                "(nearest printable colour) or perceptual (SGCK compression in CAM16-UCS). "
-                "Default: the profile's, else colorimetric.")
+                "(nearest printable colour), relative (ICC relative colorimetric: the source "
+                "white maps to the printable white, then colorimetric) or perceptual (SGCK "
+                "compression in CAM16-UCS). Default: the profile's, else colorimetric.")
 
 
 def _parse_rgb(text: str) -> list[float]:

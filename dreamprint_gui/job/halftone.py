@@ -49,7 +49,7 @@ from ..engine.profile import INKS
 
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
            "pick_label", "label_rows", "fg_threshold", "scatter_labels", "scatter_counts",
-           "tile_layout", "TILING",
+           "tile_layout", "TILING", "mask_build_estimate", "MASK_BUILD_SECONDS",
            "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS", "MASK_VERSION"]
 
 HALFTONE_METHODS = ("blue-noise", "random")
@@ -222,13 +222,30 @@ def _generate_mask(shape_zyx: tuple[int, int, int],
     return ((rank.reshape(nz, ny, nx) + 0.5) / n).astype(np.float32)
 
 
+# Wall seconds of a mask build (void and cluster, O(N^2), the same N for every voxel) on the
+# 2-core development machine (benchmarks/bench_preflight.py prints it against the actual).
+MASK_BUILD_SECONDS = 15.0
+
+
+def _mask_path(voxel_mm: tuple[float, float, float], shape: tuple[int, int, int]) -> Path:
+    key = hashlib.sha256(repr((MASK_VERSION, tuple(shape), tuple(round(v, 9) for v in voxel_mm),
+                               _SIGMA_VOXELS)).encode()).hexdigest()[:16]
+    return _cache_dir() / f"void-and-cluster-{key}.npy"
+
+
+def mask_build_estimate(voxel_mm: tuple[float, float, float]) -> float | None:
+    """Estimated seconds :func:`blue_noise_mask` will spend building this voxel's mask, or None
+    when the cache holds it."""
+    if _mask_path(voxel_mm, mask_shape_for_voxel(voxel_mm)).is_file():
+        return None
+    return MASK_BUILD_SECONDS
+
+
 def blue_noise_mask(voxel_mm: tuple[float, float, float],
                     shape_zyx: tuple[int, int, int] | None = None) -> np.ndarray:
     """Threshold mask (nz, ny, nx) float32 with values (rank + 0.5) / N, cached on disk."""
     shape = shape_zyx or mask_shape_for_voxel(voxel_mm)
-    key = hashlib.sha256(repr((MASK_VERSION, tuple(shape), tuple(round(v, 9) for v in voxel_mm),
-                               _SIGMA_VOXELS)).encode()).hexdigest()[:16]
-    path = _cache_dir() / f"void-and-cluster-{key}.npy"
+    path = _mask_path(voxel_mm, tuple(shape))
     try:
         m = np.load(path)
         if m.shape == tuple(shape) and m.dtype == np.float32:

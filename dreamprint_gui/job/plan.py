@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -24,7 +25,7 @@ from ..engine.content import CONTENT_MODES, apply_content
 from ..engine.printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from ..engine.profile import INKS
 from ..errors import DreamPrintError
-from .halftone import HALFTONE_METHODS, Halftoner
+from .halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
            "JobCancelled",
@@ -112,12 +113,34 @@ def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
     return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
-def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None):
+def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None,
+                notify: Callable[[str], None] | None = None):
+    """The profile at the printer's layer and its tables; a first-use build is announced with
+    its estimated time and its progress through ``notify``."""
     from ..engine.gamut import get_tables
+    from ..engine.gamut.tables import build_estimate, resolve_choice
     from ..engine.profile import load_profile
 
     profile = load_profile(profile_spec).with_settings(layer_thickness_mm=layer_mm)
-    return profile, get_tables(profile, objective=objective, size=size, intent=intent)
+    progress = None
+    est = build_estimate(profile, objective, size, intent) if notify is not None else None
+    if est is not None:
+        obj, how = resolve_choice(profile, objective, intent)
+        notify(f"building colour tables ({obj}, {how}, {size}^3) for this profile and "
+               f"{layer_mm * 1000:g} um layers: first use, about {_seconds(est)}; cached after")
+        last = [-1]
+
+        def progress(f: float) -> None:
+            if int(10 * f) != last[0]:
+                last[0] = int(10 * f)
+                notify(f"building colour tables: {int(100 * f):3d} %")
+
+    return profile, get_tables(profile, objective=objective, size=size, intent=intent,
+                               progress=progress)
+
+
+def _seconds(s: float) -> str:
+    return f"{s:.0f} s" if s < 90 else f"{s / 60:.1f} min"
 
 
 @dataclass
@@ -235,8 +258,12 @@ def check_settings(settings: ConvertSettings) -> None:
         raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
 
 
-def prepare_job(settings: ConvertSettings) -> JobContext:
-    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables."""
+def prepare_job(settings: ConvertSettings,
+                notify: Callable[[str], None] | None = None) -> JobContext:
+    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables.
+
+    ``notify(message)`` is told of each first-use build (colour tables, blue-noise mask) before
+    it starts, with its estimated time, and of the tables' progress."""
     from ..io.volumes import grid_for_source
 
     s = settings
@@ -251,12 +278,18 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
                               f"{shape[2]}); choose a larger size")
     check_tray(shape, printer)  # before any expensive work
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
-                                  s.table_size, s.intent)
+                                  s.table_size, s.intent, notify)
     sigma_clear = getattr(tables, "sigma_clear", None)
     if sigma_clear is None:
         sigma_clear = _clear_sigma(profile)
     thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
     bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
+    if notify is not None and s.halftone == "blue-noise":
+        est = mask_build_estimate(printer.voxel_mm)
+        if est is not None:
+            vx, vy, vz = (1000 * v for v in printer.voxel_mm)
+            notify(f"building the blue-noise mask for {vx:g} x {vy:g} x {vz:g} um voxels: "
+                   f"first use, about {_seconds(est)}; cached after")
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
     source, content = apply_content(source, s.content, thr)
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,

@@ -18,9 +18,10 @@ Defines
 Objectives (:mod:`.optimise`): ``srgb`` (paper eq. 10), ``cielab``, ``de2000``. Default:
 :data:`DEFAULT_OBJECTIVE`, the one with the smallest lookup-minus-lattice-best dE2000 (see
 docs/physics.md and ``dreamprint gamut --json``). Rendering intents (:mod:`.mapping`):
-``colorimetric`` (the printable colour of minimum objective) and ``perceptual`` (SGCK
-compression into the gamut first). Each node's dE2000 to its *source* colour is kept in
-``dE2000``.
+``colorimetric`` (the printable colour of minimum objective), ``relative`` (ICC media-relative:
+the source white mapped onto the printable white first) and ``perceptual`` (SGCK compression
+into the gamut first). Each node's dE2000 to its *source* colour is kept in ``dE2000`` (the
+pre-flight measures against the intent's target itself).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from ..kubelka_munk import mix
 from ..profile import INKS, InkProfile
 from .forward import N_COLOUR_INKS, forward_model, mixtures_lab
 from .grey import brightness_table, grey_concentrations, rho_k_for
-from .mapping import DEFAULT_INTENT, PerceptualMap, canonical_intent
+from .mapping import DEFAULT_INTENT, canonical_intent, intent_map
 from .optimise import canonical_objective, resample, solve_grid, targets_for
 
 __all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "mixture_sigma",
@@ -176,13 +177,12 @@ def build_tables(profile: InkProfile, objective: str | None = None, size: int = 
     t0 = time.perf_counter()
     model = forward_model(profile)
     target_xyz = None
-    if intent == "perceptual":
+    imap = intent_map(model, intent)
+    if imap is not None:
         from .optimise import srgb_to_xyz
 
-        pmap = PerceptualMap.for_model(model)
-
         def target_xyz(rgb):
-            return pmap.map_xyz(srgb_to_xyz(model, rgb))
+            return imap.map_xyz(srgb_to_xyz(model, rgb))
 
     conc, _ = solve_grid(model, objective, size, progress, target_xyz)
     a = np.linspace(0.0, 1.0, size)
@@ -271,6 +271,32 @@ def _load(path: Path, key_profile: str, objective: str, size: int,
                         build_seconds=float(meta["build_seconds"]), cached=True)
 
 
+# Wall seconds of a 100^3 build on the 2-core development machine (benchmarks/bench_gamut.py,
+# docs/physics.md: de2000 35 CPU s, srgb 19; cielab solves like srgb), for the announcement of
+# a first-use build; scaled by the node count.
+BUILD_SECONDS_100 = {"de2000": 30.0, "cielab": 17.0, "srgb": 17.0}
+
+
+def tables_path(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
+                intent: str | None = None, cache: str | os.PathLike | None = None) -> Path:
+    """Where :func:`get_tables` keeps (or would keep) these tables."""
+    objective, intent = resolve_choice(profile, objective, intent)
+    folder = Path(cache) if cache is not None else cache_dir()
+    return folder / f"tables_{_cache_key(profile, objective, size, intent)}.npz"
+
+
+def build_estimate(profile: InkProfile, objective: str | None = None,
+                   size: int = DEFAULT_SIZE, intent: str | None = None,
+                   cache: str | os.PathLike | None = None) -> float | None:
+    """Estimated seconds :func:`get_tables` will spend building, or None when the cache holds
+    the tables (checked by the file's presence: a stale file is rebuilt, rarely)."""
+    objective, intent = resolve_choice(profile, objective, intent)
+    if tables_path(profile, objective, size, intent, cache).is_file():
+        return None
+    extra = 1.15 if intent != "colorimetric" else 1.0  # the intent's mapping of every target
+    return BUILD_SECONDS_100.get(objective, 30.0) * extra * (size / 100) ** 3
+
+
 def get_tables(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
                progress: Callable[[float], None] | None = None,
                cache: str | os.PathLike | None = None,
@@ -283,8 +309,7 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
     from the cache reports nothing: the caller would otherwise say "building").
     """
     objective, intent = resolve_choice(profile, objective, intent)
-    folder = Path(cache) if cache is not None else cache_dir()
-    path = folder / f"tables_{_cache_key(profile, objective, size, intent)}.npz"
+    path = tables_path(profile, objective, size, intent, cache)
     fp = profile.fingerprint()
     t0 = time.perf_counter()
     found = _load(path, fp, objective, size, intent)
