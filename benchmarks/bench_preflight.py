@@ -89,8 +89,8 @@ def samples(height: float, printer: str | None, cold: bool) -> None:
 
 
 def heights(args) -> None:
-    from dreamprint_gui.engine.preflight import preflight
     from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+    from dreamprint_gui.job.preflight import preflight
     from dreamprint_gui.job.run import run_conversion
 
     print("height_mm voxels preflight_s fraction_max_abs_err clamped_est clamped_job "

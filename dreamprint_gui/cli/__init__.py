@@ -1,8 +1,11 @@
-"""The ``dreamprint`` command line: thin over the engine and the readers.
+"""The ``dreamprint`` command line: thin over the layers below (proof, job, gamut, physics, io).
 
 Every command reports a problem the same way: exit status 2 and one line
 ``dreamprint: error: <file>: <problem>`` on stderr, no traceback (``--debug`` shows one).
-Command groups live in sibling modules, each registering its commands on :data:`cli`.
+Command groups live in sibling modules, each registering its commands on :data:`cli`. A
+command imports the layers it calls inside its function, so that ``dreamprint --help`` and a
+mistyped option answer at once, without loading numba, colour-science and the colour tables
+(the one reason for an import of the package's own modules inside a function).
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ import sys
 
 import click
 
-from ..errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 
 
 class _Group(click.Group):
@@ -84,12 +87,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 # Command modules register themselves on `cli` when imported.
-from . import physics  # noqa: E402,F401,I001
-from . import spectra  # noqa: E402,F401,I001
-from . import volumes  # noqa: E402,F401,I001
-from . import jobs  # noqa: E402,F401,I001
-from . import gamut  # noqa: E402,F401,I001
-from . import proof  # noqa: E402,F401,I001
+from dreamprint_gui.cli import physics  # noqa: E402,F401,I001
+from dreamprint_gui.cli import spectra  # noqa: E402,F401,I001
+from dreamprint_gui.cli import volumes  # noqa: E402,F401,I001
+from dreamprint_gui.cli import jobs  # noqa: E402,F401,I001
+from dreamprint_gui.cli import gamut  # noqa: E402,F401,I001
+from dreamprint_gui.cli import proof  # noqa: E402,F401,I001
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -10,9 +10,9 @@ import time
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli, evaluate
-from .jobs import _fmt_time, _option_value, _size
+from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli.jobs import _fmt_time, _option_value, _size
+from dreamprint_gui.core.errors import DreamPrintError
 
 # Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
 # engine modules are not imported here to keep the command line quick to start).
@@ -36,7 +36,7 @@ def _options(items: tuple[str, ...]) -> tuple[tuple[str, object], ...]:
 
 def _drive(gen, prefix: str = ""):
     """Run a proof generator with progress bars on stderr; return its value."""
-    from ..job.plan import JobCancelled
+    from dreamprint_gui.job.plan import JobCancelled
 
     def on_term(signum, frame):
         raise KeyboardInterrupt()
@@ -122,7 +122,7 @@ def _common(f, halftones: bool = False):
 
 
 def _settings(source, output, method, kw, overwrite=False):
-    from ..engine.proof.runner import ProofSettings
+    from dreamprint_gui.proof.runner import ProofSettings
 
     return ProofSettings(
         source=source, output=output, height_mm=kw["height_mm"], size_mm=_size(kw["size_mm"]),
@@ -153,7 +153,7 @@ def _check_source(source: str) -> None:
 def proof(source, output, method, overwrite, **kw) -> None:
     """Render SOURCE (a volume, 'demo', or an exported JOB folder) as printed, beside the
     source, and measure how alike they look."""
-    from ..engine.proof.runner import run_proof
+    from dreamprint_gui.proof.runner import run_proof
 
     _check_source(source)
     report = _drive(run_proof(_settings(source, output, method, kw, overwrite)))
@@ -183,7 +183,7 @@ def _common_halftones(f):
 def evaluate_methods(source, methods, **kw) -> None:
     """Proof SOURCE with each method and halftoning (same cameras, seed, size) and tabulate the
     figures: one row per --method x --halftone."""
-    from ..engine.proof.runner import render_proof
+    from dreamprint_gui.proof.runner import render_proof
 
     _check_source(source)
     ms = list(dict.fromkeys(methods))

@@ -6,8 +6,8 @@ import threading
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.engine.proof.runner import ProofSettings, run_proof
 from dreamprint_gui.job.plan import JobCancelled
+from dreamprint_gui.proof.runner import ProofSettings, run_proof
 
 TINY = ["--height-mm", "3", "--views", "1", "--resolution", "16", "--spp", "2", "--cells", "12",
         "--table-size", "17"]
@@ -158,7 +158,7 @@ def test_fixed_choices_are_refused_before_any_work(capsys, cmd, option, bad):
 
 def test_cli_choices_are_the_engines():
     from dreamprint_gui.cli.proof import HALFTONE_CHOICES, METHOD_CHOICES
-    from dreamprint_gui.engine.proof.methods import METHODS
+    from dreamprint_gui.proof.methods import METHODS
     from dreamprint_gui.job.halftone import HALFTONE_METHODS
 
     assert METHOD_CHOICES == METHODS and HALFTONE_CHOICES == HALFTONE_METHODS

@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from dreamprint_gui.engine.preflight import Preflight, _warnings
+from dreamprint_gui.job.preflight import Preflight, _warnings
 
 
 def _pf(**kw) -> Preflight:
@@ -82,7 +82,7 @@ def test_a_faint_fog_is_told_how_far_the_scale_may_rise(up, suggested):
 def test_the_named_scale_keeps_the_demo_printed(tmp_path):
     """On a real job: the dense demo at scale 50 (clamped): whatever scale a warning names,
     converting at it keeps the job printed (not mostly Clear) and clamps nothing."""
-    from dreamprint_gui.engine.preflight import preflight
+    from dreamprint_gui.job.preflight import preflight
     from dreamprint_gui.job.plan import ConvertSettings
 
     pf = preflight(ConvertSettings(source="demo", height_mm=1.2, table_size=17,
