@@ -28,10 +28,10 @@ from dreamprint_gui.gamut import get_tables
 from dreamprint_gui.gamut.alignment import kernel_table
 from dreamprint_gui.gamut.mapping import canonical_intent
 from dreamprint_gui.gamut.optimise import canonical_objective
+from dreamprint_gui.gamut.tables import build_estimate, resolve_choice
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.registry import reader_options
 from dreamprint_gui.job.content import CONTENT_MODES, apply_content
-from dreamprint_gui.gamut.tables import build_estimate, resolve_choice
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
 from dreamprint_gui.physics.density import scalar_sigma
 
@@ -255,16 +255,50 @@ def check_settings(settings: ConvertSettings) -> None:
         raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
 
 
+# Seconds numba takes to compile, on the 2-core development machine (bench_preflight --samples
+# after a source change: 16-38 s under load 15): the job's kernels, and a reader's own.
+COMPILE_SECONDS = 30.0
+COMPILE_READER_SECONDS = 15.0
+
+
+def _compile_notices(source) -> list[str]:
+    """Announcements of the kernels numba has not compiled yet (its cache folder holds none of
+    the job kernels', or of the source reader module's): the first run after an install or
+    upgrade, or of a source kind. Judged from the cache's index files (``*.nbi``)."""
+    import sys
+    from pathlib import Path
+
+    from numba.core.dispatcher import Dispatcher
+
+    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or "")
+    if not os.environ.get("NUMBA_CACHE_DIR"):
+        return []
+    out = []
+    if not any(folder.glob("*/layer_kernel.*.nbi")):
+        out.append("compiling the conversion kernels: first run after an install or upgrade, "
+                   f"about {_seconds(COMPILE_SECONDS)}; cached after")
+    module = sys.modules.get(type(source).__module__)
+    name = type(source).__module__.rsplit(".", 1)[-1]
+    if module is not None and any(isinstance(v, Dispatcher) for v in vars(module).values()) \
+            and not any(folder.glob(f"*/{name}.*.nbi")):
+        out.append(f"compiling the {name} reader's kernels: first use of this source kind, "
+                   f"about {_seconds(COMPILE_READER_SECONDS)}; cached after")
+    return out
+
+
 def prepare_job(settings: ConvertSettings,
                 notify: Callable[[str], None] | None = None) -> JobContext:
     """Open the source, lay out the grid, refuse a job larger than the tray, build the tables.
 
-    ``notify(message)`` is told of each first-use build (colour tables, blue-noise mask) before
-    it starts, with its estimated time, and of the tables' progress."""
+    ``notify(message)`` is told of each first-use build (compiled kernels, colour tables,
+    blue-noise mask) before it starts, with its estimated time, and of the tables' progress."""
     s = settings
     check_settings(s)
     printer = load_printer(s.printer)
     source = _open_source(s.source, s.source_options, s.content, s.sampling)
+    if notify is not None:
+        for msg in _compile_notices(source):
+            notify(msg)
     grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
                            size_mm=tuple(s.size_mm) if s.size_mm is not None else None)
     shape = tuple(int(v) for v in grid.shape_xyz)

@@ -158,7 +158,7 @@ def test_fixed_choices_are_refused_before_any_work(capsys, cmd, option, bad):
 
 def test_cli_choices_are_the_engines():
     from dreamprint_gui.cli.proof import HALFTONE_CHOICES, METHOD_CHOICES
-    from dreamprint_gui.proof.methods import METHODS
     from dreamprint_gui.job.halftone import HALFTONE_METHODS
+    from dreamprint_gui.proof.methods import METHODS
 
     assert METHOD_CHOICES == METHODS and HALFTONE_CHOICES == HALFTONE_METHODS

@@ -5,10 +5,10 @@ the pre-flight's gamut warning measured against the chosen intent's target."""
 import numpy as np
 import pytest
 
+from dreamprint_gui.core.profile import load_profile
 from dreamprint_gui.gamut.forward import forward_model, mixtures_xyz
 from dreamprint_gui.gamut.mapping import INTENTS, RelativeMap, simplex_lattice
 from dreamprint_gui.gamut.optimise import srgb_to_xyz
-from dreamprint_gui.core.profile import load_profile
 
 # ICC.1:2022 Annex E (Bradford), as published: rows map XYZ to the sharpened cone responses.
 BRADFORD = np.array([[0.8951, 0.2664, -0.1614],
@@ -47,8 +47,8 @@ def test_white_smoke_is_in_gamut_under_relative_and_honest_under_colorimetric(sh
     """hydrogen.vti prints as white smoke: under colorimetric every printed voxel is out of
     gamut (sRGB white is outside the printable gamut) and the warning says so against the
     source colour; under relative its white is the printable white: no warning."""
-    from dreamprint_gui.job.preflight import preflight
     from dreamprint_gui.job.plan import ConvertSettings
+    from dreamprint_gui.job.preflight import preflight
 
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     src = str(shared_data / "volumes" / "hydrogen.vti")

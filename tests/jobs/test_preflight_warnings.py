@@ -82,8 +82,8 @@ def test_a_faint_fog_is_told_how_far_the_scale_may_rise(up, suggested):
 def test_the_named_scale_keeps_the_demo_printed(tmp_path):
     """On a real job: the dense demo at scale 50 (clamped): whatever scale a warning names,
     converting at it keeps the job printed (not mostly Clear) and clamps nothing."""
-    from dreamprint_gui.job.preflight import preflight
     from dreamprint_gui.job.plan import ConvertSettings
+    from dreamprint_gui.job.preflight import preflight
 
     pf = preflight(ConvertSettings(source="demo", height_mm=1.2, table_size=17,
                                    density_scale=50.0), sample_voxels=30_000)
