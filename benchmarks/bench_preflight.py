@@ -78,7 +78,7 @@ def samples(height: float, printer: str | None, cold: bool) -> None:
             est = m["preflight"]["seconds_estimate"]
             act = m["timings_s"]["convert"]
             builds = sum(float(v) * (60 if u == "min" else 1) for v, u in re.findall(
-                r"first use, about ([0-9.]+) (s|min)", r.stderr))
+                r"about ([0-9.]+) (s|min); cached after", r.stderr))
             print(f"{name:10s} {m['total_voxels']:11,d} {est:10.2f} {act:10.2f} "
                   f"{act / est:7.2f} {m['timings_s']['prepare']:9.1f} "
                   f"{builds if builds else '-':>12} {wall:7.1f}", flush=True)
