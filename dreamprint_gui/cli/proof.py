@@ -14,6 +14,12 @@ from dreamprint_gui.cli import cli, evaluate, placement_options, placement_value
 from dreamprint_gui.cli.jobs import _fmt_time, _option_value, _size
 from dreamprint_gui.core.errors import DreamPrintError
 
+# Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
+# engine modules are not imported here to keep the command line quick to start).
+METHOD_CHOICES = ("paper", "no-alignment", "brute-force")
+HALFTONE_CHOICES = ("blue-noise", "random")
+BACKGROUND_CHOICES = ("clear", "empty")
+
 _STAGES = {"preparing": "preparing", "labels": "labels", "source": "source render",
            "print": "print render (Mitsuba)", "compare": "comparing", "writing": "writing"}
 
@@ -69,7 +75,14 @@ def _drive(gen, prefix: str = ""):
         signal.signal(signal.SIGTERM, old)
 
 
-def _common(f):
+def _common(f, halftones: bool = False):
+    """The options ``proof`` and ``evaluate methods`` share; ``halftones``: ``--halftone`` is
+    repeatable (one row per choice) instead of one choice."""
+    halftone = (click.option("--halftone", "halftone", type=click.Choice(HALFTONE_CHOICES),
+                             multiple=True, default=("blue-noise",), show_default=True,
+                             help="Halftoning; repeat for one row per choice.") if halftones else
+                click.option("--halftone", type=click.Choice(HALFTONE_CHOICES),
+                             default="blue-noise", show_default=True))
     opts = [
         click.option("--height-mm", type=float, default=None, help="Height (z) of the print."),
         click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm."),
@@ -81,12 +94,12 @@ def _common(f):
                      help="Image width and height in pixels."),
         click.option("--spp", type=int, default=16, show_default=True,
                      help="Samples per pixel of the print render."),
-        click.option("--halftone", default="blue-noise", show_default=True,
-                     help="blue-noise or random."),
+        halftone,
         click.option("--seed", type=int, default=0, show_default=True),
         click.option("--density-scale", type=float, default=1.0, show_default=True),
-        click.option("--background", default="clear", show_default=True,
-                     help="What voxels below the density threshold become: clear or empty."),
+        click.option("--background", type=click.Choice(BACKGROUND_CHOICES), default="clear",
+                     show_default=True,
+                     help="What voxels below the density threshold become."),
         click.option("--cells", "max_cells", type=int, default=128, show_default=True,
                      help="Medium cells along the print's longest axis."),
         click.option("--layers-per-block", type=int, default=2, show_default=True,
@@ -135,8 +148,8 @@ def _check_source(source: str) -> None:
 @click.argument("source")
 @click.option("-o", "--output", required=True, type=click.Path(),
               help="Folder to create (images, contact_sheet.png, proof.json).")
-@click.option("--method", default="paper", show_default=True,
-              help="paper, no-alignment or brute-force (a source, not a job folder).")
+@click.option("--method", type=click.Choice(METHOD_CHOICES), default="paper", show_default=True,
+              help="Labelling method (a source, not a job folder).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output folder.")
 @_common
 def proof(source, output, method, overwrite, **kw) -> None:
@@ -159,30 +172,24 @@ def proof(source, output, method, overwrite, **kw) -> None:
                f"{report['renderer']['variant']})")
 
 
+def _common_halftones(f):
+    return _common(f, halftones=True)
+
+
 @evaluate.command("methods")
 @click.argument("source")
-@click.option("--methods", "methods", default="paper,no-alignment,brute-force",
-              show_default=True, help="Comma-separated methods.")
-@click.option("--halftones", default="blue-noise", show_default=True,
-              help="Comma-separated halftoning choices (blue-noise, random).")
-@_common
-def evaluate_methods(source, methods, halftones, **kw) -> None:
-    """Proof SOURCE with each method (same cameras, seed, size) and tabulate the figures."""
-    from dreamprint_gui.proof.methods import METHODS
+@click.option("--method", "methods", type=click.Choice(METHOD_CHOICES), multiple=True,
+              default=METHOD_CHOICES, show_default=True,
+              help="Labelling method; repeat for several (default: all three).")
+@_common_halftones
+def evaluate_methods(source, methods, **kw) -> None:
+    """Proof SOURCE with each method and halftoning (same cameras, seed, size) and tabulate the
+    figures: one row per --method x --halftone."""
     from dreamprint_gui.proof.runner import render_proof
 
     _check_source(source)
-    ctx = click.get_current_context()
-    if ctx.get_parameter_source("halftone") is not click.core.ParameterSource.DEFAULT:
-        # --halftone (of the shared options) would otherwise be silently replaced per row
-        if ctx.get_parameter_source("halftones") is not click.core.ParameterSource.DEFAULT:
-            raise DreamPrintError("give --halftones (a list) or --halftone, not both")
-        halftones = kw["halftone"]
-    ms = [m.strip() for m in methods.split(",") if m.strip()]
-    hs = [h.strip() for h in halftones.split(",") if h.strip()]
-    bad = [m for m in ms if m not in METHODS]
-    if bad or not ms:
-        raise DreamPrintError(f"unknown method(s) {bad or methods!r} (use {', '.join(METHODS)})")
+    ms = list(dict.fromkeys(methods))
+    hs = list(dict.fromkeys(kw["halftone"]))
     rows = []
     combos = [(m, h) for m in ms for h in hs]
     for k, (m, h) in enumerate(combos):

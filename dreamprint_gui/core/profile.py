@@ -202,7 +202,7 @@ def profile_from_dict(d: Any, source: str = "<profile>") -> InkProfile:
 # The names the ``table`` settings accept (gamut/optimise.py and mapping.py own them;
 # listed here so that loading a profile does not import the solver).
 TABLE_OBJECTIVES = ("srgb", "cielab", "de2000", "rgb", "lab")
-TABLE_INTENTS = ("colorimetric", "perceptual")
+TABLE_INTENTS = ("colorimetric", "relative", "perceptual")
 
 
 def _table_settings(t: Any, source: str) -> dict[str, str]:

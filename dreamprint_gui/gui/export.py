@@ -393,6 +393,7 @@ class ExportDialog(QDialog):
         self.intent = QComboBox()  # rendering intent (ConvertSettings.intent; "" = profile's)
         self.intent.addItem("the profile's (colorimetric unless it says otherwise)", "")
         self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
+        self.intent.addItem("relative (source white to printable white)", "relative")
         self.intent.addItem("perceptual (compress sRGB into the gamut)", "perceptual")
         self.intent.setCurrentIndex(max(0, self.intent.findData(
             self.settings.get("export/intent", "", str))))

@@ -73,7 +73,7 @@ def test_proof_of_an_exported_job(tmp_path, capsys):
     (["--spp", "0"], "--spp"),
     (["--spp", "10000000"], "--spp"),
     (["--views", "0"], "--views"),
-    (["--method", "magic"], "unknown method"),
+    (["--method", "magic"], "'magic' is not one of"),
 ])
 def test_absurd_settings_are_one_line_errors(tmp_path, capsys, extra, words):
     code, _, err = run(capsys, "proof", "demo", "-o", tmp_path / "x", "--height-mm", "3",
@@ -122,23 +122,43 @@ def test_cancel_leaves_nothing(tmp_path):
 
 
 def test_evaluate_methods_table(capsys):
-    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
-                         "--halftones", "blue-noise,random", "--json")
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper",
+                         "--halftone", "blue-noise", "--halftone", "random", "--json")
     assert code == 0, err
     t = json.loads(out)
     assert [(r["method"], r["halftone"]) for r in t["methods"]] == [
         ("paper", "blue-noise"), ("paper", "random")]
     assert all(r["object_pixels"] > 0 for r in t["methods"])
-    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "nope")
-    assert code == 2 and "unknown method" in err
+    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "nope")
+    assert code == 2 and "'nope' is not one of" in err and err.count("\n") == 1
 
 
 def test_evaluate_methods_honours_halftone(capsys):
-    """``--halftone random`` was silently replaced by the --halftones default (blue-noise)."""
-    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
+    """``--halftone random`` alone gives one row, random (it was once silently replaced)."""
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper",
                          "--halftone", "random", "--json")
     assert code == 0, err
     assert [r["halftone"] for r in json.loads(out)["methods"]] == ["random"]
-    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--halftone", "random",
-                       "--halftones", "blue-noise")
-    assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1
+    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--halftones", "random")
+    assert code == 2 and "--halftones" in err  # the former second option is gone
+
+
+@pytest.mark.parametrize(("cmd", "option", "bad"), [
+    (("proof", "demo", "-o", "X"), "--method", "fast"),
+    (("proof", "demo", "-o", "X"), "--halftone", "bluenoise"),
+    (("proof", "demo", "-o", "X"), "--background", "white"),
+    (("evaluate", "methods", "demo"), "--halftone", "ordered"),
+    (("convert", "demo", "-o", "X"), "--halftone", "ordered"),
+    (("convert", "demo", "-o", "X"), "--background", "none"),
+])
+def test_fixed_choices_are_refused_before_any_work(capsys, cmd, option, bad):
+    code, _, err = run(capsys, *cmd, "--height-mm", "1", option, bad)
+    assert code == 2 and f"'{bad}' is not one of" in err and err.count("\n") == 1, err
+
+
+def test_cli_choices_are_the_engines():
+    from dreamprint_gui.cli.proof import HALFTONE_CHOICES, METHOD_CHOICES
+    from dreamprint_gui.job.halftone import HALFTONE_METHODS
+    from dreamprint_gui.proof.methods import METHODS
+
+    assert METHOD_CHOICES == METHODS and HALFTONE_CHOICES == HALFTONE_METHODS

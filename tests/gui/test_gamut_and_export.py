@@ -130,6 +130,8 @@ def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
     assert dlg.settings_for_job().intent == "colorimetric"
     dlg.intent.setCurrentIndex(dlg.intent.findData("perceptual"))
     assert dlg.settings_for_job().intent == "perceptual"
+    dlg.intent.setCurrentIndex(dlg.intent.findData("relative"))
+    assert dlg.settings_for_job().intent == "relative"
 
 
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
