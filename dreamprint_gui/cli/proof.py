@@ -98,6 +98,14 @@ def _common(f):
                      help="Irradiance of a directional key light (the environment's "
                           "radiance is 1)."),
         click.option("--floor", is_flag=True, help="Stand the print on a neutral grey floor."),
+        click.option("--viewing-distance-mm", type=float, default=500.0, show_default=True,
+                     help="S-CIELAB: the print seen at its real size from this distance."),
+        click.option("--noise-floor/--no-noise-floor", default=True, show_default=True,
+                     help="Render the print again at seed + 1 and report the difference "
+                          "(the figures' own noise; twice the print render time)."),
+        click.option("--sampler", default="independent", show_default=True,
+                     help="Mitsuba sampler: independent, stratified, multijitter, orthogonal "
+                          "or ldsampler."),
         click.option("--option", "source_options", multiple=True,
                      help="Source reader option KEY=VALUE; repeatable."),
         click.option("--table-size", type=int, default=100, hidden=True),
@@ -118,7 +126,8 @@ def _settings(source, output, method, kw, overwrite=False):
         seed=kw["seed"], density_scale=kw["density_scale"], background=kw["background"],
         max_cells=kw["max_cells"], layers_per_block=kw["layers_per_block"], bands=kw["bands"],
         max_depth=kw["max_depth"], key_light=kw["key_light"], floor=kw["floor"],
-        overwrite=overwrite, table_size=kw["table_size"],
+        viewing_distance_mm=kw["viewing_distance_mm"], noise_floor=kw["noise_floor"],
+        sampler=kw["sampler"], overwrite=overwrite, table_size=kw["table_size"],
         source_options=_options(kw["source_options"]))
 
 
@@ -151,10 +160,16 @@ def proof(source, output, method, overwrite, **kw) -> None:
         return
     o = report["overall"]
     click.echo(f"wrote {output}: {len(report['views'])} views; dE2000 mean "
-               f"{o['mean_de2000']:.2f} p95 {o['p95_de2000']:.2f}, PSNR {o['psnr_db']:.1f} dB, "
-               f"SSIM {o['ssim']:.3f}, coverage {o['source_coverage']:.3f} -> "
-               f"{o['print_coverage']:.3f} ({report['timings_s']['total']:.0f} s, "
-               f"{report['renderer']['variant']})")
+               f"{o['mean_de2000']:.2f} p95 {o['p95_de2000']:.2f}, S-CIELAB dE2000 mean "
+               f"{o['mean_scielab_de2000']:.2f} at {kw['viewing_distance_mm']:g} mm, PSNR "
+               f"{o['psnr_db']:.1f} dB, SSIM {o['ssim']:.3f}, coverage "
+               f"{o['source_coverage']:.3f} -> {o['print_coverage']:.3f} "
+               f"({report['timings_s']['total']:.0f} s, {report['renderer']['variant']})")
+    f = report["noise_floor"]
+    if f is not None:
+        click.echo(f"noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 mean "
+                   f"{f['mean_de2000']:.2f}, S-CIELAB dE2000 mean "
+                   f"{f['mean_scielab_de2000']:.2f}")
 
 
 @evaluate.command("methods")
@@ -166,6 +181,7 @@ def proof(source, output, method, overwrite, **kw) -> None:
 @_common
 def evaluate_methods(source, methods, halftones, **kw) -> None:
     """Proof SOURCE with each method (same cameras, seed, size) and tabulate the figures."""
+    from ..engine.proof.compare import SIGNIFICANCE_FACTOR, mark_significance
     from ..engine.proof.methods import METHODS
     from ..engine.proof.runner import render_proof
 
@@ -188,17 +204,34 @@ def evaluate_methods(source, methods, halftones, **kw) -> None:
         res = _drive(render_proof(_settings(source, None, m, kw2)),
                      prefix=f"[{k + 1}/{len(combos)} {m}/{h}] ")
         r = res["report"]
-        rows.append({"method": m, "halftone": h, **r["overall"],
+        rows.append({"method": m, "halftone": h, **r["overall"], "noise_floor": r["noise_floor"],
                      "seconds": r["timings_s"]["total"]})
+    mark_significance(rows)
     table = {"source": source, "height_mm": kw["height_mm"], "size_mm": kw["size_mm"],
              "views": kw["views"], "resolution": kw["resolution"], "spp": kw["spp"],
-             "seed": kw["seed"], "background": kw["background"], "methods": rows}
+             "seed": kw["seed"], "background": kw["background"],
+             "viewing_distance_mm": kw["viewing_distance_mm"],
+             "significance": f"a row's difference from the best row is significant when it "
+                             f"exceeds {SIGNIFICANCE_FACTOR:g} x the larger noise floor of the "
+                             "two (vs_best)", "methods": rows}
     if kw["as_json"]:
         click.echo(json.dumps(table, indent=2))
         return
-    click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>8s} {'dE p95':>8s} {'PSNR':>6s} "
-               f"{'SSIM':>6s} {'coverage':>9s}")
+    click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'dE p95':>8s} "
+               f"{'S-CIELAB':>9s} {'floor':>11s} {'PSNR':>6s} {'SSIM':>6s} {'coverage':>9s}")
+
+    def mark(r, key):
+        sig = r["vs_best"][key]["significant"]
+        return " " if sig is None or sig or r["vs_best"][key]["difference"] == 0 else "~"
+
     for r in rows:
-        click.echo(f"{r['method']:14s} {r['halftone']:10s} {r['mean_de2000']:8.2f} "
-                   f"{r['p95_de2000']:8.2f} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
+        f = r["noise_floor"]
+        floor = f"{f['mean_de2000']:.2f}/{f['mean_scielab_de2000']:.2f}" if f else "-"
+        click.echo(f"{r['method']:14s} {r['halftone']:10s} {r['mean_de2000']:8.2f}"
+                   f"{mark(r, 'mean_de2000')} {r['p95_de2000']:8.2f} "
+                   f"{r['mean_scielab_de2000']:8.2f}{mark(r, 'mean_scielab_de2000')} "
+                   f"{floor:>11s} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
                    f"{r['coverage_error']:+9.3f}")
+    if any(r["noise_floor"] for r in rows):
+        click.echo(f"~: within {SIGNIFICANCE_FACTOR:g} x the noise floor of the best row (not "
+                   "significant); floor: mean dE2000 / S-CIELAB between two seeds")

@@ -29,7 +29,14 @@ def test_proof_demo_writes_everything_and_is_deterministic(tmp_path, capsys):
     assert rep["renderer"]["renderer"] == "mitsuba" and rep["renderer"]["version"]
     o = rep["overall"]
     assert o["object_pixels"] > 0 and 0 <= o["mean_de2000"] <= o["p95_de2000"] + 1e-9
-    assert set(o) >= {"psnr_db", "ssim", "coverage_error", "coverage_abs_error"}
+    assert set(o) >= {"psnr_db", "ssim", "coverage_error", "coverage_abs_error",
+                      "mean_scielab_de2000", "p95_scielab_de2000"}
+    # the noise floor: the print again at seed + 1; S-CIELAB blurs what the eye does not see
+    f = rep["noise_floor"]
+    assert f["seeds"] == [0, 1] and f["object_pixels"] > 0
+    assert 0 < f["mean_scielab_de2000"] < f["mean_de2000"] <= f["p95_de2000"] + 1e-9
+    assert rep["viewing"]["distance_mm"] == 500.0 and rep["viewing"]["pixels_per_degree"] > 0
+    assert json.loads((tmp_path / "a" / "proof.json").read_text())["noise_floor"] == f
     code, out2, _ = run(capsys, "proof", "demo", "-o", tmp_path / "b", *TINY, "--json")
     rep2 = json.loads(out2)
     assert rep2["overall"] == rep["overall"]
@@ -74,6 +81,8 @@ def test_proof_of_an_exported_job(tmp_path, capsys):
     (["--spp", "10000000"], "--spp"),
     (["--views", "0"], "--views"),
     (["--method", "magic"], "unknown method"),
+    (["--sampler", "sobol"], "unknown sampler"),
+    (["--viewing-distance-mm", "0"], "--viewing-distance-mm"),
 ])
 def test_absurd_settings_are_one_line_errors(tmp_path, capsys, extra, words):
     code, _, err = run(capsys, "proof", "demo", "-o", tmp_path / "x", "--height-mm", "3",
@@ -129,8 +138,23 @@ def test_evaluate_methods_table(capsys):
     assert [(r["method"], r["halftone"]) for r in t["methods"]] == [
         ("paper", "blue-noise"), ("paper", "random")]
     assert all(r["object_pixels"] > 0 for r in t["methods"])
+    for r in t["methods"]:   # each row has its floor, and is judged against the best row's
+        assert r["noise_floor"]["mean_scielab_de2000"] > 0
+        for key in ("mean_de2000", "mean_scielab_de2000"):
+            v = r["vs_best"][key]
+            assert v["difference"] >= 0 and v["significant"] == (v["difference"] > v["threshold"])
     code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "nope")
     assert code == 2 and "unknown method" in err
+
+
+def test_evaluate_methods_text_marks_noise(capsys):
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
+                         "--halftones", "blue-noise,blue-noise")
+    assert code == 0, err
+    rows = [ln for ln in out.splitlines() if ln.startswith("paper")]
+    # the same proof twice: identical figures, no difference, nothing marked as a ranking
+    assert len(rows) == 2 and rows[0] == rows[1]
+    assert "within 3 x the noise floor" in out
 
 
 def test_evaluate_methods_honours_halftone(capsys):

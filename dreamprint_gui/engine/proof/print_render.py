@@ -36,15 +36,18 @@ from numpy.typing import NDArray
 
 from .cameras import View
 
-__all__ = ["render_print", "DEFAULT_MAX_DEPTH"]
+__all__ = ["render_print", "render_print_seeds", "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER",
+           "SAMPLERS"]
 
 DEFAULT_MAX_DEPTH = 512
+DEFAULT_SAMPLER = "independent"
+SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
 BRICK_CELLS = 16
 BRICK_GAP = 1.5e-4
 FLOOR_REFLECTANCE = 0.5
 
 
-def _sensor(mi, view: View, resolution: int, spp: int) -> dict:
+def _sensor(mi, view: View, resolution: int, spp: int, sampler: str = "independent") -> dict:
     T = mi.ScalarTransform4f
     eye = [float(v) for v in view.eye]
     return {"type": "orthographic",
@@ -53,12 +56,13 @@ def _sensor(mi, view: View, resolution: int, spp: int) -> dict:
             "near_clip": 1e-3, "far_clip": 1e7,
             "film": {"type": "hdrfilm", "width": int(resolution), "height": int(resolution),
                      "rfilter": {"type": "box"}, "pixel_format": "rgb"},
-            "sampler": {"type": "independent", "sample_count": int(spp)}}
+            "sampler": {"type": sampler, "sample_count": int(spp)}}
 
 
 def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray,
                views: list[View], resolution: int, spp: int, max_depth: int,
-               key_light: float = 0.0, floor: bool = False, brick: int = BRICK_CELLS) -> dict:
+               key_light: float = 0.0, floor: bool = False, brick: int = BRICK_CELLS,
+               sampler: str = "independent") -> dict:
     """The Mitsuba scene description of one pass (three bands)."""
     T = mi.ScalarTransform4f
     lo = np.asarray(lo, np.float64)
@@ -119,7 +123,7 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                       "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [
                           FLOOR_REFLECTANCE] * 3}}}
     for i, v in enumerate(views):
-        d[f"view_{i:02d}"] = _sensor(mi, v, resolution, spp)
+        d[f"view_{i:02d}"] = _sensor(mi, v, resolution, spp, sampler)
     return d
 
 
@@ -128,12 +132,27 @@ def render_print(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArray,
                  max_depth: int = DEFAULT_MAX_DEPTH, key_light: float = 0.0,
                  floor: bool = False,
                  progress: Callable[[int, int], None] | None = None,
-                 cancelled: Callable[[], bool] | None = None) -> tuple[NDArray, dict]:
+                 cancelled: Callable[[], bool] | None = None,
+                 sampler: str = DEFAULT_SAMPLER) -> tuple[NDArray, dict]:
     """Band radiance images (views, res, res, n_bands) of the medium (ncz, ncy, ncx, n_bands).
 
     Deterministic for a given ``seed`` (Mitsuba's sampler seed per view and pass). Returns the
     images and ``{"renderer": ..., "variant": ..., "note": ...}``.
     """
+    imgs, info = render_print_seeds(sigma_t, albedo, lo, hi, views, resolution, spp, (seed,),
+                                    max_depth, key_light, floor, progress, cancelled, sampler)
+    return imgs[0], info
+
+
+def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArray,
+                       views: list[View], resolution: int, spp: int, seeds: tuple[int, ...],
+                       max_depth: int = DEFAULT_MAX_DEPTH, key_light: float = 0.0,
+                       floor: bool = False,
+                       progress: Callable[[int, int], None] | None = None,
+                       cancelled: Callable[[], bool] | None = None,
+                       sampler: str = DEFAULT_SAMPLER) -> tuple[list[NDArray], dict]:
+    """:func:`render_print` at each of ``seeds`` (one scene per pass serves them all): the
+    proof and its noise floor's second render. Returns the images per seed and the info."""
     from .mitsuba_setup import load_mitsuba
 
     mi, variant, note = load_mitsuba()
@@ -144,27 +163,29 @@ def render_print(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArray,
         zeros = np.zeros(sigma_t.shape[:-1] + (pad,), np.float32)
         sigma_t = np.concatenate([sigma_t, zeros], axis=-1)
         albedo = np.concatenate([albedo, zeros], axis=-1)
-    out = np.empty((len(views), resolution, resolution, passes * 3), np.float32)
-    total = passes * len(views)
+    outs = [np.empty((len(views), resolution, resolution, passes * 3), np.float32)
+            for _ in seeds]
+    total = passes * len(views) * len(seeds)
     done = 0
     for p in range(passes):
         ch = slice(3 * p, 3 * p + 3)
         scene = mi.load_dict(scene_dict(
             mi, np.ascontiguousarray(sigma_t[..., ch], np.float32),
             np.ascontiguousarray(albedo[..., ch], np.float32), lo, hi, views, resolution, spp,
-            max_depth, key_light, floor))
-        for i in range(len(views)):
-            if cancelled is not None and cancelled():
-                from ...job.plan import JobCancelled
+            max_depth, key_light, floor, sampler=sampler))
+        for out, seed in zip(outs, seeds, strict=True):
+            for i in range(len(views)):
+                if cancelled is not None and cancelled():
+                    from ...job.plan import JobCancelled
 
-                raise JobCancelled("the proof was cancelled")
-            img = mi.render(scene, sensor=i, spp=int(spp),
-                            seed=int(seed) * 7919 + 101 * i + p)
-            out[i, :, :, ch] = np.asarray(img, np.float32)[..., :3]
-            done += 1
-            if progress is not None:
-                progress(done, total)
+                    raise JobCancelled("the proof was cancelled")
+                img = mi.render(scene, sensor=i, spp=int(spp),
+                                seed=int(seed) * 7919 + 101 * i + p)
+                out[i, :, :, ch] = np.asarray(img, np.float32)[..., :3]
+                done += 1
+                if progress is not None:
+                    progress(done, total)
     info = {"renderer": "mitsuba", "version": mi.__version__, "variant": variant, "note": note,
             "integrator": "volpath", "max_depth": int(max_depth), "spp": int(spp),
-            "passes": passes}
-    return out[..., :nb_], info
+            "sampler": sampler, "passes": passes}
+    return [out[..., :nb_] for out in outs], info
