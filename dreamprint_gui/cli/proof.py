@@ -103,6 +103,13 @@ def _common(f):
         click.option("--noise-floor/--no-noise-floor", default=True, show_default=True,
                      help="Render the print again at seed + 1 and report the difference "
                           "(the figures' own noise; twice the print render time)."),
+        click.option("--surface", default=None,
+                     help="The print's surface: none, glossy or matte (a dielectric boundary, "
+                          "n 1.5 unless the profile says). Default: the profile's, else none "
+                          "(the built-in K and S were fitted without one)."),
+        click.option("--phase", default=None,
+                     help="Phase function: isotropic or hg:G (Henyey-Greenstein, reduced "
+                          "scattering kept). Default: the profile's, else isotropic."),
         click.option("--sampler", default="independent", show_default=True,
                      help="Mitsuba sampler: independent, stratified, multijitter, orthogonal "
                           "or ldsampler."),
@@ -127,7 +134,8 @@ def _settings(source, output, method, kw, overwrite=False):
         max_cells=kw["max_cells"], layers_per_block=kw["layers_per_block"], bands=kw["bands"],
         max_depth=kw["max_depth"], key_light=kw["key_light"], floor=kw["floor"],
         viewing_distance_mm=kw["viewing_distance_mm"], noise_floor=kw["noise_floor"],
-        sampler=kw["sampler"], overwrite=overwrite, table_size=kw["table_size"],
+        sampler=kw["sampler"], surface=kw["surface"], phase=kw["phase"], overwrite=overwrite,
+        table_size=kw["table_size"],
         source_options=_options(kw["source_options"]))
 
 

@@ -37,6 +37,7 @@ def test_proof_demo_writes_everything_and_is_deterministic(tmp_path, capsys):
     assert 0 < f["mean_scielab_de2000"] < f["mean_de2000"] <= f["p95_de2000"] + 1e-9
     assert rep["viewing"]["distance_mm"] == 500.0 and rep["viewing"]["pixels_per_degree"] > 0
     assert json.loads((tmp_path / "a" / "proof.json").read_text())["noise_floor"] == f
+    assert rep["optics"] == {"surface": "none", "phase": "isotropic", "from": "defaults"}
     code, out2, _ = run(capsys, "proof", "demo", "-o", tmp_path / "b", *TINY, "--json")
     rep2 = json.loads(out2)
     assert rep2["overall"] == rep["overall"]
@@ -82,6 +83,10 @@ def test_proof_of_an_exported_job(tmp_path, capsys):
     (["--views", "0"], "--views"),
     (["--method", "magic"], "unknown method"),
     (["--sampler", "sobol"], "unknown sampler"),
+    (["--surface", "satin"], "unknown surface"),
+    (["--phase", "hg:1.5"], "hg:G"),
+    (["--phase", "mie"], "unknown phase"),
+    (["--surface", "glossy", "--background", "empty"], "--background clear"),
     (["--viewing-distance-mm", "0"], "--viewing-distance-mm"),
 ])
 def test_absurd_settings_are_one_line_errors(tmp_path, capsys, extra, words):
@@ -166,3 +171,14 @@ def test_evaluate_methods_honours_halftone(capsys):
     code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--halftone", "random",
                        "--halftones", "blue-noise")
     assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1
+
+
+def test_proof_with_a_surface_and_hg_phase(tmp_path, capsys):
+    code, out, err = run(capsys, "proof", "demo", "-o", tmp_path / "s", *TINY, "--surface",
+                         "matte", "--phase", "hg:0.4", "--no-noise-floor", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["optics"]["surface"] == "matte" and rep["optics"]["from"] == "command line"
+    assert rep["optics"]["refractive_index"] == 1.5 and rep["km_to_rte"]["g"] == 0.4
+    assert rep["renderer"]["surface"] == "matte" and rep["noise_floor"] is None
+    assert rep["overall"]["object_pixels"] > 0

@@ -7,9 +7,11 @@ Scene (units mm, the print centred on the origin, z up):
 - the print: boxes ("bricks" of 16^3 cells, see :func:`scene_dict`) with index-matched
   (``null``) boundaries, each holding a ``heterogeneous`` medium: ``sigma_t`` and ``albedo``
   grid volumes on the proof's cells (:mod:`.medium`, :mod:`.km_to_rte`), nearest-cell lookup
-  (a cell is a uniform mixture), isotropic phase function. No surface reflection: the KM
-  coefficients of the product's profile describe the inks without one (Saunderson is off by
-  default), so the render judges exactly the model the tables were built with;
+  (a cell is a uniform mixture), the phase function of :mod:`.optics` (isotropic by default).
+  By default no surface reflection: the KM coefficients of the product's profile describe the
+  inks without one (Saunderson is off by default), so the render judges exactly the model the
+  tables were built with. ``--surface glossy|matte`` (:mod:`.optics`) puts a dielectric
+  (smooth, or rough GGX) box on the print's bounds, around the bricks;
 - light: a uniform ``constant`` environment of radiance 1 in every band (white, D65 once the
   bands are weighted, :mod:`.spectral`); optionally a ``directional`` key light from the upper
   front-left, and a neutral diffuse floor under the print;
@@ -19,7 +21,9 @@ Scene (units mm, the print centred on the origin, z up):
   collision) is hidden (``hide_emitters``) and added back exactly by the caller as the
   medium's direct transmittance per band (:func:`.source_render.optical_depth`): delta
   tracking estimates it with 0/1 samples, the largest noise of the image (a pixel of
-  transmittance 0.5 had a standard deviation of 0.5 / sqrt(spp)); the expectation is the same;
+  transmittance 0.5 had a standard deviation of 0.5 / sqrt(spp)); the expectation is the same.
+  With a surface the straight-through light is refracted (no longer the straight rays' exact
+  transmittance), so Mitsuba samples it and nothing is added (:func:`hides_direct`);
 - sensors: one ``orthographic`` camera per view, the same rays as the source render
   (:mod:`.cameras`), box pixel filter.
 
@@ -35,12 +39,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .cameras import View
+from .optics import Optics
 
-__all__ = ["render_print", "render_print_seeds", "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER",
-           "SAMPLERS"]
+__all__ = ["render_print", "render_print_seeds", "hides_direct", "DEFAULT_MAX_DEPTH",
+           "DEFAULT_SAMPLER", "SAMPLERS"]
 
 DEFAULT_MAX_DEPTH = 512
 DEFAULT_SAMPLER = "independent"
+DEFAULT_RR_DEPTH = 5          # Mitsuba's: Russian roulette from the 5th bounce on
 SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
 BRICK_CELLS = 16
 BRICK_GAP = 1.5e-4
@@ -59,19 +65,30 @@ def _sensor(mi, view: View, resolution: int, spp: int, sampler: str = "independe
             "sampler": {"type": sampler, "sample_count": int(spp)}}
 
 
+def hides_direct(floor: bool, optics: Optics | None) -> bool:
+    """Whether the render hides the environment seen straight through the print (and the
+    caller adds it back exactly): without a floor and without a surface."""
+    return not floor and (optics is None or optics.surface == "none")
+
+
 def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray,
                views: list[View], resolution: int, spp: int, max_depth: int,
                key_light: float = 0.0, floor: bool = False, brick: int = BRICK_CELLS,
-               sampler: str = "independent") -> dict:
+               sampler: str = "independent", optics: Optics | None = None,
+               rr_depth: int | None = None) -> dict:
     """The Mitsuba scene description of one pass (three bands)."""
     T = mi.ScalarTransform4f
+    optics = optics or Optics()
+    phase = ({"type": "isotropic"} if optics.g == 0
+             else {"type": "hg", "g": float(optics.g)})
     lo = np.asarray(lo, np.float64)
     hi = np.asarray(hi, np.float64)
     ncz, ncy, ncx = sigma_t3.shape[:3]
     cell = (hi - lo) / np.array([ncx, ncy, ncz])
     d: dict = {"type": "scene",
                "integrator": {"type": "volpath", "max_depth": int(max_depth),
-                              "hide_emitters": not floor},
+                              "rr_depth": int(DEFAULT_RR_DEPTH if rr_depth is None else rr_depth),
+                              "hide_emitters": hides_direct(floor, optics)},
                "environment": {"type": "constant", "radiance": {"type": "rgb",
                                                                 "value": [1.0, 1.0, 1.0]}}}
     # Bricks of brick^3 cells, each its own box and medium: delta tracking then steps by the
@@ -103,7 +120,7 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                           "albedo": {"type": "gridvolume", "filter_type": "nearest",
                                      "grid": mi.VolumeGrid(np.ascontiguousarray(al)),
                                      "to_world": grid_tf, "raw": True},
-                          "phase": {"type": "isotropic"}}
+                          "phase": dict(phase)}
                 d[f"brick_{n_bricks:05d}"] = {
                     "type": "cube", "to_world": T().translate((blo + ext / 2).tolist())
                     @ T().scale((ext / 2 - gap).tolist()), "bsdf": {"type": "null"},
@@ -111,6 +128,11 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                 n_bricks += 1
     ext = hi - lo
     mid = (hi + lo) / 2
+    bsdf = optics.bsdf()
+    if bsdf is not None:
+        # the print's outer boundary; the bricks sit inside it, inset by their gap
+        d["print_surface"] = {"type": "cube", "to_world": T().translate(mid.tolist())
+                              @ T().scale((ext / 2).tolist()), "bsdf": bsdf}
     if key_light > 0:
         d["key"] = {"type": "directional", "direction": [0.5, 0.6, -0.62],
                     "irradiance": {"type": "rgb", "value": [key_light] * 3}}
@@ -133,14 +155,16 @@ def render_print(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArray,
                  floor: bool = False,
                  progress: Callable[[int, int], None] | None = None,
                  cancelled: Callable[[], bool] | None = None,
-                 sampler: str = DEFAULT_SAMPLER) -> tuple[NDArray, dict]:
+                 sampler: str = DEFAULT_SAMPLER, optics: Optics | None = None
+                 ) -> tuple[NDArray, dict]:
     """Band radiance images (views, res, res, n_bands) of the medium (ncz, ncy, ncx, n_bands).
 
     Deterministic for a given ``seed`` (Mitsuba's sampler seed per view and pass). Returns the
     images and ``{"renderer": ..., "variant": ..., "note": ...}``.
     """
     imgs, info = render_print_seeds(sigma_t, albedo, lo, hi, views, resolution, spp, (seed,),
-                                    max_depth, key_light, floor, progress, cancelled, sampler)
+                                    max_depth, key_light, floor, progress, cancelled, sampler,
+                                    optics)
     return imgs[0], info
 
 
@@ -150,7 +174,8 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                        floor: bool = False,
                        progress: Callable[[int, int], None] | None = None,
                        cancelled: Callable[[], bool] | None = None,
-                       sampler: str = DEFAULT_SAMPLER) -> tuple[list[NDArray], dict]:
+                       sampler: str = DEFAULT_SAMPLER, optics: Optics | None = None
+                       ) -> tuple[list[NDArray], dict]:
     """:func:`render_print` at each of ``seeds`` (one scene per pass serves them all): the
     proof and its noise floor's second render. Returns the images per seed and the info."""
     from .mitsuba_setup import load_mitsuba
@@ -172,7 +197,7 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
         scene = mi.load_dict(scene_dict(
             mi, np.ascontiguousarray(sigma_t[..., ch], np.float32),
             np.ascontiguousarray(albedo[..., ch], np.float32), lo, hi, views, resolution, spp,
-            max_depth, key_light, floor, sampler=sampler))
+            max_depth, key_light, floor, sampler=sampler, optics=optics))
         for out, seed in zip(outs, seeds, strict=True):
             for i in range(len(views)):
                 if cancelled is not None and cancelled():
@@ -187,5 +212,5 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                     progress(done, total)
     info = {"renderer": "mitsuba", "version": mi.__version__, "variant": variant, "note": note,
             "integrator": "volpath", "max_depth": int(max_depth), "spp": int(spp),
-            "sampler": sampler, "passes": passes}
+            "sampler": sampler, "passes": passes, **(optics or Optics()).describe()}
     return [out[..., :nb_] for out in outs], info

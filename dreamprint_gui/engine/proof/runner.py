@@ -67,6 +67,8 @@ class ProofSettings:
     viewing_distance_mm: float = 500.0   # S-CIELAB: the print seen at its size from here
     noise_floor: bool = True             # render the print again at seed + 1 (twice the time)
     sampler: str = "independent"         # Mitsuba's sampler of the print render
+    surface: str | None = None           # none | glossy | matte (None: the profile's, else none)
+    phase: str | None = None             # isotropic | hg:G (None: the profile's, else isotropic)
     overwrite: bool = False
     table_size: int = 100
     source_options: tuple[tuple[str, Any], ...] = ()
@@ -111,10 +113,15 @@ def validate(s: ProofSettings) -> None:
     if not (math.isfinite(s.viewing_distance_mm) and 10 <= s.viewing_distance_mm <= 1e5):
         raise DreamPrintError(f"--viewing-distance-mm must be 10..100000, got "
                               f"{s.viewing_distance_mm}")
+    from .optics import resolve_optics
     from .print_render import SAMPLERS
 
     if s.sampler not in SAMPLERS:
         raise DreamPrintError(f"unknown sampler '{s.sampler}' (use {', '.join(SAMPLERS)})")
+    optics = resolve_optics(s.surface, s.phase)     # the names, before any work
+    if optics.surface != "none" and s.background == "empty":
+        raise DreamPrintError("--surface needs --background clear: the surface is the print's "
+                              "box of Clear resin, which an empty background does not print")
 
 
 def _labels(s: ProofSettings):
@@ -135,6 +142,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     from .cameras import orbit_views
     from .compare import compare_view, noise_floor, summarise, summarise_floor
     from .medium import block_for_cell, block_fractions, medium_coefficients
+    from .optics import resolve_optics
     from .print_render import render_print_seeds
     from .scielab import samples_per_degree
     from .source_render import optical_depth, render_source, sample_source
@@ -176,7 +184,11 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     timings["labels"] = el() - sum(timings.values())
     lo, hi = medium.box_mm
     views = orbit_views(medium.print_size_mm, s.views)
-    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S)
+    optics = resolve_optics(s.surface, s.phase, lab.profile.proof_optics)
+    if optics.surface != "none" and s.background == "empty":
+        raise DreamPrintError("--surface needs --background clear (the profile asks for a "
+                              f"{optics.surface} surface; give --surface none)")
+    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics.g)
 
     yield ProofProgress("source", 0, len(views), el(), "rendering the source")
     t1 = time.perf_counter()
@@ -203,7 +215,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
             box["m"] = render_print_seeds(
                 sigma_t, albedo, lo, hi, views, s.resolution, s.spp, seeds, s.max_depth,
                 s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
-                cancelled=is_cancelled, sampler=s.sampler)
+                cancelled=is_cancelled, sampler=s.sampler, optics=optics)
         except BaseException as exc:  # noqa: BLE001
             box["e"] = exc
 
@@ -226,11 +238,12 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
         prn_alpha = 1.0 - T @ y_w
         src_xyz = src_lin[i] @ to_xyz.T
-        prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor)
+        prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor, optics)
         fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs, spd)
         if s.noise_floor:
             fig["noise_floor"] = noise_floor(
-                prn_xyz, print_xyz(bands, prn_seeds[1][i], T, s.floor), prn_alpha, obs, spd)
+                prn_xyz, print_xyz(bands, prn_seeds[1][i], T, s.floor, optics), prn_alpha,
+                obs, spd)
         per_view.append({"view": i, **v.describe(), **fig})
         images.append({"source": src_lin[i], "print": obs.XYZ_to_linear_sRGB(prn_xyz),
                        "de2000": de})
@@ -247,8 +260,13 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         "grid_dimensions": list(lab.shape_xyz),
         "medium": medium.describe(),
         "spectral": bands.describe(),
-        "km_to_rte": {"sigma_a": "K / 2", "sigma_s": "4 S / 3", "phase": "isotropic",
-                      "reference": "Gate 1974; Thennadil 2008 (diffuse incidence)"},
+        "km_to_rte": {"sigma_a": "K / 2", "sigma_s": "4 S / (3 (1 - g))",
+                      "phase": optics.describe()["phase"], "g": optics.g,
+                      "reference": "Gate 1974; Thennadil 2008 (diffuse incidence); reduced "
+                                   "scattering sigma_s (1 - g) kept (similarity relation)"},
+        "optics": {**optics.describe(),
+                   "from": ("command line" if s.surface is not None or s.phase is not None
+                            else "profile" if lab.profile.proof_optics else "defaults")},
         "renderer": info,
         "source_renderer": "emission-absorption ray march (dreamprint)",
         "lighting": {"environment": "uniform white (D65), radiance 1",
@@ -270,11 +288,14 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     return {"report": report, "images": images}
 
 
-def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool) -> np.ndarray:
-    """XYZ (res, res, 3) of a print view: Mitsuba's band images plus, without a floor, the
-    environment seen straight through (the renderer hides it; ``direct_T`` per band is its
-    exact expectation, :mod:`.print_render`)."""
-    return bands.to_XYZ(rendered + (0.0 if floor else direct_T))
+def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool,
+              optics=None) -> np.ndarray:
+    """XYZ (res, res, 3) of a print view: Mitsuba's band images plus, without a floor or a
+    surface, the environment seen straight through (the renderer hides it; ``direct_T`` per
+    band is its exact expectation, :mod:`.print_render`)."""
+    from .print_render import hides_direct
+
+    return bands.to_XYZ(rendered + (direct_T if hides_direct(floor, optics) else 0.0))
 
 
 def _in_thread(fn, stage, prog, el, box, cancel):
