@@ -52,6 +52,7 @@ case "$what" in
     ;;
   test)
     .venv/bin/ruff check .
+    .venv/bin/lint-imports   # the package's layers (pyproject.toml [tool.importlinter])
     exec .venv/bin/python -m pytest -q "$@"
     ;;
   *)

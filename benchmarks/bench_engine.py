@@ -9,11 +9,11 @@ import time
 
 import numpy as np
 
-from dreamprint_gui.engine.colorimetry import observer_for
-from dreamprint_gui.engine.density import fit_sigma_per_wavelength
-from dreamprint_gui.engine.kubelka_munk import mix, reflectance_transmittance
-from dreamprint_gui.engine.mixture import predict
-from dreamprint_gui.engine.profile import default_profile
+from dreamprint_gui.core.profile import default_profile
+from dreamprint_gui.physics.colorimetry import observer_for
+from dreamprint_gui.physics.density import fit_sigma_per_wavelength
+from dreamprint_gui.physics.kubelka_munk import mix, reflectance_transmittance
+from dreamprint_gui.physics.mixture import predict
 
 
 def timed(label: str, fn, n: int, unit: str) -> None:

@@ -22,18 +22,18 @@ import time
 
 import numpy as np
 
-from dreamprint_gui.engine.gamut import (
+from dreamprint_gui.core.profile import default_profile
+from dreamprint_gui.gamut import (
     align_density,
     build_tables,
     get_tables,
     lookup,
     lookup_and_align_into,
 )
-from dreamprint_gui.engine.gamut.evaluation import objective_figures
-from dreamprint_gui.engine.gamut.mapping import INTENTS
-from dreamprint_gui.engine.gamut.optimise import OBJECTIVES
-from dreamprint_gui.engine.gamut.tables import mixture_sigma
-from dreamprint_gui.engine.profile import default_profile
+from dreamprint_gui.gamut.evaluation import objective_figures
+from dreamprint_gui.gamut.mapping import INTENTS
+from dreamprint_gui.gamut.optimise import OBJECTIVES
+from dreamprint_gui.gamut.tables import mixture_sigma
 
 
 def main() -> None:

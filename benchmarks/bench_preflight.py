@@ -25,8 +25,8 @@ def main() -> None:
     ap.add_argument("--content", default="auto")
     args = ap.parse_args()
 
-    from dreamprint_gui.engine.preflight import preflight
     from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+    from dreamprint_gui.job.preflight import preflight
     from dreamprint_gui.job.run import run_conversion
 
     print("height_mm voxels preflight_s fraction_max_abs_err clamped_est clamped_job "

@@ -26,16 +26,16 @@ import numpy as np
 
 
 def _medium(lab, block, layers_per_block):
-    from dreamprint_gui.engine.proof.medium import block_fractions
+    from dreamprint_gui.proof.medium import block_fractions
 
     return block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block, layers_per_block)
 
 
 def _print_xyz(medium, bands, view, res, spp, seed, sampler=None):
-    from dreamprint_gui.engine.proof.medium import medium_coefficients
-    from dreamprint_gui.engine.proof.print_render import DEFAULT_SAMPLER, render_print
-    from dreamprint_gui.engine.proof.runner import print_xyz
-    from dreamprint_gui.engine.proof.source_render import optical_depth
+    from dreamprint_gui.proof.medium import medium_coefficients
+    from dreamprint_gui.proof.print_render import DEFAULT_SAMPLER, render_print
+    from dreamprint_gui.proof.runner import print_xyz
+    from dreamprint_gui.proof.source_render import optical_depth
 
     st, al = medium_coefficients(medium.fractions, bands.K, bands.S)
     lo, hi = medium.box_mm
@@ -49,15 +49,15 @@ def _print_xyz(medium, bands, view, res, spp, seed, sampler=None):
 
 
 def speed(args) -> None:
-    from dreamprint_gui.engine.proof.cameras import orbit_views
-    from dreamprint_gui.engine.proof.compare import noise_floor
-    from dreamprint_gui.engine.proof.medium import block_for_cell
-    from dreamprint_gui.engine.proof.methods import method_labels
-    from dreamprint_gui.engine.proof.print_render import DEFAULT_SAMPLER
-    from dreamprint_gui.engine.proof.runner import DEFAULT_SPP, ProofSettings
-    from dreamprint_gui.engine.proof.scielab import samples_per_degree
-    from dreamprint_gui.engine.proof.source_render import render_source, sample_source
-    from dreamprint_gui.engine.proof.spectral import spectral_bands
+    from dreamprint_gui.proof.cameras import orbit_views
+    from dreamprint_gui.proof.compare import noise_floor
+    from dreamprint_gui.proof.medium import block_for_cell
+    from dreamprint_gui.proof.methods import method_labels
+    from dreamprint_gui.proof.print_render import DEFAULT_SAMPLER
+    from dreamprint_gui.proof.runner import DEFAULT_SPP, ProofSettings
+    from dreamprint_gui.proof.scielab import samples_per_degree
+    from dreamprint_gui.proof.source_render import render_source, sample_source
+    from dreamprint_gui.proof.spectral import spectral_bands
 
     spps = [int(x) for x in (args.spp or str(DEFAULT_SPP)).split(",")]
     samplers = (args.samplers or DEFAULT_SAMPLER).split(",")
@@ -101,11 +101,11 @@ def speed(args) -> None:
 
 
 def block_error(args) -> None:
-    from dreamprint_gui.engine.colorimetry import delta_E2000
-    from dreamprint_gui.engine.proof.cameras import orbit_views
-    from dreamprint_gui.engine.proof.methods import method_labels
-    from dreamprint_gui.engine.proof.runner import ProofSettings
-    from dreamprint_gui.engine.proof.spectral import spectral_bands
+    from dreamprint_gui.physics.colorimetry import delta_E2000
+    from dreamprint_gui.proof.cameras import orbit_views
+    from dreamprint_gui.proof.methods import method_labels
+    from dreamprint_gui.proof.runner import ProofSettings
+    from dreamprint_gui.proof.spectral import spectral_bands
 
     s = ProofSettings(source="demo", height_mm=3.0)
     lab = method_labels(s)

@@ -40,7 +40,8 @@ def height_for(source: str, n_voxels: float, options: dict | None = None) -> flo
 
 def job_hash(source: str, height: float, workers: int, slab_layers: int | None,
              scheduler: str | None = None) -> tuple[list[int], str, str]:
-    from dreamprint_gui.engine.pipeline import ConvertSettings, run_conversion
+    from dreamprint_gui.job.plan import ConvertSettings
+    from dreamprint_gui.job.run import run_conversion
 
     tmp = tempfile.mkdtemp(prefix="dp-hash-")
     try:

@@ -15,8 +15,8 @@ def _numba_cache_dir() -> str:
     numba's ``cache=True`` invalidates a cached kernel only when the kernel's *own* file changes;
     a kernel that inlined a function from another module keeps its stale machine code after that
     module changes (it happened here: wrong labels until the cache was deleted). Keying the folder
-    on a hash of the engine and io sources (where the kernels live) makes any change there, or an
-    upgrade, compile afresh.
+    on a hash of every layer's sources below cli/ and gui/ (where the kernels live) makes any
+    change there, or an upgrade, compile afresh.
     """
     import hashlib
     from pathlib import Path
@@ -26,7 +26,8 @@ def _numba_cache_dir() -> str:
     root = Path(__file__).resolve().parent
     digest = hashlib.sha256(__version__.encode())
     # Only the layers that hold compiled kernels: a GUI or CLI edit need not recompile them.
-    for path in sorted(p for layer in ("engine", "io") for p in (root / layer).rglob("*.py")):
+    layers = ("core", "physics", "io", "gamut", "job", "proof")
+    for path in sorted(p for layer in layers for p in (root / layer).rglob("*.py")):
         digest.update(path.relative_to(root).as_posix().encode())
         digest.update(path.read_bytes())
     return str(user_cache_path("dreamprint") / "numba" / digest.hexdigest()[:16])

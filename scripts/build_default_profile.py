@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dreamprint_gui.engine.profile import INKS, InkProfile, now_iso, save_profile
+from dreamprint_gui.core.profile import INKS, InkProfile, now_iso, save_profile
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "resources" / "inks" / "polyjet_ks"

@@ -1,17 +1,80 @@
-"""The engine and io layers never import Qt (they run headless, in workers and on clusters)."""
+"""The package's layers (issue 26): the contract in ``pyproject.toml`` holds, nothing below
+``gui/`` imports Qt, the moved modules' old paths are gone, and an import written inside a
+function is never one of the package's own modules below cli/ and gui/ (such an import only
+ever dodged a circle; heavy or optional third-party dependencies are the one reason left)."""
 
+import ast
+import importlib
+import pkgutil
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
+
+import dreamprint_gui
+
+PACKAGE = Path(dreamprint_gui.__file__).resolve().parent
+BELOW_GUI = ("core", "physics", "io", "gamut", "job", "proof", "cli")
 
 
-def test_engine_and_io_import_without_qt():
+def test_layers_contract_holds():
+    """``lint-imports`` (import-linter) checks the layers, the Qt ban and the absence of import
+    circles between sibling modules; it fails on any import that runs up a layer."""
+    exe = Path(sys.executable).with_name("lint-imports")
+    out = subprocess.run([str(exe)], cwd=PACKAGE.parent, capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-2000:]
+    assert "3 kept, 0 broken" in out.stdout
+
+
+def test_nothing_below_gui_imports_qt():
     code = (
         "import sys, pkgutil, importlib\n"
-        "import dreamprint_gui.engine as e, dreamprint_gui.io as i, dreamprint_gui.cli\n"
-        "for pkg in (e, i):\n"
+        f"for name in {BELOW_GUI!r}:\n"
+        "    pkg = importlib.import_module('dreamprint_gui.' + name)\n"
         "    for m in pkgutil.walk_packages(pkg.__path__, pkg.__name__ + '.'):\n"
-        "        importlib.import_module(m.name)\n"
-        "bad = [m for m in sys.modules if m.startswith(('PySide6', 'PyQt', 'pyvistaqt'))]\n"
+        "        if not m.name.endswith('.__main__'):  # runs the command line\n"
+        "            importlib.import_module(m.name)\n"
+        "bad = [m for m in sys.modules if m.startswith(('PySide6', 'PyQt', 'pyvistaqt'))\n"
+        "       or m.startswith('dreamprint_gui.gui')]\n"
         "assert not bad, bad\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("old", ["dreamprint_gui.engine", "dreamprint_gui.errors",
+                                 "dreamprint_gui.resources", "dreamprint_gui.io.job_export",
+                                 "dreamprint_gui.job.sample_label.vec16"])
+def test_old_paths_are_gone(old):
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module(old)
+
+
+def test_every_layer_folder_is_a_layer():
+    """A new top-level folder must be placed in the contract (``exhaustive = true`` says so to
+    lint-imports too); this names the folders the README's Layout section describes."""
+    folders = {m.name for m in pkgutil.iter_modules([str(PACKAGE)]) if m.ispkg}
+    assert folders == {"core", "physics", "io", "gamut", "job", "proof", "cli", "gui"}
+
+
+def _function_local_own_imports(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    found = []
+    for fn in ast.walk(tree):
+        if not isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef):
+            continue
+        for node in ast.walk(fn):
+            if isinstance(node, ast.ImportFrom) and (
+                    node.level or (node.module or "").startswith("dreamprint_gui")):
+                found.append(f"{path.relative_to(PACKAGE)}:{node.lineno} {node.module}")
+            elif isinstance(node, ast.Import) and any(
+                    a.name.startswith("dreamprint_gui") for a in node.names):
+                found.append(f"{path.relative_to(PACKAGE)}:{node.lineno}")
+    return found
+
+
+@pytest.mark.parametrize("layer", ["core", "physics", "io", "gamut", "job", "proof"])
+def test_no_own_module_imported_inside_a_function(layer):
+    found = [f for p in sorted((PACKAGE / layer).rglob("*.py"))
+             for f in _function_local_own_imports(p)]
+    assert not found, found

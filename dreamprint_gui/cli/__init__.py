@@ -11,7 +11,7 @@ import sys
 
 import click
 
-from ..errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -60,12 +60,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 # Command modules register themselves on `cli` when imported.
-from . import physics  # noqa: E402,F401,I001
-from . import spectra  # noqa: E402,F401,I001
-from . import volumes  # noqa: E402,F401,I001
-from . import jobs  # noqa: E402,F401,I001
-from . import gamut  # noqa: E402,F401,I001
-from . import proof  # noqa: E402,F401,I001
+from dreamprint_gui.cli import physics  # noqa: E402,F401,I001
+from dreamprint_gui.cli import spectra  # noqa: E402,F401,I001
+from dreamprint_gui.cli import volumes  # noqa: E402,F401,I001
+from dreamprint_gui.cli import jobs  # noqa: E402,F401,I001
+from dreamprint_gui.cli import gamut  # noqa: E402,F401,I001
+from dreamprint_gui.cli import proof  # noqa: E402,F401,I001
 
 if __name__ == "__main__":
     sys.exit(main())

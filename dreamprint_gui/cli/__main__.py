@@ -1,5 +1,5 @@
 import sys
 
-from . import main
+from dreamprint_gui.cli import main
 
 sys.exit(main())

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli
+from dreamprint_gui.cli import cli
+from dreamprint_gui.core.errors import DreamPrintError
 
 # rgb, lab: former names of srgb, cielab (still accepted)
 _OBJECTIVES = click.Choice(["srgb", "cielab", "de2000", "rgb", "lab"])
@@ -99,11 +99,11 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, size,
     """Ink concentrations for colours: table lookup, density alignment, reproduced colour."""
     import numpy as np
 
-    from ..engine.colorimetry import delta_E2000, observer_for, srgb_to_lab
-    from ..engine.gamut import align_density, get_tables
-    from ..engine.gamut import lookup as table_lookup
-    from ..engine.mixture import predict
-    from ..engine.profile import COLOUR_INKS, INKS, load_profile
+    from dreamprint_gui.core.profile import COLOUR_INKS, INKS, load_profile
+    from dreamprint_gui.gamut import align_density, get_tables
+    from dreamprint_gui.gamut import lookup as table_lookup
+    from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for, srgb_to_lab
+    from dreamprint_gui.physics.mixture import predict
 
     if (rgb_text is None) == (rgb_file is None):
         raise DreamPrintError("give exactly one of --rgb or --rgb-file")
@@ -163,12 +163,12 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, size,
 def gamut(profile_path, objective, intent, compare, size, samples, chart, plot,
           as_json) -> None:
     """Build (or load) the colour tables and report the printable gamut."""
-    from ..engine.gamut import get_tables
-    from ..engine.gamut.charts import gamut_plot, hexagon_chart
-    from ..engine.gamut.evaluation import evaluate
-    from ..engine.gamut.optimise import OBJECTIVES
-    from ..engine.gamut.tables import resolve_choice
-    from ..engine.profile import load_profile
+    from dreamprint_gui.core.profile import load_profile
+    from dreamprint_gui.gamut import get_tables
+    from dreamprint_gui.gamut.charts import gamut_plot, hexagon_chart
+    from dreamprint_gui.gamut.evaluation import evaluate
+    from dreamprint_gui.gamut.optimise import OBJECTIVES
+    from dreamprint_gui.gamut.tables import resolve_choice
 
     profile = load_profile(profile_path)
     objective, intent = resolve_choice(profile, objective, intent)

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli, evaluate
+from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.core.errors import DreamPrintError
 
 
 def _size(text: str | None) -> tuple[float, float, float] | None:
@@ -89,8 +89,8 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
     warnings (mostly Clear, clamping, out of gamut) go to stderr; after the job, how many voxels
     were clamped. --quiet silences both; --json adds them to the printed manifest."""
-    from ..job.plan import ConvertSettings, JobCancelled
-    from ..job.run import run_conversion
+    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled
+    from dreamprint_gui.job.run import run_conversion
 
     opts = {}
     for kv in source_options:
@@ -232,7 +232,7 @@ def _option_value(v: str):
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 def evaluate_job(job, as_json) -> None:
     """Read a finished JOB back: material fractions vs intended concentrations, consistency."""
-    from ..job.check import check_job
+    from dreamprint_gui.job.check import check_job
 
     report = check_job(Path(job))
     if as_json:

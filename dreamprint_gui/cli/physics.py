@@ -8,8 +8,8 @@ from pathlib import Path
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli, evaluate
+from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.core.errors import DreamPrintError
 
 
 def emit_json(obj: object) -> None:
@@ -58,9 +58,9 @@ profile_option = click.option("--profile", "profile_path", default=None, metavar
 def predict(mix_text: str | None, mix_file: Path | None, profile_path: str | None,
             thickness_mm: str | None, saunderson: str | None, as_json: bool) -> None:
     """Spectra, colour and density of ink mixtures (Kubelka-Munk, eqs. 3-9)."""
-    from ..engine.mixture import predict as predict_mix
-    from ..engine.profile import load_profile, parse_mix
-    from ..io.recipes import read_recipes
+    from dreamprint_gui.core.profile import load_profile, parse_mix
+    from dreamprint_gui.io.recipes import read_recipes
+    from dreamprint_gui.physics.mixture import predict as predict_mix
 
     if (mix_text is None) == (mix_file is None):
         raise click.UsageError("give exactly one of --mix or --mix-file")
@@ -110,7 +110,7 @@ def calibrate(measurements: Path | None, output: Path, chart: Path | None,
     DreamPrint's layout (docs/measurements-csv.md). With --chart and --reflectance, refit all
     inks jointly to a printed mixture chart and report cross-validated dE2000.
     """
-    from ..engine.profile import load_profile
+    from dreamprint_gui.core.profile import load_profile
 
     base = load_profile(base_profile)
     if chart is not None or reflectance is not None:
@@ -130,15 +130,15 @@ def calibrate(measurements: Path | None, output: Path, chart: Path | None,
 
 
 def _calibrate_layers(base, path: Path, name: str | None, output: Path) -> dict:
-    from ..engine.calibration import calibrate_profile
-    from ..engine.profile import save_profile
+    from dreamprint_gui.core.profile import save_profile
+    from dreamprint_gui.physics.calibration import calibrate_profile
 
     if path.suffix.lower() == ".toml":
-        from ..io.spectra.calibration_set import load_calibration_set
+        from dreamprint_gui.io.spectra.calibration_set import load_calibration_set
 
         layers = load_calibration_set(path, base.wavelengths_nm)
     else:
-        from ..io.measurements_csv import read_measurements_csv
+        from dreamprint_gui.io.measurements_csv import read_measurements_csv
 
         layers = read_measurements_csv(path, base.wavelengths_nm)
     profile, fits = calibrate_profile(layers, base, name or output.stem)
@@ -150,13 +150,13 @@ def _calibrate_layers(base, path: Path, name: str | None, output: Path) -> dict:
 
 def _calibrate_chart(base, chart: Path, reflectance: Path, name: str | None,
                      saunderson, folds: int, output: Path) -> dict:
-    from ..engine.chart_calibration import fit_chart
-    from ..engine.profile import save_profile
-    from ..io.recipes import read_recipes, read_spectra_rows
+    from dreamprint_gui.core.profile import save_profile
+    from dreamprint_gui.io.recipes import read_recipes, read_spectra_rows
+    from dreamprint_gui.physics.chart_calibration import fit_chart
 
     recipes = read_recipes(chart)
     wl, spectra = read_spectra_rows(reflectance)
-    from ..engine.spectral_grid import resample
+    from dreamprint_gui.core.spectral_grid import resample
 
     spectra = resample(wl, spectra, base.wavelengths_nm, source=str(reflectance))
     if spectra.shape[0] != recipes.shape[0]:
@@ -195,8 +195,8 @@ def _print_report(report: dict) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def density_fit(profile_path: str | None, t_max_mm: float, samples: int, as_json: bool) -> None:
     """The paper's Table 1: error of approximating T(t) by exp(-sigma t), per ink."""
-    from ..engine.density import exp_fit_errors
-    from ..engine.profile import load_profile
+    from dreamprint_gui.core.profile import load_profile
+    from dreamprint_gui.physics.density import exp_fit_errors
 
     profile = load_profile(profile_path)
     mean, worst = exp_fit_errors(profile.K, profile.S, t_max_mm, samples)

@@ -10,9 +10,9 @@ import time
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli, evaluate
-from .jobs import _fmt_time, _option_value, _size
+from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli.jobs import _fmt_time, _option_value, _size
+from dreamprint_gui.core.errors import DreamPrintError
 
 _STAGES = {"preparing": "preparing", "labels": "labels", "source": "source render",
            "print": "print render (Mitsuba)", "compare": "comparing", "writing": "writing"}
@@ -30,7 +30,7 @@ def _options(items: tuple[str, ...]) -> tuple[tuple[str, object], ...]:
 
 def _drive(gen, prefix: str = ""):
     """Run a proof generator with progress bars on stderr; return its value."""
-    from ..job.plan import JobCancelled
+    from dreamprint_gui.job.plan import JobCancelled
 
     def on_term(signum, frame):
         raise KeyboardInterrupt()
@@ -124,7 +124,7 @@ def _common(f):
 
 
 def _settings(source, output, method, kw, overwrite=False):
-    from ..engine.proof.runner import ProofSettings
+    from dreamprint_gui.proof.runner import ProofSettings
 
     return ProofSettings(
         source=source, output=output, height_mm=kw["height_mm"], size_mm=_size(kw["size_mm"]),
@@ -157,7 +157,7 @@ def _check_source(source: str) -> None:
 def proof(source, output, method, overwrite, **kw) -> None:
     """Render SOURCE (a volume, 'demo', or an exported JOB folder) as printed, beside the
     source, and measure how alike they look."""
-    from ..engine.proof.runner import run_proof
+    from dreamprint_gui.proof.runner import run_proof
 
     _check_source(source)
     report = _drive(run_proof(_settings(source, output, method, kw, overwrite)))
@@ -189,9 +189,9 @@ def proof(source, output, method, overwrite, **kw) -> None:
 @_common
 def evaluate_methods(source, methods, halftones, **kw) -> None:
     """Proof SOURCE with each method (same cameras, seed, size) and tabulate the figures."""
-    from ..engine.proof.compare import SIGNIFICANCE_FACTOR, mark_significance
-    from ..engine.proof.methods import METHODS
-    from ..engine.proof.runner import render_proof
+    from dreamprint_gui.proof.compare import SIGNIFICANCE_FACTOR, mark_significance
+    from dreamprint_gui.proof.methods import METHODS
+    from dreamprint_gui.proof.runner import render_proof
 
     _check_source(source)
     ctx = click.get_current_context()

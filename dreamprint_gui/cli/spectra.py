@@ -6,7 +6,7 @@ import json
 
 import click
 
-from . import cli
+from dreamprint_gui.cli import cli
 
 _QUANTITIES = ["reflectance", "transmittance", "absorbance", "spd"]
 
@@ -27,7 +27,7 @@ def spectra(file: str, as_json: bool, quantity: str | None, file_quantity: str |
     Reads CGATS.17 (i1Profiler, ArgyllCMS, X-Rite), Agilent Cary CSV, JCAMP-DX, IES TM-27-14
     and plain CSV. Physically impossible values are listed as problems.
     """
-    from ..io.spectra import read_spectra
+    from dreamprint_gui.io.spectra import read_spectra
 
     sf = read_spectra(file, quantity=quantity, file_quantity=file_quantity, value_scale=scale)
     summary = sf.summary()

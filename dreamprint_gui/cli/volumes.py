@@ -7,8 +7,8 @@ import json
 
 import click
 
-from ..errors import DreamPrintError
-from . import cli
+from dreamprint_gui.cli import cli
+from dreamprint_gui.core.errors import DreamPrintError
 
 
 def _fmt_num(v) -> str:
@@ -124,8 +124,8 @@ def format_info(path: str, info: dict, height_mm: float | None = None,
 
 def describe(file: str) -> dict:
     """The ``inspect`` description of ``file`` plus ``content``: what ``--content auto`` picks."""
-    from ..engine.content import choose_content, content_of_info
-    from ..io.volumes.registry import inspect_source
+    from dreamprint_gui.io.volumes.registry import inspect_source
+    from dreamprint_gui.job.content import choose_content, content_of_info
 
     info, src = inspect_source(file)
     mode, reason = choose_content(src) if src is not None else content_of_info(info)
@@ -171,7 +171,7 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     MagicaVoxel file, InstantNGP snapshot (.ingp/.msgpack) or volume export (RGBA PNG slice
     folder, WxHxD_C.bin), or "demo".
     """
-    from .jobs import _size
+    from dreamprint_gui.cli.jobs import _size
 
     if height_mm is not None and size_mm is not None:
         raise DreamPrintError("give at most one of --height-mm and --size-mm")

@@ -88,11 +88,11 @@ def main(argv: list[str] | None = None) -> int:
     from PySide6.QtGui import QIcon
     from PySide6.QtWidgets import QApplication
 
-    from ..errors import DreamPrintError
-    from ..resources import resource_path
-    from .crash import install_exception_hook, log_file
-    from .main_window import MainWindow
-    from .workers import wait_all
+    from dreamprint_gui.core.errors import DreamPrintError
+    from dreamprint_gui.core.resources import resource_path
+    from dreamprint_gui.gui.crash import install_exception_hook, log_file
+    from dreamprint_gui.gui.main_window import MainWindow
+    from dreamprint_gui.gui.workers import wait_all
 
     app = QApplication.instance() or QApplication([sys.argv[0]])
     app.setApplicationName("DreamPrint")
@@ -188,7 +188,7 @@ def main(argv: list[str] | None = None) -> int:
         window.warm_up()
         try:
             if args.profile:
-                from ..engine.profile import load_profile
+                from dreamprint_gui.core.profile import load_profile
 
                 window.set_profile(load_profile(args.profile), args.profile)
             else:

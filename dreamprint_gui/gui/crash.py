@@ -19,7 +19,7 @@ from types import TracebackType
 from PySide6.QtCore import QObject, Qt, Signal, Slot
 from PySide6.QtWidgets import QApplication, QMessageBox
 
-from ..errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 
 __all__ = ["log_file", "setup_logging", "install_exception_hook", "short_message"]
 

@@ -40,10 +40,16 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ..errors import DreamPrintError
-from .names import BACKGROUNDS, CONTENTS, background_name, gui_wording, printer_name
-from .settings import AppSettings
-from .workers import Task, generator_job, run_task
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.gui.names import (
+    BACKGROUNDS,
+    CONTENTS,
+    background_name,
+    gui_wording,
+    printer_name,
+)
+from dreamprint_gui.gui.settings import AppSettings
+from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
 __all__ = ["ExportDialog", "convert_settings", "export_job", "format_duration",
            "manifest_summary", "check_scheduler_address", "SCHEDULERS"]
@@ -87,7 +93,7 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
     ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear";
     ``intent`` the rendering intent, None for the profile's)."""
-    from ..job.plan import ConvertSettings
+    from dreamprint_gui.job.plan import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
         printer = printer.path or printer.name
@@ -107,7 +113,7 @@ def export_job(settings, preflight=True):
     """A worker job running the conversion: progress items are ``ConvertProgress``.
     ``preflight``: an estimate already made for these settings (recorded in the manifest as
     is), or True to make it first (``job.run.run_conversion``)."""
-    from ..job.run import run_conversion
+    from dreamprint_gui.job.run import run_conversion
 
     return generator_job(lambda cancel: run_conversion(settings, cancel, preflight=preflight))
 
@@ -133,7 +139,7 @@ def format_duration(seconds: float | None) -> str:
 
 
 def _manifest_printer_name(printer: dict) -> str:
-    from ..engine.printer import PRINTER_NAMES
+    from dreamprint_gui.core.printer import PRINTER_NAMES
 
     name = str(printer.get("name", ""))
     return str(printer.get("title") or PRINTER_NAMES.get(name, name))
@@ -247,7 +253,7 @@ def preflight_html(pf) -> str:
 
 
 def _printer_file_name(path: str) -> str:
-    from ..engine.printer import load_printer
+    from dreamprint_gui.core.printer import load_printer
 
     try:
         return printer_name(load_printer(path))
@@ -266,7 +272,7 @@ class ExportDialog(QDialog):
                  source_name: str | None = None, table_size: int | None = None,
                  context=None) -> None:
         super().__init__(parent)
-        from ..engine.printer import DEFAULT_PRINTER, builtin_printers
+        from dreamprint_gui.core.printer import DEFAULT_PRINTER, builtin_printers
 
         self.settings = settings or AppSettings()
         self.source_path = source_path
@@ -455,7 +461,7 @@ class ExportDialog(QDialog):
             self._preflight_debounce.start()
 
     def update_preflight(self) -> None:
-        """Estimate the job of the current settings on a worker (``engine.preflight``)."""
+        """Estimate the job of the current settings on a worker (``job.preflight``)."""
         if self._preflight_task is not None and self._preflight_task.outcome is None:
             self._preflight_pending = True  # one at a time; the latest settings win
             return
@@ -468,8 +474,8 @@ class ExportDialog(QDialog):
         previous = self.context
 
         def job(report, cancel):
-            from ..engine.preflight import preflight
-            from .preview_data import job_context
+            from dreamprint_gui.gui.preview_data import job_context
+            from dreamprint_gui.job.preflight import preflight
 
             return settings, preflight(job_context(settings, previous), seed=settings.seed)
 
@@ -510,7 +516,7 @@ class ExportDialog(QDialog):
         self._update_printer()
 
     def _update_printer(self) -> None:
-        from ..engine.printer import load_printer
+        from dreamprint_gui.core.printer import load_printer
 
         spec = self.printer.currentData()
         try:

@@ -47,7 +47,7 @@ def printable_gamut_mesh(profile, steps: int = 12) -> GamutMesh:
     """Hull of the colours printable with C, M, Y, K, W (Clear adds no colour at R_inf)."""
     from scipy.spatial import ConvexHull
 
-    from ..engine.mixture import predict
+    from dreamprint_gui.physics.mixture import predict
 
     conc = simplex_lattice(5, steps)
     pred = predict(profile, conc)
@@ -62,7 +62,7 @@ def printable_gamut_mesh(profile, steps: int = 12) -> GamutMesh:
 
 def srgb_gamut_mesh(profile, n: int = 17) -> GamutMesh:
     """The sRGB cube's surface (n x n per face) in CIELAB under the profile's observer."""
-    from ..engine.colorimetry import observer_for, srgb_to_lab
+    from dreamprint_gui.physics.colorimetry import observer_for, srgb_to_lab
 
     t = np.linspace(0.0, 1.0, n)
     u, v = np.meshgrid(t, t, indexing="ij")
@@ -88,10 +88,10 @@ def pick_colour(profile, tables, rgb) -> dict:
     """What the printer makes of sRGB ``rgb``: table concentrations (C, M, Y, K, W), the
     reproduced colour (``predict`` at the reference thickness) and its dE2000 to the target,
     under the tables' rendering intent (``intent``: the mapping source -> printed colour)."""
-    from ..engine.colorimetry import delta_E2000, observer_for, srgb_to_lab
-    from ..engine.gamut import lookup
-    from ..engine.mixture import predict
-    from ..engine.profile import COLOUR_INKS
+    from dreamprint_gui.core.profile import COLOUR_INKS
+    from dreamprint_gui.gamut import lookup
+    from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for, srgb_to_lab
+    from dreamprint_gui.physics.mixture import predict
 
     target = np.clip(np.asarray(rgb, dtype=np.float64).reshape(3), 0.0, 1.0)
     conc = np.asarray(lookup(tables, target.astype(np.float32)[None, :]),

@@ -45,10 +45,10 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ..engine.profile import COLOUR_INKS
-from .gamut_data import pick_colour, printable_gamut_mesh, srgb_gamut_mesh
-from .volume_view import ViewHost
-from .workers import Task, run_task
+from dreamprint_gui.core.profile import COLOUR_INKS
+from dreamprint_gui.gui.gamut_data import pick_colour, printable_gamut_mesh, srgb_gamut_mesh
+from dreamprint_gui.gui.volume_view import ViewHost
+from dreamprint_gui.gui.workers import Task, run_task
 
 __all__ = ["GamutPage"]
 
@@ -308,7 +308,7 @@ class GamutPage(QWidget):
         profile, objective, size = self.profile, main.objective, main.size
 
         def job(report, cancel):
-            from ..engine.gamut import get_tables
+            from dreamprint_gui.gamut import get_tables
 
             return get_tables(profile, objective, size, intent=want,
                               progress=lambda f: report(float(f)))
@@ -335,7 +335,7 @@ class GamutPage(QWidget):
         """Share of the table's sRGB nodes printable within ``IN_GAMUT_DE2000``."""
         import numpy as np
 
-        from ..engine.gamut.evaluation import IN_GAMUT_DE2000
+        from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 
         if self.tables is None:
             return None
@@ -343,7 +343,7 @@ class GamutPage(QWidget):
         return float(np.mean(de <= IN_GAMUT_DE2000))
 
     def _show_fraction(self) -> None:
-        from ..engine.gamut.evaluation import IN_GAMUT_DE2000
+        from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 
         f = self.in_gamut_fraction()
         if f is None:
@@ -446,7 +446,7 @@ class GamutPage(QWidget):
             self.de_label.setText("dE2000 - (not available)")
             self.problem.emit(f"The colour lookup failed: {exc}")
             return
-        from ..engine.gamut.evaluation import IN_GAMUT_DE2000
+        from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 
         self.last_pick = result
         self.repro_swatch.setStyleSheet(_swatch_style(result["sRGB"]))
@@ -476,7 +476,7 @@ class GamutPage(QWidget):
         def job(report, cancel):
             import tempfile
 
-            from ..engine.gamut.charts import hexagon_chart
+            from dreamprint_gui.gamut.charts import hexagon_chart
 
             with tempfile.TemporaryDirectory() as d:
                 path = f"{d}/hexagon.png"

@@ -32,9 +32,9 @@ from PySide6.QtWidgets import (
     QTabWidget,
 )
 
-from ..errors import DreamPrintError
-from .settings import AppSettings
-from .workers import Task, run_task
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.gui.settings import AppSettings
+from dreamprint_gui.gui.workers import Task, run_task
 
 __all__ = ["MainWindow", "classify_path", "VOLUME_FILTER", "PROFILE_FILTER"]
 
@@ -88,26 +88,26 @@ class MainWindow(QMainWindow):
 
         self.setWindowTitle("DreamPrint")
         self.setAcceptDrops(True)
-        from ..resources import resource_path
+        from dreamprint_gui.core.resources import resource_path
 
         try:
             self.setWindowIcon(QIcon(str(resource_path("icons", "dreamprint.svg"))))
         except DreamPrintError:
             pass
 
-        from .preview import PreviewPage
+        from dreamprint_gui.gui.preview import PreviewPage
 
         self.tabs = QTabWidget()
         self.preview = PreviewPage(self, table_size=table_size)
         self.tabs.addTab(self.preview, "Preview")
         self.gamut = None
         if with_gamut:
-            from .gamut_view import GamutPage
+            from dreamprint_gui.gui.gamut_view import GamutPage
 
             self.gamut = GamutPage(self)
             self.gamut.set_hold(True)  # until the preview is ready or the page is opened
             self.tabs.addTab(self.gamut, "Gamut")
-        from .proof_view import ProofPage
+        from dreamprint_gui.gui.proof_view import ProofPage
 
         self.proof = ProofPage(self, lambda: self.preview.job_settings()
                                if self.preview.source_path else None)
@@ -159,7 +159,7 @@ class MainWindow(QMainWindow):
         """Import the 3D stack on a worker while the window is already showing."""
         if self._warm_task is not None:
             return
-        from .volume_view import import_3d
+        from dreamprint_gui.gui.volume_view import import_3d
 
         self._warm_task = run_task(Task(lambda report, cancel: import_3d(), "import-3d"))
 
@@ -254,7 +254,7 @@ class MainWindow(QMainWindow):
             self.tabs.setCurrentWidget(self.preview)  # the file is what the operator sees next
         try:
             if kind == "profile":
-                from ..engine.profile import load_profile
+                from dreamprint_gui.core.profile import load_profile
 
                 self.set_profile(load_profile(path), path)
                 self.settings.set_last_folder("profile", path)
@@ -309,7 +309,7 @@ class MainWindow(QMainWindow):
         self._say_waiting(f"opening {name} ...")
 
         def job(report, cancel):
-            from ..io.volumes import open_source
+            from dreamprint_gui.io.volumes import open_source
 
             return open_source(path)
 
@@ -353,7 +353,7 @@ class MainWindow(QMainWindow):
 
     def _ensure_printer(self):
         if self.printer is None:
-            from ..engine.printer import DEFAULT_PRINTER, load_printer
+            from dreamprint_gui.core.printer import DEFAULT_PRINTER, load_printer
 
             name = self.settings.get("export/printer", DEFAULT_PRINTER, str)
             try:
@@ -375,7 +375,7 @@ class MainWindow(QMainWindow):
             self.preview.set_inputs(printer=printer)
 
     def use_default_profile(self) -> None:
-        from ..engine.profile import default_profile
+        from dreamprint_gui.core.profile import default_profile
 
         self.set_profile(default_profile(), None)
 
@@ -400,7 +400,7 @@ class MainWindow(QMainWindow):
         eff = profile.with_settings(layer_thickness_mm=self._ensure_printer().layer_thickness_mm)
 
         def job(report, cancel):
-            from ..engine.gamut import get_tables
+            from dreamprint_gui.gamut import get_tables
 
             kwargs = {} if size is None else {"size": size}
             return get_tables(eff, progress=lambda f: report(float(f)), **kwargs)
@@ -443,7 +443,7 @@ class MainWindow(QMainWindow):
 
     # actions ----------------------------------------------------------------------------------
     def calibration_wizard(self, calibration_set: str | None = None) -> None:
-        from .wizard import CalibrationWizard
+        from dreamprint_gui.gui.wizard import CalibrationWizard
 
         wiz = CalibrationWizard(self, settings=self.settings, calibration_set=calibration_set)
         wiz.profileSaved.connect(lambda prof, path: self.set_profile(prof, path))
@@ -451,7 +451,7 @@ class MainWindow(QMainWindow):
         self._wizard = wiz
 
     def export_dialog(self) -> None:
-        from .export import ExportDialog
+        from dreamprint_gui.gui.export import ExportDialog
 
         if self.source is None or self.profile is None:
             QMessageBox.information(self, "DreamPrint", "Open a volume first.")
@@ -465,7 +465,7 @@ class MainWindow(QMainWindow):
         self._export = dlg
 
     def _show_log_path(self) -> None:
-        from .crash import log_file
+        from dreamprint_gui.gui.crash import log_file
 
         QMessageBox.information(self, "DreamPrint log", f"The log file is\n{log_file()}")
 
@@ -497,7 +497,7 @@ class MainWindow(QMainWindow):
             if k not in ("content", "sampling"):  # chosen per source: each file starts on auto
                 self.settings.set(f"preview/{k}", v)
         self.settings.sync()
-        from .workers import wait_all
+        from dreamprint_gui.gui.workers import wait_all
 
         for task in (self._tables_task, self._source_task):
             if task is not None:

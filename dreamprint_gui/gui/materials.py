@@ -16,7 +16,7 @@ __all__ = ["label_colours"]
 def label_colours(printer=None) -> tuple[np.ndarray, list[str]]:
     """(7, 3) uint8 colours of labels 0..6 as the slices encode them, and their names
     ("C (VeroCyan-V)", ..., "empty (no material)")."""
-    from ..engine.printer import material_legend
+    from dreamprint_gui.core.printer import material_legend
 
     legend = material_legend(printer)
     colours = np.array([rgb for _, _, rgb in legend], dtype=np.uint8)

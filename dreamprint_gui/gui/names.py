@@ -49,8 +49,8 @@ def printer_name(printer) -> str:
     if printer is None:
         return ""
     if isinstance(printer, str):
-        from ..engine.printer import builtin_printers, load_printer
-        from ..errors import DreamPrintError
+        from dreamprint_gui.core.errors import DreamPrintError
+        from dreamprint_gui.core.printer import builtin_printers, load_printer
 
         if printer not in builtin_printers():
             return printer

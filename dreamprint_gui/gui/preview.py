@@ -6,11 +6,11 @@ voxel's colour and density as the engine predicts them after table lookup and de
 (``gamut.predicted_appearance``), so washed-out or too-opaque regions show before printing; the
 footnote under them says how the preview grid relates to the print's. Controls: physical height,
 density scale, background (Clear resin or nothing), content intent (auto, fog or solid:
-``engine.content``, with what auto picked and why), voxel edges of voxel models (sharp or
+``job.content``, with what auto picked and why), voxel edges of voxel models (sharp or
 smooth), and a slice scrubber showing the halftoned material labels of any printer layer
 (``job.slab.halftone_layer``) at full resolution with zoom and pan (:mod:`.layer_view`), in the
 slice PNGs' own colour codes (:mod:`.materials`). The engine's pre-flight of the job
-(``engine.preflight``) runs after each preview; its warnings show in the Warnings box. Sampling,
+(``job.preflight``) runs after each preview; its warnings show in the Warnings box. Sampling,
 prediction, halftoning and the pre-flight run on worker threads (:mod:`.workers`); the page
 only draws. Problems go to the main window (signals :attr:`PreviewPage.failed` and
 :attr:`PreviewPage.problem`), which says each once. Its 3D view is created when there is first
@@ -40,11 +40,11 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from .layer_view import LayerView, MaterialLegend
-from .names import BACKGROUNDS, CONTENTS, SAMPLINGS, gui_wording, printer_name
-from .preview_data import PreviewData, compute_preview, job_context
-from .volume_view import ViewHost, add_rgba_volume
-from .workers import Task, run_task
+from dreamprint_gui.gui.layer_view import LayerView, MaterialLegend
+from dreamprint_gui.gui.names import BACKGROUNDS, CONTENTS, SAMPLINGS, gui_wording, printer_name
+from dreamprint_gui.gui.preview_data import PreviewData, compute_preview, job_context
+from dreamprint_gui.gui.volume_view import ViewHost, add_rgba_volume
+from dreamprint_gui.gui.workers import Task, run_task
 
 __all__ = ["PreviewPage"]
 
@@ -162,7 +162,7 @@ class PreviewPage(QWidget):
 
         side = QWidget()
         side_l = QVBoxLayout(side)
-        # Pre-flight warnings of the job these settings make (engine.preflight), shown here
+        # Pre-flight warnings of the job these settings make (job.preflight), shown here
         # only (hidden when there are none).
         self.warnings = QLabel("")
         self.warnings.setWordWrap(True)
@@ -253,7 +253,7 @@ class PreviewPage(QWidget):
     def _new_source(self, path: str) -> None:
         """A new source starts on auto content and its reader's own sampling; the voxel-edge
         choice is offered only for sources that have one (voxel models)."""
-        from ..io.volumes.registry import reader_options
+        from dreamprint_gui.io.volumes.registry import reader_options
 
         try:
             takes = reader_options(path)
@@ -305,7 +305,7 @@ class PreviewPage(QWidget):
     # computation ------------------------------------------------------------------------------
     def job_settings(self, output=None):
         """The job settings the export would use with the current controls."""
-        from .export import convert_settings
+        from dreamprint_gui.gui.export import convert_settings
 
         p = self.params()
         return convert_settings(self.source_path, self.profile_path, self.printer,
@@ -409,7 +409,7 @@ class PreviewPage(QWidget):
         ctx = self.ctx
 
         def job(report, cancel):
-            from ..engine.preflight import preflight
+            from dreamprint_gui.job.preflight import preflight
 
             return ctx, preflight(ctx, seed=ctx.settings.seed)  # as the export's
 
@@ -465,7 +465,7 @@ class PreviewPage(QWidget):
         ctx = self.ctx
 
         def job(report, cancel):
-            from ..job.slab import halftone_layer
+            from dreamprint_gui.job.slab import halftone_layer
 
             return ctx, layer, np.asarray(halftone_layer(ctx.settings, layer, context=ctx))
 
@@ -492,7 +492,7 @@ class PreviewPage(QWidget):
         ctx, layer, labels = result
         if ctx is not self.ctx or self._slice_pending:
             return  # a layer of earlier settings; the current one is on its way
-        from .materials import label_colours
+        from dreamprint_gui.gui.materials import label_colours
 
         colours, names = label_colours(self.printer)
         self.slice_labels = labels
@@ -529,7 +529,7 @@ def _box(size_mm):
 def _density_threshold() -> float | None:
     """The job pipeline's background threshold (1/mm), so the preview matches the export."""
     try:
-        from ..job import plan as pipeline
+        from dreamprint_gui.job import plan as pipeline
     except ImportError:
         return None
     return getattr(pipeline, "DEFAULT_DENSITY_THRESHOLD", None)

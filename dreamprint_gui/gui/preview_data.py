@@ -84,11 +84,11 @@ def job_context(settings, previous=None):
     """
     from dataclasses import replace
 
-    from ..engine.printer import EMPTY_LABEL
-    from ..engine.profile import INKS
-    from ..io.volumes import grid_for_source
-    from ..job.halftone import Halftoner
-    from ..job.plan import prepare_job
+    from dreamprint_gui.core.printer import EMPTY_LABEL
+    from dreamprint_gui.core.profile import INKS
+    from dreamprint_gui.io.volumes import grid_for_source
+    from dreamprint_gui.job.halftone import Halftoner
+    from dreamprint_gui.job.plan import prepare_job
 
     same = ("source", "profile", "printer", "halftone", "seed", "table_size", "objective",
             "source_options", "density_threshold", "content", "sampling")
@@ -121,10 +121,10 @@ def compute_preview(ctx, profile, *, n: int = PREVIEW_VOXELS,
         if cancel is not None and cancel.is_set():
             raise PreviewCancelled()
 
-    from ..engine import gamut
-    from ..engine.mixture import predict
-    from ..engine.profile import INKS
-    from ..io.volumes import grid_for_source
+    from dreamprint_gui import gamut
+    from dreamprint_gui.core.profile import INKS
+    from dreamprint_gui.io.volumes import grid_for_source
+    from dreamprint_gui.physics.mixture import predict
 
     s = ctx.settings
     source = ctx.source

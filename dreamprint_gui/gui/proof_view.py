@@ -28,7 +28,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from .workers import Task, generator_job, run_task
+from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
 __all__ = ["ProofPage", "to_pixmap"]
 
@@ -115,7 +115,7 @@ class ProofPage(QWidget):
 
     def proof_settings(self):
         """The proof settings from the job settings and this page's controls (or None)."""
-        from ..engine.proof.runner import ProofSettings
+        from dreamprint_gui.proof.runner import ProofSettings
 
         js = self._job_settings() if self._job_settings is not None else None
         if js is None or not getattr(js, "source", None):
@@ -134,7 +134,7 @@ class ProofPage(QWidget):
 
     def render(self, settings=None) -> None:
         """Start a render (of ``settings``, default :meth:`proof_settings`)."""
-        from ..engine.proof.runner import render_proof
+        from dreamprint_gui.proof.runner import render_proof
 
         s = settings if settings is not None else self.proof_settings()
         if s is None:
@@ -177,7 +177,7 @@ class ProofPage(QWidget):
         self._end("succeeded", "done")
 
     def _show_view(self, i: int) -> None:
-        from ..engine.proof.compare import de_heatmap, to_display
+        from dreamprint_gui.proof.compare import de_heatmap, to_display
 
         if not self.images or not 0 <= i < len(self.images):
             return

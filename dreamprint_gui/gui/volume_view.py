@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from PySide6.QtCore import QSize, Qt
 from PySide6.QtWidgets import QLabel, QStackedLayout, QWidget
 
-from .preview_data import opacity_per_voxel
+from dreamprint_gui.gui.preview_data import opacity_per_voxel
 
 __all__ = ["make_plotter", "ViewHost", "import_3d", "add_rgba_volume", "frame_statistics",
            "BACKGROUND"]

@@ -45,10 +45,10 @@ from PySide6.QtWidgets import (
     QWizardPage,
 )
 
-from ..engine.profile import INKS
-from ..errors import DreamPrintError
-from .settings import AppSettings
-from .workers import Task, abandonable, run_task
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.gui.settings import AppSettings
+from dreamprint_gui.gui.workers import Task, abandonable, run_task
 
 __all__ = ["CalibrationWizard", "MeasurementsPage", "ChartPage", "FitPage", "SavePage",
            "SPECTRA_FILTER"]
@@ -141,7 +141,7 @@ class _InkRow:
         if self.edits[q].text() != path:
             self.edits[q].setText(path)
         if path:
-            from ..io.spectra import read_spectra
+            from dreamprint_gui.io.spectra import read_spectra
 
             try:
                 ch.file = read_spectra(path, quantity="reflectance" if q == "R"
@@ -196,7 +196,7 @@ class _InkRow:
         self.error.setVisible(bool(errors))
 
     def measurement(self):
-        from ..engine.calibration_types import LayerMeasurement
+        from dreamprint_gui.core.calibration_types import LayerMeasurement
 
         R, T = self.channels["R"].values, self.channels["T"].values
         if R is None and T is None:
@@ -261,7 +261,7 @@ class MeasurementsPage(QWizardPage):
         self.set_measurements, self.set_path = None, None
         self.set_label.setStyleSheet("")
         if path:
-            from ..io.spectra.calibration_set import load_calibration_set
+            from dreamprint_gui.io.spectra.calibration_set import load_calibration_set
 
             try:
                 self.set_measurements = list(load_calibration_set(path, self.wavelengths()))
@@ -375,8 +375,8 @@ class ChartPage(QWizardPage):
             try:
                 if not (rp and sp):
                     raise DreamPrintError("give both the recipes and the reflectance file")
-                from ..io.recipes import read_recipes
-                from ..io.spectra import read_spectra
+                from dreamprint_gui.io.recipes import read_recipes
+                from dreamprint_gui.io.spectra import read_spectra
 
                 recipes = np.asarray(read_recipes(rp))
                 f = read_spectra(sp, quantity="reflectance")
@@ -504,7 +504,7 @@ class FitPage(QWizardPage):
         name = self.wiz.default_name
 
         def job(report, cancel):
-            from ..engine.calibration import calibrate_profile
+            from dreamprint_gui.physics.calibration import calibrate_profile
 
             if not measurements and recipes is None:
                 raise DreamPrintError("nothing to fit: choose ink measurements (first page) or "
@@ -518,7 +518,7 @@ class FitPage(QWizardPage):
                 profile, fits = base.with_settings(name=name), []
             chart_fit = None
             if recipes is not None:
-                from ..engine.chart_calibration import fit_chart
+                from dreamprint_gui.physics.chart_calibration import fit_chart
 
                 report(f"refitting the inks to the chart's {len(recipes)} patches with "
                        f"{folds}-fold cross-validation (this can take a minute):")
@@ -588,7 +588,7 @@ class FitPage(QWizardPage):
         self.fitted.emit(self.result)
 
     def _plot_fit(self, profile, measurements) -> None:
-        from ..engine.kubelka_munk import reflectance_transmittance
+        from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
         fig = self.fit_fig
         fig.clear()
@@ -683,7 +683,7 @@ class SavePage(QWizardPage):
             self.path_edit.setText(path)
 
     def validatePage(self) -> bool:  # noqa: N802 - Qt override
-        from ..engine.profile import save_profile
+        from dreamprint_gui.core.profile import save_profile
 
         fit = self.wiz.fit_page.result
         if fit is None:
@@ -716,7 +716,7 @@ class CalibrationWizard(QWizard):
     def __init__(self, parent: QWidget | None = None, settings: AppSettings | None = None,
                  base_profile=None, calibration_set: str | None = None) -> None:
         super().__init__(parent)
-        from ..engine.profile import default_profile
+        from dreamprint_gui.core.profile import default_profile
 
         self.settings = settings or AppSettings()
         self.base_profile = base_profile or getattr(parent, "profile", None) or default_profile()

@@ -24,7 +24,7 @@ from typing import Any
 
 from PySide6.QtCore import QObject, QThread, Signal
 
-from ..errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 
 __all__ = ["Task", "Cancelled", "run_task", "generator_job", "abandonable", "wait_all"]
 

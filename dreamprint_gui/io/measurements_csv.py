@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..engine.calibration_types import LayerMeasurement
-from ..engine.profile import INKS
-from ..engine.spectral_grid import resample
-from ..errors import DreamPrintError
-from .recipes import read_csv_rows
+from dreamprint_gui.core.calibration_types import LayerMeasurement
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.core.spectral_grid import resample
+from dreamprint_gui.io.recipes import read_csv_rows
 
 __all__ = ["read_measurements_csv", "write_measurements_csv"]
 

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..engine.profile import INKS
-from ..errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS
 
 __all__ = ["read_recipes", "read_spectra_rows", "read_csv_rows"]
 

@@ -1,6 +1,10 @@
 """The print job, one stage per module (paper Fig. 2 and section 4).
 
-plan -> sample -> label -> encode -> write -> check:
+plan -> sample -> label -> encode -> write -> check, with the job's material intent and its
+estimate before it runs:
+
+- :mod:`.content`: the material intent of a source (fog or solid, ``--content``).
+- :mod:`.preflight`: the job's estimate (grid, slices, disk, time, materials) and warnings.
 
 - :mod:`.plan`: :class:`~.plan.ConvertSettings`, :func:`~.plan.prepare_job` (source, printer
   grid, colour tables, halftoner, printer) and the slab plan.
@@ -10,12 +14,14 @@ plan -> sample -> label -> encode -> write -> check:
   :func:`~.slab.halftone_layer`.
 - :mod:`.sample_label`: the compiled kernels that sample a source and label its voxels
   (``layer_kernel``; the fused dense and leaf-grid paths ``dense_job`` and ``leaf_grid_job``;
-  ``vec16`` and ``vector_math``, the vectorised arithmetic they use).
+  the vectorised arithmetic they share with density alignment is
+  :mod:`dreamprint_gui.core.kernels`).
 - :mod:`.halftone`: the halftoning rule (blue-noise mask or hash) that picks each voxel's label.
 - :mod:`.encode`: labels -> PNG slices (``png_slices``, ``label_deflate``).
 - :mod:`.write`: the job folder (temporary folder, renamed into place when complete).
 - :mod:`.check`: ``dreamprint check``, reading a job folder back.
 
-Nothing here imports Qt. This package imports no submodule eagerly, so that
-``engine.gamut`` can use :mod:`.sample_label.vec16` without an import circle.
+Nothing here imports Qt. Imports :mod:`dreamprint_gui.gamut`, :mod:`dreamprint_gui.physics`,
+:mod:`dreamprint_gui.io` and :mod:`dreamprint_gui.core`; the proof, the command line and the GUI
+stand on it.
 """

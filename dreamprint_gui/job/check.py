@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DreamPrintError
-from .encode.png_slices import read_png_labels
-from .write import MANIFEST, SLICES, slice_name
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.job.encode.png_slices import read_png_labels
+from dreamprint_gui.job.write import MANIFEST, SLICES, slice_name
 
 __all__ = ["check_job", "Z_LIMIT"]
 

@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..engine.profile import INKS
+from dreamprint_gui.core.profile import INKS
 
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
            "pick_label", "label_rows", "fg_threshold", "scatter_labels", "scatter_counts",

@@ -20,11 +20,18 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.content import CONTENT_MODES, apply_content
-from ..engine.printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
-from ..engine.profile import INKS
-from ..errors import DreamPrintError
-from .halftone import HALFTONE_METHODS, Halftoner
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
+from dreamprint_gui.core.profile import INKS, load_profile
+from dreamprint_gui.gamut import get_tables
+from dreamprint_gui.gamut.alignment import kernel_table
+from dreamprint_gui.gamut.mapping import canonical_intent
+from dreamprint_gui.gamut.optimise import canonical_objective
+from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.io.volumes.registry import reader_options
+from dreamprint_gui.job.content import CONTENT_MODES, apply_content
+from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner
+from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "JobCancelled",
            "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings"]
@@ -57,7 +64,7 @@ class ConvertSettings:
     intent: str | None = None             # rendering intent (None: profile's/colorimetric)
     table_size: int = 100
     source_options: dict[str, Any] = field(default_factory=dict)
-    content: str = "auto"                 # "fog" | "solid" | "auto" (engine.content)
+    content: str = "auto"                 # "fog" | "solid" | "auto" (job.content)
     sampling: str | None = None           # None: the reader's default; "nearest" | "linear"
 
 
@@ -71,7 +78,7 @@ class ConvertProgress:
     elapsed_s: float
     eta_s: float | None
     message: str = ""
-    preflight: Any = None      # engine.preflight.Preflight, on the "preflight" stage
+    preflight: Any = None      # job.preflight.Preflight, on the "preflight" stage
 
 
 # ----------------------------------------------------------------------------- context
@@ -87,7 +94,6 @@ def source_options_for(spec: str, options: dict[str, Any], content: str = "fog",
     operator chose otherwise; ``sampling`` ("nearest" or "linear") goes to a reader that offers
     it (voxel models); every other reader samples trilinearly, so "nearest" is refused there.
     """
-    from ..io.volumes.registry import reader_options
 
     opts = dict(options)
     takes = reader_options(spec)
@@ -106,14 +112,11 @@ def source_options_for(spec: str, options: dict[str, Any], content: str = "fog",
 
 def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
                  sampling: str | None = None):
-    from ..io.volumes import open_source
 
     return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
 def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None):
-    from ..engine.gamut import get_tables
-    from ..engine.profile import load_profile
 
     profile = load_profile(profile_spec).with_settings(layer_thickness_mm=layer_mm)
     return profile, get_tables(profile, objective=objective, size=size, intent=intent)
@@ -133,7 +136,7 @@ class JobContext:
     profile_fingerprint: str = ""
     source: Any = None
     tables: Any = None
-    content: Any = None  # engine.content.ContentChoice (None: fog)
+    content: Any = None  # job.content.ContentChoice (None: fog)
     # the source file's size and mtime when the job was planned (:func:`_stamp`): part of a
     # worker's cache key, so a long-lived worker reopens a source edited since its last job
     source_stamp: tuple = ()
@@ -153,7 +156,6 @@ class JobContext:
         """The per-job arguments of :func:`.layer_kernel.slab_labels` (built once per process)."""
         args = self.__dict__.get("_kernel_args")
         if args is None:
-            from ..engine.gamut.alignment import kernel_table
 
             _, tables = self.resources()
             ht = self.halftoner
@@ -172,7 +174,6 @@ class JobContext:
                s.content, s.sampling, s.intent)
         with _WORKER_LOCK:
             if key not in _WORKER_CACHE:
-                from ..engine.content import apply_content
 
                 mode = self.content.mode if self.content is not None else "fog"
                 src = _open_source(s.source, s.source_options, s.content, s.sampling)
@@ -198,7 +199,6 @@ def _stamp(spec: str) -> tuple:
 
 
 def _clear_sigma(profile) -> float:
-    from ..engine.density import scalar_sigma
 
     return float(scalar_sigma(profile.K[INKS.index("Cl")], profile.S[INKS.index("Cl")],
                               profile.layer_thickness_mm, profile.density_t_max_mm,
@@ -207,15 +207,12 @@ def _clear_sigma(profile) -> float:
 
 def prepare_job(settings: ConvertSettings) -> JobContext:
     """Open the source, lay out the grid, refuse a job larger than the tray, build the tables."""
-    from ..io.volumes import grid_for_source
 
     s = settings
     if s.halftone not in HALFTONE_METHODS:
         raise DreamPrintError(f"unknown halftoning '{s.halftone}' "
                               f"(use {' or '.join(HALFTONE_METHODS)})")
     if s.objective is not None or s.intent is not None:
-        from ..engine.gamut.mapping import canonical_intent
-        from ..engine.gamut.optimise import canonical_objective
 
         try:
             canonical_objective(s.objective, "cielab")
@@ -254,26 +251,7 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
                      palette=printer.palette(), profile_name=profile.name,
                      profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
                      content=content, source_stamp=_stamp(s.source))
-    _load_kernels(ctx)
     return ctx
-
-def _load_kernels(ctx: JobContext) -> None:
-    """Load the compiled kernels (numba's on-disk cache, ~0.5 s on a first call) now, while
-    preparing, rather than in the first slab: the preparation is reported as such and the
-    conversion's progress and speed are those of the conversion. The source's sampler is
-    loaded by sampling one voxel (a grid of 1 x 1 x 1 at the job grid's corner)."""
-    from .encode.png_slices import encode_labels_pngs
-    from .slab import _oriented, _slab_into
-
-    # The same path (fused or general), sampler, types and arrays as the job's slabs.
-    one_voxel = replace(ctx.grid, shape_xyz=(1, 1, 1))
-    labels = np.empty((1, 1, 1), np.uint8)
-    _slab_into(ctx, one_voxel, 0, 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
-               np.zeros(4))
-    encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
-    if _scheduler_kind(ctx.settings) != "distributed":
-        import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s
-
 
 # ----------------------------------------------------------------------------- scheduling
 def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:

@@ -26,9 +26,10 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.profile import INKS
-from ..errors import DreamPrintError
-from .plan import (
+from dreamprint_gui import __version__
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.job.plan import (
     ConvertProgress,
     ConvertSettings,
     JobCancelled,
@@ -37,7 +38,10 @@ from .plan import (
     _slabs,
     prepare_job,
 )
-from .slab import run_slab
+from dreamprint_gui.job.preflight import preflight as estimate
+from dreamprint_gui.job.preflight import record_rate
+from dreamprint_gui.job.slab import load_kernels, run_slab
+from dreamprint_gui.job.write import JobWriter, check_target, slice_name
 
 __all__ = ["run_conversion"]
 
@@ -153,7 +157,6 @@ def _sha256(path: str) -> str | None:
 
 
 def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> dict[str, Any]:
-    from .. import __version__
 
     s = ctx.settings
     nx, ny, nz = ctx.shape_xyz
@@ -203,7 +206,6 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
 
 
 def _slice(z: int, nz: int) -> str:
-    from .write import slice_name
 
     return slice_name(z, nz)
 
@@ -220,7 +222,6 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     with stage "preflight"), a :class:`.preflight.Preflight` already made is used as is, False
     skips it; the manifest records its estimate and warnings (``preflight``).
     """
-    from .write import JobWriter, check_target
 
     started = time.perf_counter()
     if settings.output is None:
@@ -228,10 +229,10 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     check_target(settings.output, settings.overwrite)  # before any work
     yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
     ctx = context if context is not None else prepare_job(settings)
+    load_kernels(ctx)  # now, so that the first slab's speed is the conversion's
     pf = None
     t_pf = 0.0
     if preflight is True:
-        from ..engine.preflight import preflight as estimate
 
         t0 = time.perf_counter()
         pf = estimate(ctx, seed=settings.seed)
@@ -326,7 +327,6 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
             manifest["preflight"] = pf.to_json()
             manifest["warnings"] = [w.to_json() for w in pf.warnings]
         writer.commit(manifest)
-    from ..engine.preflight import record_rate
 
     record_rate(nx * ny * nz, timings["convert"])
     yield ConvertProgress("done", nz, nz, nx * ny * nz, nx * ny * nz,

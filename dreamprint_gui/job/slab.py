@@ -21,15 +21,28 @@ from __future__ import annotations
 import os
 import threading
 import time
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from ..errors import DreamPrintError
-from .plan import ConvertSettings, JobCancelled, JobContext, prepare_job
-from .sample_label.dense_job import dense_slab_labels, window_slab_labels
-from .sample_label.layer_kernel import slab_labels
-from .sample_label.leaf_grid_job import leaf_grid_colour_slab_labels, leaf_grid_slab_labels
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import SlabBuffers
+from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
+from dreamprint_gui.job.plan import (
+    ConvertSettings,
+    JobCancelled,
+    JobContext,
+    _scheduler_kind,
+    prepare_job,
+)
+from dreamprint_gui.job.sample_label.dense_job import dense_slab_labels, window_slab_labels
+from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
+from dreamprint_gui.job.sample_label.leaf_grid_job import (
+    leaf_grid_colour_slab_labels,
+    leaf_grid_slab_labels,
+)
+from dreamprint_gui.job.write import slice_name
 
 __all__ = ["run_slab", "halftone_layer"]
 
@@ -114,7 +127,6 @@ class _Workspace(threading.local):
     """A worker thread's slab buffers, reused from slab to slab (see ``SlabBuffers``)."""
 
     def __init__(self) -> None:
-        from ..io.volumes.base import SlabBuffers
 
         self.samples = SlabBuffers()
         self.labels = np.empty((0, 0, 0), np.uint8)
@@ -131,8 +143,6 @@ _WORKSPACE = _Workspace()
 def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
              cancel: threading.Event | None = None) -> dict[str, Any]:
     """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings."""
-    from .encode.png_slices import encode_labels_pngs
-    from .write import slice_name
 
     nx, ny, nz = ctx.shape_xyz
     if _cancelled(slices_dir, cancel):
@@ -176,3 +186,18 @@ def halftone_layer(settings: ConvertSettings, layer: int,
     _slab_into(ctx, ctx.grid, layer, layer + 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
                np.zeros(4))
     return labels[0]
+
+
+def load_kernels(ctx: JobContext) -> None:
+    """Load the compiled kernels (numba's on-disk cache, ~0.5 s on a first call) now, while
+    preparing, rather than in the first slab: the preparation is reported as such and the
+    conversion's progress and speed are those of the conversion. The source's sampler is
+    loaded by sampling one voxel (a grid of 1 x 1 x 1 at the job grid's corner)."""
+    # The same path (fused or general), sampler, types and arrays as the job's slabs.
+    one_voxel = replace(ctx.grid, shape_xyz=(1, 1, 1))
+    labels = np.empty((1, 1, 1), np.uint8)
+    _slab_into(ctx, one_voxel, 0, 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
+               np.zeros(4))
+    encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+    if _scheduler_kind(ctx.settings) != "distributed":
+        import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s

@@ -27,7 +27,7 @@ import uuid
 from pathlib import Path
 from typing import Any
 
-from ..errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 
 __all__ = ["JobWriter", "check_target", "slice_name", "disk_error", "MANIFEST", "SLICES",
            "CANCEL_MARKER"]

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.engine.kubelka_munk import mix, reflectance_infinite, reflectance_transmittance
-from dreamprint_gui.engine.profile import INKS, default_profile, load_profile
+from dreamprint_gui.core.profile import INKS, default_profile, load_profile
+from dreamprint_gui.physics.kubelka_munk import mix, reflectance_infinite, reflectance_transmittance
 
 
 def run(capsys, *args):
@@ -141,8 +141,8 @@ def test_calibrate_from_instrument_calibration_set(tmp_path, capsys):
 
 
 def test_optically_thick_reflectance_joins_the_fit():
-    from dreamprint_gui.engine.calibration import fit_ink
-    from dreamprint_gui.engine.calibration_types import LayerMeasurement
+    from dreamprint_gui.core.calibration_types import LayerMeasurement
+    from dreamprint_gui.physics.calibration import fit_ink
 
     K, S = np.full(36, 2.0), np.full(36, 5.0)
     layers = [LayerMeasurement("W", 0.2, None, reflectance_transmittance(K, S, 0.2)[1], "t"),

@@ -6,8 +6,8 @@ import threading
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.engine.proof.runner import ProofSettings, run_proof
 from dreamprint_gui.job.plan import JobCancelled
+from dreamprint_gui.proof.runner import ProofSettings, run_proof
 
 TINY = ["--height-mm", "3", "--views", "1", "--resolution", "16", "--spp", "2", "--cells", "12",
         "--table-size", "17"]

@@ -6,13 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dreamprint_gui.engine.gamut import get_tables
-from dreamprint_gui.engine.mixture import predict
-from dreamprint_gui.engine.printer import PRINTER_NAMES, load_printer
-from dreamprint_gui.engine.profile import INKS, default_profile
+from dreamprint_gui.core.printer import PRINTER_NAMES, load_printer
+from dreamprint_gui.core.profile import INKS, default_profile
+from dreamprint_gui.gamut import get_tables
 from dreamprint_gui.gui.export import ExportDialog
 from dreamprint_gui.gui.gamut_view import GamutPage
 from dreamprint_gui.gui.volume_view import frame_statistics
+from dreamprint_gui.physics.mixture import predict
 
 
 @pytest.fixture(scope="module")
@@ -211,7 +211,7 @@ def test_gamut_page_fits_1280x800(qtbot, gl_display, job_profile, table_size):
     is on screen."""
     from PySide6.QtCore import QPoint, QRect
 
-    from dreamprint_gui.engine.gamut.evaluation import IN_GAMUT_DE2000
+    from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
     from dreamprint_gui.gui.main_window import MainWindow
 
     w = MainWindow(table_size=table_size)
@@ -266,8 +266,8 @@ def test_gamut_page_fits_1280x800(qtbot, gl_display, job_profile, table_size):
 def test_export_shows_the_preflight_before_export(qtbot, tmp_path, table_size):
     """Before Export the dialog shows the engine's estimate of the job these settings make
     (grid, slices, disk, time, materials) and its warnings; it follows the settings."""
-    from dreamprint_gui.engine.preflight import preflight
     from dreamprint_gui.gui.names import gui_wording
+    from dreamprint_gui.job.preflight import preflight
 
     dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
     qtbot.waitUntil(lambda: dlg.preflight is not None, timeout=120000)

@@ -10,8 +10,8 @@ import pytest
 from PySide6.QtCore import QMimeData, QPointF, Qt, QUrl
 from PySide6.QtGui import QDropEvent
 
-from dreamprint_gui.engine.printer import EMPTY_LABEL
-from dreamprint_gui.engine.profile import default_profile
+from dreamprint_gui.core.printer import EMPTY_LABEL
+from dreamprint_gui.core.profile import default_profile
 from dreamprint_gui.gui.main_window import MainWindow, classify_path
 from dreamprint_gui.gui.materials import label_colours
 from dreamprint_gui.gui.volume_view import frame_statistics
@@ -215,7 +215,7 @@ def test_opening_a_file_shows_the_preview(qtbot, shared_data):
 def test_voxel_model_previews_solid_with_its_intent(qtbot, gl_display, table_size, shared_data):
     """A .vox opens on auto content: the engine picks solid, the preview says so, the source
     is sampled nearest (sharp) and its occupied voxels are opaque; fog is one choice away."""
-    from dreamprint_gui.engine.content import SOLID_SIGMA
+    from dreamprint_gui.job.content import SOLID_SIGMA
 
     w = MainWindow(table_size=table_size)
     w.interactive = False

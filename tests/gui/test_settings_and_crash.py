@@ -58,6 +58,6 @@ def test_exception_hook_logs_and_reports(qtbot, monkeypatch):
 
 
 def test_short_message_of_dreamprint_error():
-    from dreamprint_gui.errors import DreamPrintError
+    from dreamprint_gui.core.errors import DreamPrintError
 
     assert short_message(DreamPrintError("bad header", "a.vdb", 3)) == "a.vdb:3: bad header"

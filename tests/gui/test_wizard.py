@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from PySide6.QtWidgets import QWizard
 
-from dreamprint_gui.engine.kubelka_munk import reflectance_transmittance
-from dreamprint_gui.engine.profile import INKS, default_profile, load_profile
+from dreamprint_gui.core.profile import INKS, default_profile, load_profile
 from dreamprint_gui.gui.wizard import CalibrationWizard
 from dreamprint_gui.io.spectra import Sample, write_spectra
+from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
 THICKNESS_MM = 0.4
 
@@ -149,7 +149,7 @@ def test_cary_file_with_mixed_y_modes(qtbot, tmp_path):
 def test_chart_only_calibration(qtbot, tmp_path, truth):
     """A mixture chart alone: the refit brings the prediction closer to the measured patches
     than the base profile, and the cross-validated dE2000 is reported and plotted."""
-    from dreamprint_gui.engine.mixture import predict
+    from dreamprint_gui.physics.mixture import predict
 
     rng = np.random.default_rng(3)
     recipes = rng.dirichlet(np.ones(5) * 0.6, size=14)
@@ -218,8 +218,8 @@ def test_stopping_a_running_chart_fit(qtbot, tmp_path, truth, monkeypatch):
     """Stop returns the page at once; the abandoned fit's result, when it comes, is dropped."""
     import threading
 
-    from dreamprint_gui.engine import chart_calibration
-    from dreamprint_gui.engine.mixture import predict
+    from dreamprint_gui.physics import chart_calibration
+    from dreamprint_gui.physics.mixture import predict
 
     started, release, returned = threading.Event(), threading.Event(), threading.Event()
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
 

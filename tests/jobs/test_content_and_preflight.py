@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.engine.content import SOLID_SIGMA, choose_content, is_binary_mask
-from dreamprint_gui.engine.preflight import preflight
-from dreamprint_gui.engine.printer import EMPTY_LABEL, load_printer, material_legend
-from dreamprint_gui.engine.profile import INKS
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.printer import EMPTY_LABEL, load_printer, material_legend
+from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.job.content import SOLID_SIGMA, choose_content, is_binary_mask
 from dreamprint_gui.job.encode.png_slices import read_png_labels
 from dreamprint_gui.job.plan import ConvertSettings, prepare_job
+from dreamprint_gui.job.preflight import preflight
 from dreamprint_gui.job.run import run_conversion
 from dreamprint_gui.job.slab import halftone_layer
 
@@ -184,10 +184,10 @@ def test_solid_source_marks_occupied_voxels(tmp_path):
 
 
 def test_alignment_reads_solid_as_undiluted_colour():
-    from dreamprint_gui.engine.gamut import get_tables
-    from dreamprint_gui.engine.gamut.alignment import align_density, lookup_and_align_into
-    from dreamprint_gui.engine.gamut.tables import lookup
-    from dreamprint_gui.engine.profile import default_profile
+    from dreamprint_gui.core.profile import default_profile
+    from dreamprint_gui.gamut import get_tables
+    from dreamprint_gui.gamut.alignment import align_density, lookup_and_align_into
+    from dreamprint_gui.gamut.tables import lookup
 
     prof = default_profile()
     tables = get_tables(prof, size=TABLE)
@@ -300,7 +300,7 @@ def test_solid_forced_on_a_dense_fog_takes_the_solid_rule():
 
 
 def test_time_estimate_wording():
-    from dreamprint_gui.engine.preflight import _about_seconds
+    from dreamprint_gui.job.preflight import _about_seconds
 
     assert _about_seconds(0.4) == "under 1 s"  # not "about under 1 s"
     assert _about_seconds(12.2) == "about 12 s"

@@ -3,8 +3,8 @@ inner source's plan (which samples the inner density) to the job."""
 
 import numpy as np
 
-from dreamprint_gui.engine.content import SOLID_SIGMA, apply_content
 from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.job.content import SOLID_SIGMA, apply_content
 
 
 def test_solid_demo_takes_the_general_path_and_is_binary():

@@ -3,8 +3,8 @@ volume (more than two values)"."""
 
 import numpy as np
 
-from dreamprint_gui.engine.content import choose_content
 from dreamprint_gui.io.volumes import open_source
+from dreamprint_gui.job.content import choose_content
 
 
 def test_ingp_raw_volume_is_a_radiance_field(tmp_path):

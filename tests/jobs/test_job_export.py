@@ -9,7 +9,7 @@ import textwrap
 
 import pytest
 
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.job.write import JobWriter, check_target, slice_name
 
 

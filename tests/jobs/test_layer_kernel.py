@@ -4,7 +4,7 @@ by ``Halftoner.layer_into`` (labels, counts, intended concentrations and clamp r
 import numpy as np
 import pytest
 
-from dreamprint_gui.engine.gamut import lookup_and_align_into
+from dreamprint_gui.gamut import lookup_and_align_into
 from dreamprint_gui.job.plan import ConvertSettings, prepare_job
 from dreamprint_gui.job.slab import _labels_of_slab
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.job.check import check_job
 from dreamprint_gui.job.encode.png_slices import read_png_labels
 from dreamprint_gui.job.plan import ConvertSettings, JobCancelled, prepare_job

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from dreamprint_gui.engine.printer import load_printer
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.printer import load_printer
 from dreamprint_gui.job.encode.label_deflate import label_zlib
 from dreamprint_gui.job.encode.png_slices import encode_labels_png, read_png_labels
 

@@ -1,7 +1,7 @@
 """Wording of the pre-flight summary: time estimates read as English, the clamping hint is
 honest about being estimated from a sample."""
 
-from dreamprint_gui.engine.preflight import Preflight, PreflightWarning, _warnings
+from dreamprint_gui.job.preflight import Preflight, PreflightWarning, _warnings
 
 
 def _pf(seconds: float, clamped: int = 0, safe: float | None = None) -> Preflight:

@@ -2,13 +2,13 @@
 
 import pytest
 
-from dreamprint_gui.engine.printer import (
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.printer import (
     EMPTY_LABEL,
     builtin_printers,
     check_tray,
     load_printer,
 )
-from dreamprint_gui.errors import DreamPrintError
 
 
 def test_builtins_have_the_documented_grids():
@@ -34,7 +34,7 @@ def _write(tmp_path, text):
 
 
 def test_user_file_round_trip_and_edit(tmp_path):
-    from dreamprint_gui.resources import resource_path
+    from dreamprint_gui.core.resources import resource_path
 
     text = resource_path("printers", "j850-paper.toml").read_text()
     text = text.replace('name = "j850-paper"', 'name = "mine"').replace(
@@ -52,7 +52,7 @@ def test_user_file_round_trip_and_edit(tmp_path):
     (("tray_mm = [490.0", "tray_mm = [490.0,,"), "invalid TOML"),
 ])
 def test_bad_files_name_the_problem(tmp_path, change, fragment):
-    from dreamprint_gui.resources import resource_path
+    from dreamprint_gui.core.resources import resource_path
 
     text = resource_path("printers", "j850-paper.toml").read_text().replace(*change)
     f = _write(tmp_path, text)

@@ -19,12 +19,12 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 
-from ...errors import DreamPrintError
-from .cgats import write_cgats
-from .detect import detect_format, read_spectra
-from .jcampdx import write_jcamp
-from .model import QUANTITIES, Sample, SpectraFile
-from .plain_csv import write_csv_columns, write_csv_rows
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.spectra.cgats import write_cgats
+from dreamprint_gui.io.spectra.detect import detect_format, read_spectra
+from dreamprint_gui.io.spectra.jcampdx import write_jcamp
+from dreamprint_gui.io.spectra.model import QUANTITIES, Sample, SpectraFile
+from dreamprint_gui.io.spectra.plain_csv import write_csv_columns, write_csv_rows
 
 __all__ = ["read_spectra", "detect_format", "write_spectra", "Sample", "SpectraFile",
            "QUANTITIES", "WRITERS"]

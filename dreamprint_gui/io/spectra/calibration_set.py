@@ -1,7 +1,7 @@
 """The calibration set: a small TOML file naming, per ink layer, its measured R and T.
 
 Defines :func:`load_calibration_set` (TOML -> list of
-:class:`~dreamprint_gui.engine.calibration_types.LayerMeasurement` on the profile's grid) and
+:class:`~dreamprint_gui.core.calibration_types.LayerMeasurement` on the profile's grid) and
 :data:`SET_FORMAT`. The layout is documented, with an example, in ``docs/calibration-set.md``;
 an example set built from generated files is in ``tests/data/calibration_set/``.
 
@@ -33,11 +33,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...engine.calibration_types import LayerMeasurement
-from ...engine.profile import INKS
-from ...errors import DreamPrintError
-from .detect import read_spectra
-from .model import SpectraFile, check_sample
+from dreamprint_gui.core.calibration_types import LayerMeasurement
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.io.spectra.detect import read_spectra
+from dreamprint_gui.io.spectra.model import SpectraFile, check_sample
 
 __all__ = ["load_calibration_set", "SET_FORMAT"]
 

@@ -26,8 +26,8 @@ import re
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .model import RawSample, RawSpectra, is_number, parse_float
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.spectra.model import RawSample, RawSpectra, is_number, parse_float
 
 __all__ = ["looks_like_cary", "read_cary"]
 

@@ -47,8 +47,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .model import RawSample, RawSpectra, Sample, parse_float
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.spectra.model import RawSample, RawSpectra, Sample, parse_float
 
 __all__ = ["read_cgats", "write_cgats", "looks_like_cgats"]
 

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import os
 
-from ...errors import DreamPrintError
-from .cary import looks_like_cary, read_cary
-from .cgats import looks_like_cgats, read_cgats
-from .jcampdx import looks_like_jcamp, read_jcamp
-from .model import RawSpectra, SpectraFile, ValueScale, finish
-from .plain_csv import looks_like_cgats_csv, read_cgats_csv, read_plain_csv
-from .spdx import looks_like_spdx, read_spdx
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.spectra.cary import looks_like_cary, read_cary
+from dreamprint_gui.io.spectra.cgats import looks_like_cgats, read_cgats
+from dreamprint_gui.io.spectra.jcampdx import looks_like_jcamp, read_jcamp
+from dreamprint_gui.io.spectra.model import RawSpectra, SpectraFile, ValueScale, finish
+from dreamprint_gui.io.spectra.plain_csv import looks_like_cgats_csv, read_cgats_csv, read_plain_csv
+from dreamprint_gui.io.spectra.spdx import looks_like_spdx, read_spdx
 
 __all__ = ["read_text", "detect_format", "read_spectra", "MAX_BYTES", "FORMATS"]
 

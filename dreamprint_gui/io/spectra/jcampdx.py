@@ -39,8 +39,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .model import RawSample, RawSpectra, Sample
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.spectra.model import RawSample, RawSpectra, Sample
 
 __all__ = ["looks_like_jcamp", "read_jcamp", "write_jcamp", "decode_asdf_line",
            "encode_difdup"]

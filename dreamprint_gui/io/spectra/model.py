@@ -15,7 +15,7 @@ Defines:
   nanometres, descending or duplicated wavelengths; then the impossible-value checks
   (negative, above 100 %, non-finite), each reported with sample name and wavelength.
 
-Resampling onto a profile grid goes through :func:`dreamprint_gui.engine.spectral_grid.resample`
+Resampling onto a profile grid goes through :func:`dreamprint_gui.core.spectral_grid.resample`
 (colour-science interpolators, CIE 167:2005), which refuses uncovered ranges unless a stated
 extrapolation is allowed.
 """
@@ -29,7 +29,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ...errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.spectral_grid import is_uniform, resample
 
 __all__ = ["QUANTITIES", "FRACTION_QUANTITIES", "Sample", "SpectraFile", "RawSample",
            "RawSpectra", "finish", "check_sample", "ValueScale"]
@@ -73,7 +74,6 @@ class Sample:
 
     @property
     def uniform(self) -> bool:
-        from ...engine.spectral_grid import is_uniform
 
         return is_uniform(self.wavelengths_nm, rtol=1e-3)
 
@@ -84,7 +84,6 @@ class Sample:
         Raises :class:`DreamPrintError` naming the covered range when ``target_nm`` reaches
         more than ``extrapolate_nm`` beyond the data.
         """
-        from ...engine.spectral_grid import resample
 
         try:
             return resample(self.wavelengths_nm, self.values, target_nm,

@@ -30,8 +30,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .model import QUANTITIES, RawSample, RawSpectra, Sample, is_number, parse_float
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.spectra.cgats import names_cgats_fields, read_cgats_rows
+from dreamprint_gui.io.spectra.model import (
+    QUANTITIES,
+    RawSample,
+    RawSpectra,
+    Sample,
+    is_number,
+    parse_float,
+)
 
 __all__ = ["read_plain_csv", "write_csv_columns", "write_csv_rows", "looks_like_cgats_csv",
            "read_cgats_csv"]
@@ -281,7 +289,6 @@ def _content(text: str) -> tuple[list[str], list[tuple[int, str]]]:
 
 def looks_like_cgats_csv(text_head: str) -> bool:
     """A delimited table whose header names CGATS fields (``SAMPLE_ID,SPECTRAL_NM380,...``)."""
-    from .cgats import names_cgats_fields
 
     _, content = _content(text_head)
     if not content:
@@ -301,7 +308,6 @@ def read_cgats_csv(text: str, path: str) -> RawSpectra:
     unless the file says otherwise), columns that are not spectral are ignored. A ``#
     quantity: ...`` / ``# scale: ...`` comment states what CGATS's default would not.
     """
-    from .cgats import read_cgats_rows
 
     comments, content = _content(text)
     delim = _delimiter([ln for _, ln in content[:20]]) or ","

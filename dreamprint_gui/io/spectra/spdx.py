@@ -20,8 +20,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .model import RawSample, RawSpectra
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.spectra.model import RawSample, RawSpectra
 
 __all__ = ["looks_like_spdx", "read_spdx"]
 

@@ -8,7 +8,7 @@ One module per format: :mod:`.openvdb`, :mod:`.nanovdb`, :mod:`.vtkimage`, :mod:
 in :mod:`.dense`.
 """
 
-from .base import PrintGrid, VolumeSource, grid_for_source
-from .registry import open_source
+from dreamprint_gui.io.volumes.base import PrintGrid, VolumeSource, grid_for_source
+from dreamprint_gui.io.volumes.registry import open_source
 
 __all__ = ["PrintGrid", "VolumeSource", "grid_for_source", "open_source"]

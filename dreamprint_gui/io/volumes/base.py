@@ -30,8 +30,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .srgb_encode import encode_inplace
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.srgb_encode import encode_inplace
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
            "linear_to_srgb_inplace",
@@ -192,17 +192,3 @@ class VolumeSource(Protocol):
     # ``job.sample_label.leaf_grid_job``) up to its layer arrays, or None. A source offers it
     # so that a print job samples and labels one layer at a time (DenseSource, VdbSource,
     # NanoVdbSource).
-
-
-_REGISTRY_NAMES = ("FORMATS", "sniff_format", "inspect_file", "inspect_source", "open_source",
-                   "reader_options", "OPTION_ALIASES")
-
-
-def __getattr__(name: str):
-    """The registry's names (moved to :mod:`.registry`), imported on first use so that this
-    module, which every reader imports, imports no reader."""
-    if name in _REGISTRY_NAMES:
-        from . import registry
-
-        return getattr(registry, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -17,10 +17,10 @@ import functools
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .dense import DenseSource, DenseVolume
-from .sampling import rasterise_gaussians
-from .splats import GaussianCloud
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume
+from dreamprint_gui.io.volumes.sampling import rasterise_gaussians
+from dreamprint_gui.io.volumes.splats import GaussianCloud
 
 __all__ = ["DemoCloud", "demo_gaussians"]
 

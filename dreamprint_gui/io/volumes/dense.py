@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...errors import DreamPrintError
-from .base import (
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import (
     PrintGrid,
     SlabBuffers,
     check_slab,
@@ -20,7 +20,12 @@ from .base import (
     uniform_rgb,
     voxel_centres,
 )
-from .dense_sampler import DenseLayers, rows_with_data, sample_dense, sample_dense_density
+from dreamprint_gui.io.volumes.dense_sampler import (
+    DenseLayers,
+    rows_with_data,
+    sample_dense,
+    sample_dense_density,
+)
 
 __all__ = ["DenseVolume", "DenseSource", "DenseLayers", "colormap_lut", "check_claimed_size",
            "apply_window", "bounds_list"]

@@ -53,10 +53,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab, linear_to_srgb, voxel_centres
-from .dense import MAX_EXPANSION, bounds_list
-from .ingp_kernels import ACT, sample_rows
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import (
+    PrintGrid,
+    SlabBuffers,
+    check_slab,
+    linear_to_srgb,
+    voxel_centres,
+)
+from dreamprint_gui.io.volumes.dense import MAX_EXPANSION, bounds_list
+from dreamprint_gui.io.volumes.ingp_kernels import ACT, sample_rows
 
 __all__ = ["read_snapshot", "parse_snapshot", "IngpModel", "IngpSource", "open_path",
            "sh_encode", "snapshot_info", "VIEW_DIRECTIONS"]

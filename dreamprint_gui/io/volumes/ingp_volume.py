@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .dense import DenseSource, DenseVolume, check_claimed_size
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume, check_claimed_size
 
 __all__ = ["open_path", "is_ingp_volume_dir", "is_ingp_volume_name", "read_png_slices",
            "read_raw_volume", "PNG_NAME", "RAW_NAME", "PNG_DEPTH"]

@@ -28,7 +28,8 @@ import threading
 import numpy as np
 from numba import njit
 
-from .dense_sampler import rows_with_data
+from dreamprint_gui.io.volumes.base import voxel_centres
+from dreamprint_gui.io.volumes.dense_sampler import rows_with_data
 
 __all__ = ["MAX_DENSE_VOXELS", "densify", "index_axis", "leaf_grid_layer", "leaf_grid_values",
            "LeafGridPlan"]
@@ -189,7 +190,6 @@ class LeafGridPlan:
 
     def args(self, grid, z0: int, z1: int, density_scale: float, uniform) -> tuple | None:
         """The plan of layers z0..z1-1 of ``grid`` (a :class:`.base.PrintGrid`), or None."""
-        from .base import voxel_centres
 
         d = self.dense()
         if d is None:

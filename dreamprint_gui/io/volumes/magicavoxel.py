@@ -23,8 +23,9 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab, voxel_centres
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
+from dreamprint_gui.io.volumes.dense import DenseVolume
 
 __all__ = ["read_vox", "VoxSource", "open_path", "DEFAULT_PALETTE"]
 
@@ -238,7 +239,6 @@ class VoxSource:
         self.solid_density = float(solid_density)
         self._dense = None
         if sampling == "linear":
-            from .dense import DenseVolume
 
             filled = (self.index > 0).astype(np.float32)
             data = np.empty(self.index.shape + (4,), np.float32)

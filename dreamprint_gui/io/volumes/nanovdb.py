@@ -25,11 +25,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab, uniform_rgb, voxel_centres
-from .dense import MAX_EXPANSION
-from .leaf_grid import LeafGridPlan
-from .sampling import SparseBlocks, sample_sparse
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import (
+    PrintGrid,
+    SlabBuffers,
+    check_slab,
+    uniform_rgb,
+    voxel_centres,
+)
+from dreamprint_gui.io.volumes.dense import MAX_EXPANSION
+from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan
+from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
 
 __all__ = ["read_nvdb", "inspect_path", "open_path", "NanoVdbSource"]
 

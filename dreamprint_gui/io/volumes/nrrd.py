@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .dense import check_claimed_size
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.dense import check_claimed_size
 
 __all__ = ["read_nrrd"]
 

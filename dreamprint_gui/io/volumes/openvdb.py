@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .base import (
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import (
     PrintGrid,
     SlabBuffers,
     check_slab,
@@ -46,8 +46,8 @@ from .base import (
     uniform_rgb,
     voxel_centres,
 )
-from .leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
-from .sampling import SparseBlocks, sample_sparse
+from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
+from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
 
 __all__ = ["VdbSource", "open_path", "inspect_path", "helper_command", "check_header"]
 

@@ -31,8 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .dense import DenseSource, DenseVolume, bounds_list, check_claimed_size
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.dense import (
+    DenseSource,
+    DenseVolume,
+    bounds_list,
+    check_claimed_size,
+)
 
 __all__ = ["open_path", "read_npz_grid", "read_exr_stack", "NPZ_LAYOUT"]
 

@@ -11,8 +11,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ...errors import DreamPrintError
-from .base import VolumeSource
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import VolumeSource
+from dreamprint_gui.io.volumes.demo import DemoCloud
+from dreamprint_gui.io.volumes.ingp_volume import is_ingp_volume_dir, is_ingp_volume_name
+from dreamprint_gui.io.volumes.splat_formats import is_sog
 
 __all__ = ["FORMATS", "sniff_format", "inspect_file", "inspect_source", "open_source",
            "reader_options", "OPTION_ALIASES"]
@@ -35,11 +38,9 @@ FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
 def sniff_format(path: Path) -> str:
     """Format key of ``path`` from its extension, falling back to its first bytes."""
     if path.is_dir() or path.name == "meta.json":
-        from .splat_formats import is_sog
 
         if is_sog(path):
             return "splats"
-    from .ingp_volume import is_ingp_volume_dir, is_ingp_volume_name
 
     if path.is_dir():
         return "ingp-volume" if is_ingp_volume_dir(path) else "radiance-exr"
@@ -115,7 +116,6 @@ def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
     import importlib
 
     if str(path_or_name) == "demo":
-        from .demo import DemoCloud
         return DemoCloud(**_checked_options(DemoCloud, options, "demo"))
     path = Path(path_or_name)
     if not path.exists():
@@ -131,7 +131,6 @@ def reader_options(path_or_name: str | os.PathLike) -> set[str]:
     import inspect
 
     if str(path_or_name) == "demo":
-        from .demo import DemoCloud
         func = DemoCloud
     else:
         path = Path(path_or_name)

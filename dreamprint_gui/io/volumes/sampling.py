@@ -15,8 +15,13 @@ import math
 import numpy as np
 from numba import njit
 
-from ...errors import DreamPrintError
-from .dense_sampler import axis_map, rows_with_data, sample_dense, sample_dense_density
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.dense_sampler import (
+    axis_map,
+    rows_with_data,
+    sample_dense,
+    sample_dense_density,
+)
 
 __all__ = ["axis_map", "sample_dense", "sample_dense_density", "rows_with_data", "SparseBlocks",
            "sample_sparse", "rasterise_gaussians"]

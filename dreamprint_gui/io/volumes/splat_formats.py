@@ -1,11 +1,12 @@
 """Gaussian-splat exchange formats other than PLY: antimatter15 ``.splat``, GaussianSplats3D
 ``.ksplat``, Niantic SPZ (v1-v4) and PlayCanvas SOG.
 
-Defines :func:`read_splat`, :func:`read_ksplat`, :func:`read_spz` and :func:`read_sog`, each
-returning the activated Gaussians (means, axis sigmas, unit quaternions w-x-y-z, opacity,
-colour) that :class:`~.splats.GaussianCloud` samples exactly as it samples an INRIA PLY: colour
-``0.5 + C0 * f_dc`` (what 8-bit colour bytes store directly), opacity after the sigmoid (what
-8-bit alpha bytes store directly), covariance ``R diag(sigma^2) R^T``.
+Defines :func:`decode_splat`, :func:`decode_ksplat`, :func:`decode_spz` and
+:func:`decode_sog`, each returning the activated Gaussians (:class:`Gaussians`: means, axis
+sigmas, unit quaternions w-x-y-z, opacity, colour) that :class:`~.splats.GaussianCloud` samples
+exactly as it samples an INRIA PLY: colour ``0.5 + C0 * f_dc`` (what 8-bit colour bytes store
+directly), opacity after the sigmoid (what 8-bit alpha bytes store directly), covariance
+``R diag(sigma^2) R^T``.
 
 Layouts, from each format's published source:
 
@@ -54,10 +55,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 
 __all__ = ["Gaussians", "decode_splat", "decode_ksplat", "decode_spz", "decode_sog",
-           "read_splat", "read_ksplat", "read_spz", "read_sog", "is_sog"]
+           "is_sog"]
 
 SH_C0 = 0.28209479177387814
 _SPLAT_RECORD = np.dtype([("pos", "<f4", 3), ("scale", "<f4", 3), ("rgba", "u1", 4),
@@ -78,13 +79,6 @@ class Gaussians(NamedTuple):
     format: str
 
 
-def _cloud(path: Path, g: Gaussians):
-    from .splats import GaussianCloud
-
-    return GaussianCloud(str(path), g.format, g.means, g.sigmas, g.quats, g.opacity, g.rgb,
-                         g.sh_degree)
-
-
 def _from_gsply(data, fmt: str) -> Gaussians:
     shn = getattr(data, "shN", None)
     n = len(data.means)
@@ -100,11 +94,6 @@ def _sigmoid(x):
 
 
 # ------------------------------------------------------------------------------ antimatter15
-
-def read_splat(path: Path):
-    """An antimatter15 ``.splat`` file as a GaussianCloud."""
-    return _cloud(path, decode_splat(path))
-
 
 def decode_splat(path: Path) -> Gaussians:
     """An antimatter15 ``.splat`` file (32-byte records, no header)."""
@@ -130,11 +119,6 @@ _KSPLAT_SECTION_HEADER = 1024
 _KSPLAT_LEVELS = {0: (12, 12, 16, 4, 4, 1), 1: (6, 6, 8, 4, 2, 32767),
                   2: (6, 6, 8, 4, 1, 32767)}
 _SH_COMPONENTS = {0: 0, 1: 9, 2: 24, 3: 45}
-
-
-def read_ksplat(path: Path):
-    """A ``.ksplat`` file as a GaussianCloud."""
-    return _cloud(path, decode_ksplat(path))
 
 
 def decode_ksplat(path: Path) -> Gaussians:
@@ -364,11 +348,6 @@ def decode_spz(path: Path) -> Gaussians:
                      f"splats (SPZ v{version})")
 
 
-def read_spz(path: Path):
-    """An SPZ file as a GaussianCloud."""
-    return _cloud(path, decode_spz(path))
-
-
 # --------------------------------------------------------------------------------------- SOG
 
 def is_sog(path: Path) -> bool:
@@ -382,11 +361,6 @@ def is_sog(path: Path) -> bool:
             return False
         return b'"means"' in head and b'"quats"' in head
     return path.suffix.lower() == ".sog"
-
-
-def read_sog(path: Path):
-    """A SOG scene as a GaussianCloud."""
-    return _cloud(path, decode_sog(path))
 
 
 def decode_sog(path: Path) -> Gaussians:

@@ -38,7 +38,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .base import SlabBuffers
+from dreamprint_gui.io.volumes.base import SlabBuffers
 
 __all__ = ["rasterise_splats", "TILE_X", "TILE_Y", "TILE_Z"]
 

@@ -34,10 +34,11 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab, voxel_centres
-from .dense import bounds_list
-from .splat_raster import rasterise_splats
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes import splat_formats
+from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
+from dreamprint_gui.io.volumes.dense import bounds_list
+from dreamprint_gui.io.volumes.splat_raster import rasterise_splats
 
 __all__ = ["GaussianCloud", "peak_density", "open_path", "SH_C0"]
 
@@ -271,24 +272,28 @@ def _read_inria(path: Path) -> GaussianCloud:
                          _sigmoid(np.asarray(v["opacity"], float)), rgb, degree)
 
 
+def _cloud(path: Path, g: splat_formats.Gaussians) -> GaussianCloud:
+    """The source of Gaussians decoded by :mod:`.splat_formats`."""
+    return GaussianCloud(str(path), g.format, g.means, g.sigmas, g.quats, g.opacity, g.rgb,
+                         g.sh_degree)
+
+
 def open_path(path: Path, fmt: str = "splats") -> GaussianCloud:
     """Open a splat file: PLY (INRIA, nerfstudio's export, SuperSplat compressed), SPZ,
     antimatter15 ``.splat``, ``.ksplat`` or PlayCanvas SOG (see :mod:`.splat_formats`)."""
     import gsply
 
-    from . import splat_formats
-
     if splat_formats.is_sog(path):
-        return splat_formats.read_sog(path)
+        return _cloud(path, splat_formats.decode_sog(path))
     suffix = path.suffix.lower()
     if suffix == ".splat":
-        return splat_formats.read_splat(path)
+        return _cloud(path, splat_formats.decode_splat(path))
     if suffix == ".ksplat":
-        return splat_formats.read_ksplat(path)
+        return _cloud(path, splat_formats.decode_ksplat(path))
     with open(path, "rb") as f:
         magic = f.read(3)
     if suffix == ".spz" or magic != b"ply":
-        return splat_formats.read_spz(path)
+        return _cloud(path, splat_formats.decode_spz(path))
     _fmt, elements = _ply_header(path)
     if any(name == "chunk" for name, _, _ in elements):
         try:

@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...job.sample_label.vector_math import exp2_f64, log2_f64
+from dreamprint_gui.core.kernels.vector_math import exp2_f64, log2_f64
 
 __all__ = ["srgb_encode32", "encode_where", "clip_where", "encode_inplace"]
 

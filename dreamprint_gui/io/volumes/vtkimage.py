@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .base import PrintGrid, SlabBuffers, check_slab
-from .dense import (
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
+from dreamprint_gui.io.volumes.dense import (
     DenseLayers,
     DenseSource,
     DenseVolume,
@@ -32,6 +32,7 @@ from .dense import (
     check_claimed_size,
     colormap_lut,
 )
+from dreamprint_gui.io.volumes.nrrd import read_nrrd
 
 __all__ = ["open_path", "ImageSource"]
 
@@ -82,7 +83,6 @@ def _precheck(path: Path) -> None:
 def _read(path: Path):
     import pyvista as pv
     if path.suffix.lower() in (".nrrd", ".nhdr"):
-        from .nrrd import read_nrrd
 
         values, origin, spacing = read_nrrd(path)
         img = pv.ImageData(dimensions=values.shape[2::-1], spacing=spacing, origin=origin)
@@ -234,7 +234,6 @@ class ImageSource:
 
 def _outside_axes(volume: DenseVolume, grid: PrintGrid, z0: int, z1: int):
     """Per axis (z, y, x), which printer voxel centres lie outside the image's bounds."""
-    from .base import voxel_centres
 
     masks = []
     for a, rng in ((2, (z0, z1)), (1, (0, None)), (0, (0, None))):

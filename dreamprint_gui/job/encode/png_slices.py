@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import DreamPrintError
-from .label_deflate import label_zlib_stack
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.job.encode.label_deflate import label_zlib_stack
 
 __all__ = ["encode_labels_png", "encode_labels_pngs", "png_bytes", "read_png_labels"]
 

@@ -17,10 +17,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...io.volumes.dense import _window_kernel
-from ...io.volumes.dense_sampler import COLOUR, COLOUR_WHERE_DENSE, DENSITY, RAW, dense_layer
-from ...io.volumes.srgb_encode import encode_where
-from .layer_kernel import layer_labels
+from dreamprint_gui.io.volumes.dense import _window_kernel
+from dreamprint_gui.io.volumes.dense_sampler import (
+    COLOUR,
+    COLOUR_WHERE_DENSE,
+    DENSITY,
+    RAW,
+    dense_layer,
+)
+from dreamprint_gui.io.volumes.srgb_encode import encode_where
+from dreamprint_gui.job.sample_label.layer_kernel import layer_labels
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]
 

@@ -26,15 +26,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...engine.gamut.alignment import (
+from dreamprint_gui.core.kernels.vec16 import accumulate8
+from dreamprint_gui.gamut.alignment import (
     ROW_BLOCK,
     ROW_STRIDE,
     block_buffers,
     lookup_align_block,
     stage_voxel,
 )
-from ..halftone import fg_threshold, label_rows, mask_columns, scatter_counts
-from .vec16 import accumulate8
+from dreamprint_gui.job.halftone import fg_threshold, label_rows, mask_columns, scatter_counts
 
 __all__ = ["layer_labels", "slab_labels", "block_conc_sums"]
 

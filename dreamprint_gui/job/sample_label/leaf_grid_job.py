@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from numba import njit
 
-from ...io.volumes.leaf_grid import leaf_grid_layer, leaf_grid_values
-from ...io.volumes.srgb_encode import clip_where, encode_where
-from .layer_kernel import layer_labels
+from dreamprint_gui.io.volumes.leaf_grid import leaf_grid_layer, leaf_grid_values
+from dreamprint_gui.io.volumes.srgb_encode import clip_where, encode_where
+from dreamprint_gui.job.sample_label.layer_kernel import layer_labels
 
 __all__ = ["leaf_grid_slab_labels", "leaf_grid_colour_slab_labels"]
 

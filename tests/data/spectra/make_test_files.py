@@ -221,8 +221,8 @@ def jcamp_encode(ints: np.ndarray, wl: np.ndarray, per_line: int) -> list[str]:
 
 def make_calibration_set() -> None:
     """Six inks at two thicknesses, R in CGATS (fractions), T in Cary %T and one JCAMP file."""
-    from dreamprint_gui.engine.kubelka_munk import reflectance_transmittance
-    from dreamprint_gui.engine.profile import INKS, default_profile
+    from dreamprint_gui.core.profile import INKS, default_profile
+    from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
     prof = default_profile()
     grid = prof.wavelengths_nm

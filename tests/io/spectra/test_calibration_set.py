@@ -5,10 +5,10 @@ import shutil
 import numpy as np
 import pytest
 
-from dreamprint_gui.engine.kubelka_munk import reflectance_transmittance
-from dreamprint_gui.engine.profile import INKS, default_profile
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS, default_profile
 from dreamprint_gui.io.spectra.calibration_set import load_calibration_set
+from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
 
 def test_example_set_matches_forward_model(calibration_set_dir):

@@ -4,7 +4,7 @@ another exception."""
 import numpy as np
 import pytest
 
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.spectra import read_spectra
 
 GENERATED = ["cary_multi_percentT.csv", "cgats_argyll.ti3", "cgats_i1profiler_percent.txt",

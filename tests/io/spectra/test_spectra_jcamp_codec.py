@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.spectra import read_spectra
 from dreamprint_gui.io.spectra.jcampdx import decode_asdf_line, encode_difdup
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.spectra import Sample, read_spectra, write_spectra
 
 WL = np.arange(380.0, 781.0, 5.0)

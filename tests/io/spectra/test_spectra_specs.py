@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.engine.kubelka_munk import reflectance_transmittance
-from dreamprint_gui.engine.profile import default_profile
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import default_profile
 from dreamprint_gui.io.spectra import read_spectra
 from dreamprint_gui.io.spectra.calibration_set import load_calibration_set
+from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
 WL = np.arange(380.0, 731.0, 10.0)
 

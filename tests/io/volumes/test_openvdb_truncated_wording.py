@@ -3,7 +3,7 @@
 
 import pytest
 
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import open_source
 
 

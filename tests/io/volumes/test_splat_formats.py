@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import open_source
 from dreamprint_gui.io.volumes.splat_formats import (
     decode_ksplat,

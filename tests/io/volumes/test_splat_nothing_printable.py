@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import open_source
 
 # antimatter15 .splat record (the format's 32 bytes): centre f32 x3, linear scale f32 x3,

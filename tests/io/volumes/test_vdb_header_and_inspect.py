@@ -7,7 +7,7 @@ import struct
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import open_source
 from dreamprint_gui.io.volumes.openvdb import check_header
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.base import linear_to_srgb, voxel_centres
 

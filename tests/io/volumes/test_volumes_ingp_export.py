@@ -9,7 +9,7 @@ import pytest
 from PIL import Image
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 
 

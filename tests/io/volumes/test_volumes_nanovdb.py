@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 
 CONVERT = shutil.which("nanovdb_convert")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
-from dreamprint_gui.errors import DreamPrintError
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.base import voxel_centres
 from dreamprint_gui.io.volumes.splats import SH_C0, GaussianCloud

@@ -1,1 +1,0 @@
-"""Physics, calibration, tables, halftoning and pipelines. Never imports Qt."""

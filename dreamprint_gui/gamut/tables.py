@@ -1,0 +1,362 @@
+"""The RGB -> concentration table (section 4.2), its per-node density data, and its disk cache.
+
+Defines
+-------
+- :class:`ColourTables`: the n^3 table over the encoded sRGB cube. Per node (``packed``, float32,
+  fields in :data:`FIELDS`): the C, M, Y, K, W concentrations minimising the objective (eq. 10),
+  the scalar density sigma (eq. 9, 1/mm) of that mixture, sigma of the mixture diluted with Clear
+  to rho = 1/2 ... 1/32 (for density alignment without KM at run time), and sigma with 10 % of
+  the node's K/W grey X (eqs. 11-13). Plus the 100-entry brightness table ``rho_K`` (eq. 11),
+  dE2000 of every node's reproduction to its target (the out-of-gamut report), and metadata.
+- :func:`build_tables`, :func:`get_tables` (cached in the platformdirs user cache, keyed by the
+  profile's fingerprint, objective, rendering intent, size and :data:`TABLE_VERSION`),
+  :func:`lookup` (trilinear).
+- :func:`mixture_sigma`: the exact scalar sigma of six-ink mixtures, as ``predict`` computes it.
+- :func:`resolve_choice`: the objective and intent to use (explicit choice, else the profile's
+  ``table`` settings, else the defaults).
+
+Objectives (:mod:`.optimise`): ``srgb`` (paper eq. 10), ``cielab``, ``de2000``. Default:
+:data:`DEFAULT_OBJECTIVE`, the one with the smallest lookup-minus-lattice-best dE2000 (see
+docs/physics.md and ``dreamprint gamut --json``). Rendering intents (:mod:`.mapping`):
+``colorimetric`` (the printable colour of minimum objective) and ``perceptual`` (SGCK
+compression into the gamut first). Each node's dE2000 to its *source* colour is kept in
+``dE2000``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numba as nb
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dreamprint_gui.core.profile import INKS, InkProfile
+from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_lab
+from dreamprint_gui.gamut.grey import brightness_table, grey_concentrations, rho_k_for
+from dreamprint_gui.gamut.mapping import DEFAULT_INTENT, PerceptualMap, canonical_intent
+from dreamprint_gui.gamut.optimise import (
+    canonical_objective,
+    resample,
+    solve_grid,
+    srgb_to_xyz,
+    targets_for,
+)
+from dreamprint_gui.physics.colorimetry import delta_E2000
+from dreamprint_gui.physics.density import scalar_sigma
+from dreamprint_gui.physics.kubelka_munk import mix
+
+__all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "mixture_sigma",
+           "DEFAULT_OBJECTIVE", "DEFAULT_INTENT", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS",
+           "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice"]
+
+TABLE_VERSION = 3
+DEFAULT_OBJECTIVE = "de2000"
+DEFAULT_SIZE = 100
+# Eq. 13 with the paper's "upper limit of rho+ 0.1" read as a bound on the grey: 1 - rho+ <= 0.1.
+GREY_MAX = 0.1
+# Clear dilutions rho (eq. 12) at which each node's sigma is tabulated; rho = 1 is the node itself.
+CLEAR_KNOTS = tuple(2.0 ** -k for k in range(6))
+F_CONC = slice(0, N_COLOUR_INKS)
+F_SIGMA = N_COLOUR_INKS  # rho = 1
+F_KNOTS = slice(N_COLOUR_INKS, N_COLOUR_INKS + len(CLEAR_KNOTS))  # rho = 1, 1/2, ..., 1/32
+F_GREY = N_COLOUR_INKS + len(CLEAR_KNOTS)  # 10 % grey
+N_FIELDS = F_GREY + 1
+FIELDS = ("C", "M", "Y", "K", "W") + tuple(f"sigma_rho_{r:g}" for r in CLEAR_KNOTS) + (
+    "sigma_grey_10pc",)
+_CHUNK_NODES = 8192
+
+
+@dataclass
+class ColourTables:
+    """Everything lookup and density alignment need, per node of the n^3 sRGB grid."""
+
+    size: int
+    objective: str
+    packed: NDArray[np.float32]  # (n, n, n, N_FIELDS), see FIELDS
+    dE2000: NDArray[np.float32]  # (n, n, n) reproduction vs target
+    brightness_rho_k: NDArray[np.float64]  # (100,) eq. 11
+    sigma_clear: float  # scalar sigma of pure Clear, the floor of alignment
+    profile_fingerprint: str
+    colour_thickness_mm: float
+    layer_thickness_mm: float
+    build_seconds: float  # the build's time (of an earlier run when ``cached``)
+    cached: bool = False  # loaded from the disk cache
+    load_seconds: float = 0.0  # the time to load it from the cache (0 when built)
+    meta: dict = field(default_factory=dict)
+    intent: str = DEFAULT_INTENT
+
+    @property
+    def conc(self) -> NDArray[np.float32]:
+        """(n, n, n, 5) C, M, Y, K, W on the simplex."""
+        return self.packed[..., F_CONC]
+
+    @property
+    def sigma(self) -> NDArray[np.float32]:
+        """(n, n, n) scalar density (1/mm) of each node's mixture."""
+        return self.packed[..., F_SIGMA]
+
+    @property
+    def clear_sigma_knots(self) -> NDArray[np.float32]:
+        return self.packed[..., F_KNOTS]
+
+    @property
+    def grey_sigma(self) -> NDArray[np.float32]:
+        return self.packed[..., F_GREY]
+
+
+def cache_dir() -> Path:
+    from platformdirs import user_cache_path
+
+    return user_cache_path("dreamprint") / "gamut"
+
+
+def resolve_choice(profile: InkProfile, objective: str | None = None,
+                   intent: str | None = None) -> tuple[str, str]:
+    """(objective, intent): the explicit choice, else the profile's, else the default."""
+    settings = getattr(profile, "table_settings", None) or {}
+    obj = canonical_objective(objective if objective is not None else settings.get("objective"),
+                              DEFAULT_OBJECTIVE)
+    return obj, canonical_intent(intent if intent is not None else settings.get("intent"))
+
+
+def _cache_key(profile: InkProfile, objective: str, size: int, intent: str) -> str:
+    d = {"profile": profile.fingerprint(), "objective": objective, "size": size,
+         "intent": intent, "version": TABLE_VERSION, "knots": CLEAR_KNOTS,
+         "grey_max": GREY_MAX}
+    return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:20]
+
+
+def mixture_sigma(profile: InkProfile, conc6: ArrayLike) -> NDArray[np.float64]:
+    """Scalar sigma (eq. 9, 1/mm) of six-ink mixtures, exactly as ``mixture.predict``."""
+    c = np.asarray(conc6, dtype=np.float64)
+    # 2-D matrix product (a batched 3-D one is ~10 times slower in numpy)
+    K, S = mix(c.reshape(-1, c.shape[-1]), profile.K, profile.S)
+    sigma = scalar_sigma(K, S, profile.layer_thickness_mm, profile.density_t_max_mm,
+                         profile.density_samples)
+    return np.asarray(sigma).reshape(c.shape[:-1])
+
+
+def _with_clear(conc5: NDArray) -> NDArray[np.float64]:
+    return np.concatenate([conc5, np.zeros(conc5.shape[:-1] + (1,))], axis=-1)
+
+
+def _clear() -> NDArray[np.float64]:
+    c = np.zeros(len(INKS))
+    c[INKS.index("Cl")] = 1.0
+    return c
+
+
+def _node_sigmas(profile: InkProfile, conc5: NDArray, rgb: NDArray,
+                 rho_k_table: NDArray) -> NDArray[np.float64]:
+    """(N, 2) sigmas of the nodes' mixtures and of them with 10 % grey X (eqs. 11, 13)."""
+    c6 = _with_clear(conc5)
+    grey = grey_concentrations(rho_k_for(rho_k_table, rgb.mean(axis=-1)))
+    greyed = (1.0 - GREY_MAX) * c6 + GREY_MAX * grey
+    return mixture_sigma(profile, np.stack([c6, greyed], axis=1))
+
+
+def _clear_ratios(profile: InkProfile, conc5: NDArray) -> NDArray[np.float64]:
+    """(N, len(CLEAR_KNOTS) - 1): sigma(rho C* + (1 - rho) Cl) / sigma(C*) (eq. 12), rho < 1."""
+    c6 = _with_clear(conc5)
+    rho = np.asarray(CLEAR_KNOTS)[None, :, None]
+    s = mixture_sigma(profile, rho * c6[:, None, :] + (1.0 - rho) * _clear())
+    return s[:, 1:] / s[:, :1]
+
+
+def build_tables(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
+                 progress: Callable[[float], None] | None = None,
+                 intent: str | None = None) -> ColourTables:
+    """Solve the n^3 table (not cached; see :func:`get_tables`)."""
+    objective, intent = resolve_choice(profile, objective, intent)
+    if size < 2:
+        raise ValueError("the table needs at least 2 nodes per axis")
+    t0 = time.perf_counter()
+    model = forward_model(profile)
+    target_xyz = None
+    if intent == "perceptual":
+
+        pmap = PerceptualMap.for_model(model)
+
+        def target_xyz(rgb):
+            return pmap.map_xyz(srgb_to_xyz(model, rgb))
+
+    conc, _ = solve_grid(model, objective, size, progress, target_xyz)
+    a = np.linspace(0.0, 1.0, size)
+    rgb = np.stack(np.meshgrid(a, a, a, indexing="ij"), axis=-1).reshape(-1, 3)
+    flat = conc.reshape(-1, N_COLOUR_INKS)
+    dE = delta_E2000(mixtures_lab(model, flat), targets_for(model, "lab", rgb))
+    rho_k_table = brightness_table(profile)
+    packed = np.empty((flat.shape[0], N_FIELDS), dtype=np.float32)
+    packed[:, F_CONC] = flat
+    # The Clear-dilution curves are smooth in the colour: tabulated on a half-resolution grid
+    # as ratios to the node's own sigma and resampled (a 7x saving of KM density fits).
+    n_half = max(2, (size + 1) // 2)
+    half = resample(conc, n_half).reshape(-1, N_COLOUR_INKS)
+    ratios = np.empty((half.shape[0], len(CLEAR_KNOTS) - 1))
+
+    def chunk(start: int) -> None:
+        stop = min(start + _CHUNK_NODES, flat.shape[0])
+        two = _node_sigmas(profile, flat[start:stop], rgb[start:stop], rho_k_table)
+        packed[start:stop, F_SIGMA] = two[:, 0]
+        packed[start:stop, F_GREY] = two[:, 1]
+
+    def chunk_half(start: int) -> None:
+        stop = min(start + _CHUNK_NODES, half.shape[0])
+        ratios[start:stop] = _clear_ratios(profile, half[start:stop])
+
+    jobs = [(chunk, s) for s in range(0, flat.shape[0], _CHUNK_NODES)]
+    jobs += [(chunk_half, s) for s in range(0, half.shape[0], _CHUNK_NODES)]
+    # The density kernels release the GIL: threads use all cores.
+    with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
+        for i, _ in enumerate(pool.map(lambda job: job[0](job[1]), jobs)):
+            if progress is not None:
+                progress(0.8 + 0.2 * (i + 1) / len(jobs))
+    ratios = resample(ratios.reshape(n_half, n_half, n_half, -1), size).reshape(-1, ratios.shape[1])
+    packed[:, F_SIGMA + 1:F_GREY] = packed[:, F_SIGMA:F_SIGMA + 1] * ratios
+    clear6 = _clear()
+    return ColourTables(
+        size=size, objective=objective, intent=intent,
+        packed=packed.reshape(size, size, size, N_FIELDS),
+        dE2000=dE.reshape(size, size, size).astype(np.float32), brightness_rho_k=rho_k_table,
+        sigma_clear=float(mixture_sigma(profile, clear6)),
+        profile_fingerprint=profile.fingerprint(),
+        colour_thickness_mm=float(profile.colour_thickness_mm),
+        layer_thickness_mm=float(profile.layer_thickness_mm),
+        build_seconds=time.perf_counter() - t0)
+
+
+def _save(tables: ColourTables, path: Path) -> None:
+    meta = {"size": tables.size, "objective": tables.objective, "intent": tables.intent,
+            "sigma_clear": tables.sigma_clear, "profile_fingerprint": tables.profile_fingerprint,
+            "colour_thickness_mm": None if math.isinf(tables.colour_thickness_mm)
+            else tables.colour_thickness_mm,
+            "layer_thickness_mm": tables.layer_thickness_mm,
+            "build_seconds": tables.build_seconds, "version": TABLE_VERSION,
+            "fields": list(FIELDS)}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.npz")
+    try:
+        np.savez(tmp, packed=tables.packed, dE2000=tables.dE2000,
+                 brightness_rho_k=tables.brightness_rho_k, meta=json.dumps(meta))
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _load(path: Path, key_profile: str, objective: str, size: int,
+          intent: str) -> ColourTables | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            meta = json.loads(str(z["meta"]))
+            packed = z["packed"]
+            dE = z["dE2000"]
+            bt = z["brightness_rho_k"]
+    except (OSError, ValueError, KeyError, json.JSONDecodeError):
+        return None  # missing or damaged: rebuild
+    if (meta.get("version") != TABLE_VERSION or meta.get("profile_fingerprint") != key_profile
+            or meta.get("objective") != objective or meta.get("size") != size
+            or meta.get("intent") != intent
+            or packed.shape != (size, size, size, N_FIELDS) or not np.all(np.isfinite(packed))):
+        return None
+    ct = meta["colour_thickness_mm"]
+    return ColourTables(size=size, objective=objective, intent=intent, packed=packed, dE2000=dE,
+                        brightness_rho_k=bt, sigma_clear=float(meta["sigma_clear"]),
+                        profile_fingerprint=key_profile,
+                        colour_thickness_mm=math.inf if ct is None else float(ct),
+                        layer_thickness_mm=float(meta["layer_thickness_mm"]),
+                        build_seconds=float(meta["build_seconds"]), cached=True)
+
+
+def get_tables(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
+               progress: Callable[[float], None] | None = None,
+               cache: str | os.PathLike | None = None,
+               intent: str | None = None) -> ColourTables:
+    """The tables for ``profile``: from the disk cache when present, else built and cached.
+
+    ``objective``/``intent`` default to the profile's ``table`` settings, else to
+    :data:`DEFAULT_OBJECTIVE` / ``colorimetric``. ``cache`` overrides the folder (default:
+    :func:`cache_dir`). ``progress(fraction)`` is called during a build.
+    """
+    objective, intent = resolve_choice(profile, objective, intent)
+    folder = Path(cache) if cache is not None else cache_dir()
+    path = folder / f"tables_{_cache_key(profile, objective, size, intent)}.npz"
+    fp = profile.fingerprint()
+    t0 = time.perf_counter()
+    found = _load(path, fp, objective, size, intent)
+    if found is not None:
+        found.load_seconds = time.perf_counter() - t0
+        if progress is not None:
+            progress(1.0)
+        return found
+    tables = build_tables(profile, objective, size, progress, intent)
+    try:
+        _save(tables, path)
+    except OSError:
+        pass  # a read-only cache only costs a rebuild next time
+    return tables
+
+
+@nb.njit(cache=True, nogil=True)
+def trilinear_fields(packed, n, r, g, b, nf, out):
+    """Trilinear interpolation of the first ``nf`` fields of ``packed`` at sRGB (r, g, b)."""
+    m = n - 1
+    coords = (min(max(r, 0.0), 1.0) * m, min(max(g, 0.0), 1.0) * m,
+              min(max(b, 0.0), 1.0) * m)
+    i0 = min(int(coords[0]), m - 1)
+    j0 = min(int(coords[1]), m - 1)
+    k0 = min(int(coords[2]), m - 1)
+    fx = coords[0] - i0
+    fy = coords[1] - j0
+    fz = coords[2] - k0
+    for f in range(nf):
+        out[f] = 0.0
+    for di in range(2):
+        wx = fx if di else 1.0 - fx
+        for dj in range(2):
+            wy = fy if dj else 1.0 - fy
+            for dk in range(2):
+                w = wx * wy * (fz if dk else 1.0 - fz)
+                for f in range(nf):
+                    out[f] += w * packed[i0 + di, j0 + dj, k0 + dk, f]
+
+
+@nb.njit(cache=True, nogil=True)
+def _lookup_many(packed, rgb, out):
+    n = packed.shape[0]
+    tmp = np.empty(N_COLOUR_INKS)
+    for v in range(rgb.shape[0]):
+        r = rgb[v, 0]
+        g = rgb[v, 1]
+        b = rgb[v, 2]
+        # NaN -> 0 so that a damaged voxel cannot index outside the table
+        trilinear_fields(packed, n, r if r == r else 0.0, g if g == g else 0.0,
+                         b if b == b else 0.0, N_COLOUR_INKS, tmp)
+        tot = 0.0
+        for f in range(N_COLOUR_INKS):
+            tot += tmp[f]
+        for f in range(N_COLOUR_INKS):  # the table is float32: renormalise to the simplex
+            out[v, f] = tmp[f] / tot
+
+
+def lookup(tables: ColourTables, rgb: ArrayLike) -> NDArray[np.float64]:
+    """C, M, Y, K, W (..., 5) for encoded sRGB in [0, 1] (..., 3), trilinear in the table.
+
+    Colours outside [0, 1] are clamped to the cube. Interpolation of simplex points stays on the
+    simplex.
+    """
+    rgb = np.asarray(rgb, dtype=np.float64)
+    flat = np.ascontiguousarray(rgb.reshape(-1, 3))
+    out = np.empty((flat.shape[0], N_COLOUR_INKS))
+    _lookup_many(tables.packed, flat, out)
+    return out.reshape(rgb.shape[:-1] + (N_COLOUR_INKS,))
+
+

@@ -1,0 +1,411 @@
+"""Pre-flight of a print job: what it will be, estimated before any slice is written.
+
+Defines
+-------
+- :class:`Preflight`: grid, slices, disk and time estimates, material fractions, warnings;
+  :meth:`Preflight.summary_lines` (the terminal / dialog text) and :meth:`Preflight.to_json`.
+- :class:`PreflightWarning`: a code, a one-line message and its numbers.
+- :func:`preflight`: the estimate for a job (a :class:`...job.plan.JobContext`, a
+  :class:`...job.plan.ConvertSettings`, or a source spec with the job's options).
+- :func:`record_rate` / :func:`measured_rate`: this machine's conversion rate, kept from the
+  jobs it has run (the user cache folder, ``rates.json``).
+
+How each figure is estimated
+----------------------------
+- Material fractions, clamping and gamut: a *systematic* sample of about ``sample_voxels``
+  voxels (a lattice with strides ``sx, sy, sz`` over the job's grid and a seeded random offset
+  per axis), sampled by the job's own source (its content rule included) and labelled by the
+  job's own compiled kernel (:func:`.layer_kernel.slab_labels`: background threshold, lookup,
+  density alignment, halftone). The fractions' standard error is at most
+  ``sqrt(p (1 - p) / n)``, 0.11 % at n = 200 000.
+- Clamping: the kernel's count of sampled voxels clamped high (denser than the inks reach with
+  10 % grey, eq. 13) scaled to the job; the density scale that avoids it is the job's scale times
+  the smallest ``reachable / target`` over the sampled voxels (the reachable density
+  interpolated in the table like the kernel does).
+- Out of gamut: the tables' per-node dE2000 (reproduction vs target) at the nearest node of
+  each sampled printed voxel's colour; out of gamut means dE2000 > ``IN_GAMUT_DE2000``.
+- Disk: up to 16 full layers (evenly spaced, at most ~8e6 voxels) labelled and PNG-encoded
+  exactly as the job does; their mean size times the layer count, plus the manifest.
+- Time of the conversion (after the preparation): voxels / rate. The rate is the median
+  ``voxels_per_second`` of the last jobs this machine ran (:func:`measured_rate`), or, before
+  any, :data:`BENCHMARK_RATE` (docs/print-jobs.md, ``benchmarks/bench_convert.py``); the
+  summary says which.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
+from dreamprint_gui.gamut.tables import F_GREY, F_SIGMA
+from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
+from dreamprint_gui.job.plan import ConvertSettings, JobContext, prepare_job
+from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
+from dreamprint_gui.job.slab import _oriented, _slab_into
+
+__all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measured_rate",
+           "BENCHMARK_RATE", "MOSTLY_CLEAR", "OUT_OF_GAMUT_WARN"]
+
+# Voxels per second of `convert` on the 2-core development machine at 1e8 voxels (the demo,
+# benchmarks/bench_convert.py): 27.7-45.6 Mvox/s in docs/speed-history.md's rounds; the lower.
+BENCHMARK_RATE = 27.7e6
+MOSTLY_CLEAR = 0.98      # warn when Clear + empty exceed this fraction of the job
+OUT_OF_GAMUT_WARN = 0.01  # warn when more than this fraction of printed voxels is out of gamut
+_LABELS = (*INKS, "empty")
+_RATES_KEPT = 9
+
+
+@dataclass(frozen=True)
+class PreflightWarning:
+    """``code`` (mostly-clear, clamped, out-of-gamut), a one-line ``message``, ``numbers``."""
+
+    code: str
+    message: str
+    numbers: dict[str, float] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"code": self.code, "message": self.message, "numbers": dict(self.numbers)}
+
+
+@dataclass
+class Preflight:
+    """The estimate of a job (module doc)."""
+
+    grid_shape: tuple[int, int, int]          # voxels x, y, z
+    size_mm: tuple[float, float, float]
+    slices: int
+    total_voxels: int
+    disk_bytes: int
+    fractions: dict[str, float]               # label -> estimated fraction of the job
+    sampled_voxels: int
+    clamped_fraction: float                   # of the job, clamped high (too dense)
+    clamped_voxels: int                       # estimated, in the whole job
+    safe_density_scale: float | None          # the scale that avoids clamping (None: no clamp)
+    out_of_gamut_fraction: float              # of the printed (non-background) voxels
+    worst_dE2000: float
+    seconds: float                            # estimated conversion time (after preparing)
+    rate_voxels_per_s: float
+    rate_source: str                          # "measured (...)" or "benchmark constant"
+    content: dict[str, Any]
+    density_scale: float
+    background: str
+    warnings: list[PreflightWarning] = field(default_factory=list)
+    estimate_seconds: float = 0.0             # what this pre-flight took
+
+    @property
+    def ink_fraction(self) -> float:
+        return sum(self.fractions.get(k, 0.0) for k in INKS if k != "Cl")
+
+    def short_line(self) -> str:
+        """One line: the job's size, disk and time estimates and the number of warnings."""
+        n = len(self.warnings)
+        return (f"pre-flight: {self.total_voxels:,} voxels in {self.slices:,} slices, about "
+                f"{_human_bytes(self.disk_bytes)}, {_about_seconds(self.seconds)}; "
+                + (f"{n} warning{'s' if n != 1 else ''}" if n else "no warnings"))
+
+    def summary_lines(self) -> list[str]:
+        """The human-readable summary: one line per figure, then one per warning."""
+        nx, ny, nz = self.grid_shape
+        sx, sy, sz = self.size_mm
+        fr = ", ".join(f"{k} {100 * v:.1f} %" for k, v in self.fractions.items()
+                       if v > 0 or k != "empty")
+        lines = [
+            f"job: {nx} x {ny} x {nz} voxels ({sx:.2f} x {sy:.2f} x {sz:.2f} mm), "
+            f"{nz:,} slices, {self.total_voxels:,} voxels",
+            f"content: {self.content.get('mode')} ({self.content.get('reason')})",
+            f"materials (estimated from {self.sampled_voxels:,} voxels): {fr}",
+            f"disk: about {_human_bytes(self.disk_bytes)}; conversion: "
+            f"{_about_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
+            f"({self.rate_source})",
+        ]
+        lines += [f"warning: {w.message}" for w in self.warnings]
+        return lines
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "grid_dimensions": list(self.grid_shape), "size_mm": list(self.size_mm),
+            "slices": self.slices, "total_voxels": self.total_voxels,
+            "disk_bytes_estimate": self.disk_bytes, "material_fractions": dict(self.fractions),
+            "sampled_voxels": self.sampled_voxels,
+            "clamped_fraction_estimate": self.clamped_fraction,
+            "clamped_voxels_estimate": self.clamped_voxels,
+            "density_scale": self.density_scale,
+            "density_scale_without_clamping": self.safe_density_scale,
+            "out_of_gamut_fraction": self.out_of_gamut_fraction,
+            "worst_dE2000": self.worst_dE2000,
+            "seconds_estimate": self.seconds,
+            "rate_voxels_per_second": self.rate_voxels_per_s, "rate_source": self.rate_source,
+            "content": dict(self.content), "background": self.background,
+            "warnings": [w.to_json() for w in self.warnings],
+            "estimate_seconds": self.estimate_seconds,
+        }
+
+
+def _human_bytes(n: float) -> str:
+    for unit in ("bytes", "kB", "MB", "GB"):
+        if n < 1000 or unit == "GB":
+            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"
+        n /= 1000
+    return f"{n:.1f} TB"  # pragma: no cover
+
+
+def _about_seconds(s: float) -> str:
+    """``"about 7 s"``, ``"about 2.5 min"``, or ``"under 1 s"`` (never "about under 1 s")."""
+    return "under 1 s" if s < 1 else f"about {_human_seconds(s)}"
+
+
+def _human_seconds(s: float) -> str:
+    if s < 60:
+        return f"{s:.0f} s" if s >= 1 else "under 1 s"
+    if s < 3600:
+        return f"{s / 60:.1f} min"
+    return f"{s / 3600:.1f} h"
+
+
+# ----------------------------------------------------------------------------- rate
+def _rates_file() -> Path:
+    env = os.environ.get("DREAMPRINT_CACHE")
+    if env:
+        return Path(env) / "rates.json"
+    from platformdirs import user_cache_path
+
+    return user_cache_path("dreamprint") / "rates.json"
+
+
+def record_rate(voxels: int, seconds: float) -> None:
+    """Keep a finished job's rate (voxels per second of its conversion, after the preparation)
+    for the time estimate; the last few are kept. Jobs under 1e6 voxels are ignored."""
+    if voxels < 1_000_000 or not seconds > 0:
+        return
+    path = _rates_file()
+    try:
+        rates = json.loads(path.read_text())["rates"] if path.is_file() else []
+    except (OSError, ValueError, KeyError, TypeError):
+        rates = []
+    rates = [float(r) for r in rates if isinstance(r, (int, float))][-(_RATES_KEPT - 1):]
+    rates.append(voxels / seconds)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps({"rates": rates}))
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+def measured_rate() -> tuple[float, str]:
+    """(voxels per second, where it comes from): the median of this machine's recorded jobs, or
+    :data:`BENCHMARK_RATE`."""
+    try:
+        rates = json.loads(_rates_file().read_text())["rates"]
+        rates = [float(r) for r in rates if isinstance(r, (int, float)) and r > 0]
+    except (OSError, ValueError, KeyError, TypeError):
+        rates = []
+    if rates:
+        return float(np.median(rates)), f"measured: median of this machine's last {len(rates)} " \
+                                        "jobs"
+    return BENCHMARK_RATE, "benchmark constant, no job measured on this machine yet"
+
+
+# ----------------------------------------------------------------------------- sampling
+def _lattice(n: int, stride: int, rng: np.random.Generator) -> tuple[int, int]:
+    """(offset, count) of a lattice of ``stride`` over ``n`` with a random offset."""
+    off = int(rng.integers(0, stride)) if stride > 1 else 0
+    off = min(off, n - 1)
+    return off, len(range(off, n, stride))
+
+
+def _sub_grid(grid, strides, offsets, counts):
+    """The job grid's voxels ``offset + stride * i`` per axis, as a grid of their own (same
+    voxel centres, see ``io.volumes.base.voxel_centres``)."""
+    vox = tuple(v * s for v, s in zip(grid.voxel_mm, strides, strict=True))
+    origin = tuple(o + (off + 0.5 - 0.5 * s) * v / grid.mm_per_unit
+                   for o, off, s, v in zip(grid.origin, offsets, strides, grid.voxel_mm,
+                                           strict=True))
+    return replace(grid, shape_xyz=tuple(counts), voxel_mm=vox, origin=origin)
+
+
+def _node_fields(tables, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(reachable density 1/mm with 10 % grey, trilinear as the kernel; dE2000 of the nearest
+    node) of encoded sRGB ``rgb`` (N, 3)."""
+
+    p = tables.packed
+    n = p.shape[0]
+    c = np.clip(np.nan_to_num(rgb.astype(np.float64)), 0.0, 1.0) * (n - 1)
+    i0 = np.minimum(c.astype(np.int64), n - 2)
+    f = c - i0
+    s0 = np.zeros(len(rgb))
+    sg = np.zeros(len(rgb))
+    for dx in (0, 1):
+        for dy in (0, 1):
+            for dz in (0, 1):
+                w = ((f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1])
+                     * (f[:, 2] if dz else 1 - f[:, 2]))
+                node = p[i0[:, 0] + dx, i0[:, 1] + dy, i0[:, 2] + dz]
+                s0 += w * node[:, F_SIGMA]
+                sg += w * node[:, F_GREY]
+    # as align_rows: the grey raises the density up to sg, unless it is no denser than s0
+    reach = np.maximum(s0, sg)
+    near = np.rint(c).astype(np.int64)
+    de = np.asarray(tables.dE2000)[near[:, 0], near[:, 1], near[:, 2]].astype(np.float64)
+    return reach, de
+
+
+def _disk_estimate(ctx, nz: int) -> int:
+    """Mean PNG size of up to 16 evenly spaced full layers (at most ~8e6 voxels in all),
+    labelled and encoded as the job does, times nz."""
+
+    nx, ny, _ = ctx.shape_xyz
+    n_layers = max(1, min(16, nz, 8_000_000 // max(1, nx * ny)))  # ~8e6 voxels at most
+    zs = sorted({int(round(v)) for v in np.linspace(0, nz - 1, n_layers + 2)[1:-1]} or {0})
+    total = 0
+    for z in zs:
+        labels = np.empty((1, ny, nx), np.uint8)
+        _slab_into(ctx, ctx.grid, z, z + 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
+                   np.zeros(4))
+        total += len(encode_labels_pngs(_oriented(ctx, labels), ctx.palette,
+                                        ctx.printer.png_mode)[0])
+    return int(total / len(zs) * nz) + 16_384  # + the manifest
+
+
+def _context(source, grid, profile, *, density_scale, content, background, printer,
+             density_threshold, halftone, source_options, sampling, height_mm, size_mm,
+             objective, table_size, seed):
+
+    if isinstance(source, JobContext):
+        return source
+    if isinstance(source, ConvertSettings):
+        return prepare_job(source)
+    if grid is not None and height_mm is None and size_mm is None:
+        height_mm = float(grid.size_mm[2])
+    settings = ConvertSettings(
+        source=str(source), profile=profile, printer=printer, height_mm=height_mm,
+        size_mm=None if size_mm is None else tuple(size_mm), density_scale=density_scale,
+        halftone=halftone, seed=seed, background=background,
+        density_threshold=density_threshold, objective=objective, table_size=table_size,
+        source_options=dict(source_options or {}), content=content, sampling=sampling)
+    ctx = prepare_job(settings)
+    if grid is not None:
+        ctx = replace(ctx, grid=grid)
+    return ctx
+
+
+def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
+              content: str = "auto", background: str = "clear", printer=None,
+              density_threshold: float | None = None, halftone: str = "blue-noise",
+              source_options: dict | None = None, sampling: str | None = None,
+              height_mm: float | None = None, size_mm=None, objective: str | None = None,
+              table_size: int = 100, sample_voxels: int = 200_000, seed: int = 0) -> Preflight:
+    """The pre-flight estimate of a job (module doc for how each figure is made).
+
+    ``source``: a prepared :class:`...job.plan.JobContext` (the CLI and the GUI pass the job's
+    own, so nothing is opened twice; the other job options are then ignored), a
+    :class:`...job.plan.ConvertSettings`, or a source spec (path or ``"demo"``) with the job's
+    options: ``grid`` (a :class:`..io.volumes.base.PrintGrid`, or ``height_mm`` / ``size_mm``),
+    ``profile`` (spec), ``printer`` (spec), ``density_scale``, ``content``, ``background``...
+    ``sample_voxels``: the size of the material sample; ``seed``: its lattice offset.
+    """
+
+    t0 = time.perf_counter()
+    ctx = _context(source, grid, profile, density_scale=density_scale, content=content,
+                   background=background, printer=printer, density_threshold=density_threshold,
+                   halftone=halftone, source_options=source_options, sampling=sampling,
+                   height_mm=height_mm, size_mm=size_mm, objective=objective,
+                   table_size=table_size, seed=seed)
+    s = ctx.settings
+    src, tables = ctx.resources()
+    nx, ny, nz = ctx.shape_xyz
+    total = nx * ny * nz
+    # Strides: equal factor per axis (at least 1) so that about sample_voxels are sampled.
+    f = max(1.0, (total / max(1, sample_voxels)) ** (1 / 3))
+    strides = [max(1, int(math.floor(f))) for _ in range(3)]
+    while math.prod(math.ceil(n / st) for n, st in zip((nx, ny, nz), strides, strict=True)) \
+            > 1.5 * sample_voxels:
+        a = int(np.argmax([n / st for n, st in zip((nx, ny, nz), strides, strict=True)]))
+        strides[a] += 1
+    rng = np.random.default_rng(seed)
+    lat = [_lattice(n, st, rng) for n, st in zip((nx, ny, nz), strides, strict=True)]
+    sub = _sub_grid(ctx.grid, strides, [o for o, _ in lat], [c for _, c in lat])
+    snx, sny, snz = sub.shape_xyz
+    rgb, dens = src.sample_slab(sub, 0, snz, density_scale=s.density_scale)
+    rgb = np.ascontiguousarray(np.asarray(rgb, np.float32).reshape(snz, -1, 3))
+    dens = np.ascontiguousarray(np.asarray(dens, np.float32).reshape(snz, -1))
+    labels = np.empty((snz, sny, snx), np.uint8)
+    counts = np.zeros(7, np.int64)
+    stats = np.zeros(4)
+    slab_labels(rgb, dens, 0, *ctx.kernel_args(), labels, counts, np.zeros((snz, 7)), stats)
+    n = int(labels.size)
+    fractions = {lab: float(counts[i]) / n for i, lab in enumerate(_LABELS)}
+    # Clamping (high: denser than reachable) and the scale that avoids it.
+    fg = (dens >= ctx.halftoner.threshold).reshape(-1)
+    frgb = rgb.reshape(-1, 3)[fg]
+    ftarget = dens.reshape(-1)[fg].astype(np.float64)
+    reach, de = _node_fields(tables, frgb) if fg.any() else (np.zeros(0), np.zeros(0))
+    clamped_frac = float(stats[1]) / n
+    safe = None
+    if stats[1] > 0 and s.density_scale > 0:
+        over = ftarget > reach
+        if over.any():
+            safe = float(s.density_scale * np.min(reach[over] / ftarget[over]))
+    oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
+    worst = float(de.max()) if len(de) else 0.0
+    rate, rate_source = measured_rate()
+    disk = _disk_estimate(ctx, nz)
+    content_json = (ctx.content.to_json() if ctx.content is not None
+                    else {"mode": "fog", "requested": s.content, "reason": ""})
+    vx, vy, vz = ctx.printer.voxel_mm
+    pf = Preflight(
+        grid_shape=(nx, ny, nz), size_mm=(nx * vx, ny * vy, nz * vz), slices=nz,
+        total_voxels=total, disk_bytes=disk, fractions=fractions, sampled_voxels=n,
+        clamped_fraction=clamped_frac, clamped_voxels=int(round(clamped_frac * total)),
+        safe_density_scale=safe, out_of_gamut_fraction=oog, worst_dE2000=worst,
+        seconds=total / rate, rate_voxels_per_s=rate, rate_source=rate_source,
+        content=content_json, density_scale=s.density_scale, background=s.background)
+    pf.warnings = _warnings(pf)
+    pf.estimate_seconds = time.perf_counter() - t0
+    return pf
+
+
+def _warnings(pf: Preflight) -> list[PreflightWarning]:
+    out = []
+    clear = pf.fractions.get("Cl", 0.0) + pf.fractions.get("empty", 0.0)
+    if clear > MOSTLY_CLEAR:
+        if pf.content.get("mode") != "fog":
+            hint = "little of the grid is occupied: check the source and its bounds"
+        elif pf.clamped_voxels > 0:  # a larger scale would clamp more: only solid helps
+            hint = "the source prints as a faint haze around clamped cores: try --content solid"
+        else:
+            hint = ("the source prints as a faint haze: try --content solid, or a larger "
+                    "--density-scale")
+        out.append(PreflightWarning(
+            "mostly-clear", f"the job would be {100 * clear:.1f} % Clear or empty "
+            f"(ink {100 * pf.ink_fraction:.2f} %): {hint}",
+            {"clear_or_empty_fraction": clear, "ink_fraction": pf.ink_fraction}))
+    if pf.clamped_voxels > 0:
+        msg = (f"about {pf.clamped_voxels:,} voxels ({100 * pf.clamped_fraction:.2f} %) are "
+               "denser than the inks can print and will be clamped")
+        nums = {"clamped_voxels": pf.clamped_voxels, "clamped_fraction": pf.clamped_fraction,
+                "density_scale": pf.density_scale}
+        if pf.safe_density_scale is not None:
+            msg += (f"; --density-scale {pf.safe_density_scale:.3g} or less avoids it in the "
+                    "sampled voxels (the densest voxels may be unsampled: a little less is safer)")
+            nums["density_scale_without_clamping"] = pf.safe_density_scale
+        out.append(PreflightWarning("clamped", msg, nums))
+    if pf.out_of_gamut_fraction > OUT_OF_GAMUT_WARN:
+        out.append(PreflightWarning(
+            "out-of-gamut", f"{100 * pf.out_of_gamut_fraction:.1f} % of the printed voxels' "
+            f"colours are out of gamut (worst dE2000 {pf.worst_dE2000:.1f}); they print as the "
+            "nearest printable colour",
+            {"out_of_gamut_fraction": pf.out_of_gamut_fraction,
+             "worst_dE2000": pf.worst_dE2000}))
+    return out
+

@@ -1,0 +1,222 @@
+"""Ink calibration: measured R and T of ink layers -> K and S per wavelength (paper section 4.2).
+
+Defines
+-------
+- :func:`invert_closed_form`: Kubelka's explicit inversion of one layer's R, T at thickness t.
+- :func:`fit_ink`: Levenberg-Marquardt over one or several layers (thicknesses, R and/or T;
+  an optically thick patch, thickness inf, contributes R_inf), started from the closed form;
+  per-wavelength residuals.
+- :func:`calibrate_profile`: all measured inks -> an :class:`InkProfile` plus a fit report; inks
+  without measurements keep the base profile's K and S (and the report says so).
+
+Closed form (Kubelka 1948, eqs. for a layer of known thickness)::
+
+    a = (1 + R^2 - T^2) / (2 R),   b = sqrt(a^2 - 1)
+    S = ln((1 - R (a - b)) / T) / (b t),   K = S (a - 1)
+
+It follows from eqs. 3-4 of the paper: ``R/T = sinh(bSt)/b`` and ``1/T = (a sinh + b cosh)/b``
+give ``a`` as above and ``exp(bSt) = (1 - R(a - b))/T``.
+
+References
+----------
+- Kubelka, P. (1948). JOSA 38(5), 448-457.
+- More, J. J. (1978). The Levenberg-Marquardt algorithm: implementation and theory.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dreamprint_gui.core.calibration_types import LayerMeasurement
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.profile import INKS, InkProfile, now_iso
+from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
+
+__all__ = ["invert_closed_form", "fit_ink", "InkFit", "calibrate_profile", "LayerMeasurement"]
+
+_FLOOR = 1e-9  # 1/mm: below this a coefficient is indistinguishable from 0 at mm thicknesses
+
+
+def invert_closed_form(R: ArrayLike, T: ArrayLike, t: float
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """K and S (1/mm) from R and T (fractions) of one layer of thickness ``t`` mm.
+
+    Exact inverse of :func:`~dreamprint_gui.physics.kubelka_munk.reflectance_transmittance`
+    where it exists (``R >= 0, T > 0, R + T <= 1``). With ``R = 0`` the layer does not scatter:
+    ``S = 0, K = -ln(T)/t``. Where the data are impossible (R + T > 1, T = 0) the result is NaN;
+    :func:`fit_ink` then falls back to a least-squares start.
+    """
+    R = np.asarray(R, dtype=np.float64)
+    T = np.asarray(T, dtype=np.float64)
+    if t <= 0:
+        raise ValueError("thickness must be > 0")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scatters = R > 1e-12
+        Rs = np.where(scatters, R, 1.0)
+        a = (1.0 + Rs * Rs - T * T) / (2.0 * Rs)
+        b = np.sqrt(a * a - 1.0)
+        # R (a - b) = R / (a + b) avoids cancellation when a is large (weak scattering).
+        S = np.log((1.0 - Rs / (a + b)) / T) / (b * t)
+        K = S * (a - 1.0)
+        # a -> 1 (no absorption): S t -> R / T and K -> 0, the 0/0 of the general form.
+        lossless = np.abs(a - 1.0) < 1e-12
+        S = np.where(lossless, Rs / (T * t), S)
+        K = np.where(lossless, 0.0, K)
+        K = np.where(scatters, K, -np.log(T) / t)
+        S = np.where(scatters, S, 0.0)
+    bad = (T <= 0) | (R < 0) | (R + T > 1.0 + 1e-12) | ~np.isfinite(K) | ~np.isfinite(S)
+    return np.where(bad, np.nan, K), np.where(bad, np.nan, S)
+
+
+@dataclass
+class InkFit:
+    """K, S (1/mm) of one ink and how well they reproduce its measurements."""
+
+    ink: str
+    K: NDArray[np.float64]
+    S: NDArray[np.float64]
+    rms_R: NDArray[np.float64]  # per wavelength, over the layers that measured R
+    rms_T: NDArray[np.float64]
+    method: str
+    layers: list[str] = field(default_factory=list)
+
+    def summary(self) -> dict[str, Any]:
+        def stat(x: NDArray) -> float | None:
+            x = x[np.isfinite(x)]
+            return float(x.max()) if x.size else None
+
+        return {"ink": self.ink, "method": self.method, "layers": self.layers,
+                "max_rms_R": stat(self.rms_R), "max_rms_T": stat(self.rms_T)}
+
+
+def _layer_arrays(layers: list[LayerMeasurement], n_wl: int
+                  ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    t = np.array([m.thickness_mm for m in layers], dtype=np.float64)
+    R = np.full((len(layers), n_wl), np.nan)
+    T = np.full((len(layers), n_wl), np.nan)
+    for i, m in enumerate(layers):
+        for arr, data in ((R, m.R), (T, m.T)):
+            if data is not None:
+                d = np.asarray(data, dtype=np.float64)
+                if d.shape != (n_wl,):
+                    raise DreamPrintError(f"{m.ink}: a measurement has {d.size} wavelengths, the "
+                                          f"profile grid {n_wl}", m.source or None)
+                arr[i] = d
+    return t, R, T, ~np.isnan(R), ~np.isnan(T)
+
+
+def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
+    """Fit K, S of one ink to all its layers, wavelength by wavelength.
+
+    One layer with R and T: the closed form is the answer (LM only polishes it). Several layers
+    (thicknesses) or noisy data: Levenberg-Marquardt (``scipy.optimize.least_squares``,
+    ``method='lm'``) on ``(ln K, ln S)`` minimises the squared R and T residuals of all layers,
+    started from the closed-form inversion of the layers that have both (or from a Beer-Lambert
+    guess).
+    """
+    from scipy.optimize import least_squares
+
+    if not layers:
+        raise ValueError("no layers to fit")
+    ink = layers[0].ink
+    t, R, T, hasR, hasT = _layer_arrays(layers, n_wavelengths)
+    for i, m in enumerate(layers):
+        if not m.thickness_mm > 0:
+            raise DreamPrintError(f"ink {ink}: thickness must be > 0 mm, got {m.thickness_mm}",
+                                  m.source or None)
+        if np.isinf(m.thickness_mm) and m.T is not None:
+            raise DreamPrintError(f"ink {ink}: an optically thick layer (thickness inf) has no "
+                                  "transmittance; give its R only", m.source or None)
+        if not (hasR[i].any() or hasT[i].any()):
+            raise DreamPrintError(f"ink {ink}: a layer has neither R nor T", m.source or None)
+    if not hasT.any():
+        raise DreamPrintError(f"ink {ink}: no transmittance measured; K and S cannot be "
+                              "separated from reflectance of one thickness alone")
+    K = np.empty(n_wavelengths)
+    S = np.empty(n_wavelengths)
+    both = hasR.all(axis=1) & hasT.all(axis=1) & np.isfinite(t)
+    single_exact = len(layers) == 1 and both[0]
+    for j in range(n_wavelengths):
+        starts = []
+        for i in np.flatnonzero(both):
+            k0, s0 = invert_closed_form(R[i, j], T[i, j], t[i])
+            if np.isfinite(k0) and np.isfinite(s0):
+                starts.append((float(k0), float(s0)))
+        if starts:
+            k0, s0 = np.median(np.asarray(starts), axis=0)
+        else:
+            sel = hasT[:, j] & (T[:, j] > 0) & np.isfinite(t)
+            k0 = float(np.median(-np.log(np.clip(T[sel, j], 1e-12, 1)) / t[sel])) if sel.any() \
+                else 1.0
+            s0 = 0.1 * k0
+        x0 = np.log(np.maximum([k0, s0], _FLOOR))
+        if single_exact and starts:
+            K[j], S[j] = k0, s0
+            continue
+
+        def residuals(x: NDArray, j: int = j) -> NDArray:
+            r, tt = reflectance_transmittance(np.exp(x[0]), np.exp(x[1]), t)
+            out = np.concatenate([(r - R[:, j])[hasR[:, j]], (tt - T[:, j])[hasT[:, j]]])
+            return out
+
+        n_res = int(hasR[:, j].sum() + hasT[:, j].sum())
+        method = "lm" if n_res >= 2 else "trf"
+        sol = least_squares(residuals, x0, method=method, xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                            max_nfev=2000)
+        K[j], S[j] = np.exp(sol.x)
+    K = np.where(K <= _FLOOR * 1.000001, 0.0, K)
+    S = np.where(S <= _FLOOR * 1.000001, 0.0, S)
+    Rm, Tm = reflectance_transmittance(K, S, t[:, None])
+    with np.errstate(invalid="ignore"):
+        rms_R = np.sqrt(np.nanmean(np.where(hasR, (Rm - R) ** 2, np.nan), axis=0)) \
+            if hasR.any() else np.full(n_wavelengths, np.nan)
+        rms_T = np.sqrt(np.nanmean(np.where(hasT, (Tm - T) ** 2, np.nan), axis=0))
+    method = "closed form (Kubelka 1948)" if single_exact else "Levenberg-Marquardt"
+    return InkFit(ink, K, S, rms_R, rms_T, method,
+                  [f"{m.thickness_mm:g} mm: {m.source}" for m in layers])
+
+
+def _json_list(x: NDArray) -> list[float | None]:
+    return [float(v) if np.isfinite(v) else None for v in x]
+
+
+def calibrate_profile(measurements: list[LayerMeasurement], base: InkProfile,
+                      name: str = "calibrated") -> tuple[InkProfile, list[InkFit]]:
+    """Fit every measured ink; inks without measurements keep ``base``'s K and S.
+
+    ``measurements`` must be on ``base.wavelengths_nm`` (the importer resamples them).
+    """
+    by_ink: dict[str, list[LayerMeasurement]] = {}
+    for m in measurements:
+        if m.ink not in INKS:
+            raise DreamPrintError(f"unknown ink '{m.ink}'; inks are {', '.join(INKS)}",
+                                  m.source or None)
+        by_ink.setdefault(m.ink, []).append(m)
+    if not by_ink:
+        raise DreamPrintError("no ink measurements given")
+    n = base.wavelengths_nm.size
+    K, S = base.K.copy(), base.S.copy()
+    fits = []
+    for ink, layers in by_ink.items():
+        fit = fit_ink(layers, n)
+        i = INKS.index(ink)
+        K[i], S[i] = fit.K, fit.S
+        fits.append(fit)
+    kept = [ink for ink in INKS if ink not in by_ink]
+    profile = base.with_settings(
+        name=name, K=K, S=S,
+        provenance={
+            "created": now_iso(),
+            "model": "Kubelka-Munk two-flux; per-wavelength inversion (closed form, "
+                     "Levenberg-Marquardt for several layers)",
+            "measurements": {f.ink: f.layers for f in fits},
+            "inks_from_base_profile": {ink: base.name for ink in kept},
+        },
+        residuals={f.ink: {"rms_R": _json_list(f.rms_R), "rms_T": _json_list(f.rms_T)}
+                   for f in fits},
+    )
+    return profile, fits

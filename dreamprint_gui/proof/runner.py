@@ -1,0 +1,389 @@
+"""``dreamprint proof``: source and print rendered on the same cameras, compared, written out.
+
+Defines :class:`ProofSettings`, :class:`ProofProgress`, :func:`run_proof` (a generator, driven
+by the CLI and the GUI alike, returning the report) and :func:`validate`.
+
+Steps: labels of the job (the engine's, for a source and a ``--method``; or a job folder's
+slices) -> block fractions (:mod:`.medium`) -> per-band sigma_t, albedo -> Mitsuba renders
+(:mod:`.print_render`) -> XYZ; the source sampled on the same cells and rendered by
+emission-absorption (:mod:`.source_render`) -> comparison (:mod:`.compare`). Output
+``DIR/view_NN_source.png``, ``view_NN_print.png``, ``view_NN_de2000.png``,
+``contact_sheet.png``, ``proof.json``, written in a temporary sibling folder renamed to DIR
+when complete; a cancel or an error removes it, so DIR is complete or absent.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import threading
+import time
+from collections.abc import Generator
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.job.halftone import HALFTONE_METHODS
+from dreamprint_gui.job.plan import JobCancelled
+from dreamprint_gui.proof.cameras import orbit_views
+from dreamprint_gui.proof.compare import (
+    compare_view,
+    de_heatmap,
+    noise_floor,
+    summarise,
+    summarise_floor,
+    to_display,
+)
+from dreamprint_gui.proof.contact_sheet import contact_sheet
+from dreamprint_gui.proof.labels import JobFolderLabels, is_job_folder
+from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
+from dreamprint_gui.proof.methods import METHODS, method_labels
+from dreamprint_gui.proof.optics import resolve_optics
+from dreamprint_gui.proof.print_render import SAMPLERS, hides_direct, render_print_seeds
+from dreamprint_gui.proof.scielab import samples_per_degree
+from dreamprint_gui.proof.source_render import optical_depth, render_source, sample_source
+from dreamprint_gui.proof.spectral import spectral_bands
+
+__all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_proof",
+           "write_proof", "print_xyz", "MAX_RESOLUTION", "MAX_SPP", "DEFAULT_SPP",
+           "DEFAULT_RESOLUTION", "DEFAULT_MAX_CELLS"]
+
+MAX_RESOLUTION = 4096
+MAX_SPP = 65536
+MAX_VIEWS = 64
+DEFAULT_SPP = 16
+DEFAULT_RESOLUTION = 256
+DEFAULT_MAX_CELLS = 128
+
+
+@dataclass(frozen=True)
+class ProofSettings:
+    source: str                      # a volume file, 'demo', or a job folder
+    output: str | None = None
+    height_mm: float | None = None
+    size_mm: tuple[float, float, float] | None = None
+    printer: str | None = None
+    profile: str | None = None
+    views: int = 4
+    resolution: int = DEFAULT_RESOLUTION
+    spp: int = DEFAULT_SPP
+    method: str = "paper"
+    halftone: str = "blue-noise"
+    seed: int = 0
+    density_scale: float = 1.0
+    background: str = "clear"        # what voxels below the density threshold become
+    max_cells: int = DEFAULT_MAX_CELLS
+    layers_per_block: int = 2
+    bands: int = 12
+    max_depth: int = 512
+    key_light: float = 0.0
+    floor: bool = False
+    viewing_distance_mm: float = 500.0   # S-CIELAB: the print seen at its size from here
+    noise_floor: bool = True             # render the print again at seed + 1 (twice the time)
+    sampler: str = "independent"         # Mitsuba's sampler of the print render
+    surface: str | None = None           # none | glossy | matte (None: the profile's, else none)
+    phase: str | None = None             # isotropic | hg:G (None: the profile's, else isotropic)
+    overwrite: bool = False
+    table_size: int = 100
+    source_options: tuple[tuple[str, Any], ...] = ()
+
+
+@dataclass(frozen=True)
+class ProofProgress:
+    stage: str          # "preparing", "labels", "source", "print", "compare", "writing", "done"
+    done: int
+    total: int
+    elapsed_s: float
+    message: str = ""
+
+
+def validate(s: ProofSettings) -> None:
+    """One-line errors for absurd settings, before any work."""
+
+    if not 8 <= int(s.resolution) <= MAX_RESOLUTION:
+        raise DreamPrintError(f"--resolution must be 8..{MAX_RESOLUTION} pixels, got "
+                              f"{s.resolution}")
+    if not 1 <= int(s.spp) <= MAX_SPP:
+        raise DreamPrintError(f"--spp must be 1..{MAX_SPP}, got {s.spp}")
+    if not 1 <= int(s.views) <= MAX_VIEWS:
+        raise DreamPrintError(f"--views must be 1..{MAX_VIEWS}, got {s.views}")
+    if s.method not in METHODS:
+        raise DreamPrintError(f"unknown method '{s.method}' (use {', '.join(METHODS)})")
+    if s.halftone not in HALFTONE_METHODS:
+        raise DreamPrintError(f"unknown halftoning '{s.halftone}' (use "
+                              f"{' or '.join(HALFTONE_METHODS)})")
+    if s.background not in ("clear", "empty"):
+        raise DreamPrintError(f"--background must be clear or empty, not '{s.background}'")
+    if not 4 <= int(s.max_cells) <= 512:
+        raise DreamPrintError(f"--cells must be 4..512, got {s.max_cells}")
+    if not 1 <= int(s.bands) <= 36:
+        raise DreamPrintError(f"--bands must be 1..36, got {s.bands}")
+    if not 1 <= int(s.max_depth) <= 100000:
+        raise DreamPrintError(f"--max-depth must be 1..100000, got {s.max_depth}")
+    if not (math.isfinite(s.key_light) and s.key_light >= 0):
+        raise DreamPrintError(f"--key-light must be >= 0, got {s.key_light}")
+    if not (math.isfinite(s.viewing_distance_mm) and 10 <= s.viewing_distance_mm <= 1e5):
+        raise DreamPrintError(f"--viewing-distance-mm must be 10..100000, got "
+                              f"{s.viewing_distance_mm}")
+    if s.sampler not in SAMPLERS:
+        raise DreamPrintError(f"unknown sampler '{s.sampler}' (use {', '.join(SAMPLERS)})")
+    optics = resolve_optics(s.surface, s.phase)     # the names, before any work
+    if optics.surface != "none" and s.background == "empty":
+        raise DreamPrintError("--surface needs --background clear: the surface is the print's "
+                              "box of Clear resin, which an empty background does not print")
+
+
+def _labels(s: ProofSettings):
+
+    if is_job_folder(s.source):
+        if s.method != "paper" or s.height_mm is not None or s.size_mm is not None:
+            raise DreamPrintError("a job folder is judged as printed: --method, --height-mm "
+                                  "and --size-mm do not apply to it", s.source)
+        return JobFolderLabels(s.source, s.profile)
+    return method_labels(s)
+
+
+def render_proof(s: ProofSettings, cancel: threading.Event | None = None
+                 ) -> Generator[ProofProgress, None, dict[str, Any]]:
+    """Render and compare (no files); returns ``{"report": ..., "images": ...}``."""
+
+    validate(s)
+    t0 = time.perf_counter()
+    timings: dict[str, float] = {}
+
+    def el() -> float:
+        return time.perf_counter() - t0
+
+    def is_cancelled() -> bool:
+        return cancel is not None and cancel.is_set()
+
+    yield ProofProgress("preparing", 0, 1, el(), "opening the source, tables and renderer")
+    lab = _labels(s)
+    bands = spectral_bands(lab.profile, s.bands)
+    size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
+    block = block_for_cell(lab.voxel_mm, size, s.max_cells)
+    timings["prepare"] = el()
+
+    # labels -> block fractions; the generator is driven from here, the work in a thread so
+    # that progress and cancel reach the caller.
+    box: dict[str, Any] = {}
+    prog: dict[str, tuple[int, int]] = {"p": (0, 1)}
+
+    def work_fractions() -> None:
+        try:
+            box["m"] = block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block,
+                                       s.layers_per_block,
+                                       progress=lambda d, t: prog.__setitem__("p", (d, t)),
+                                       cancelled=is_cancelled)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
+            box["e"] = exc
+
+    yield from _in_thread(work_fractions, "labels", prog, el, box, cancel)
+    medium = box["m"]
+    timings["labels"] = el() - sum(timings.values())
+    lo, hi = medium.box_mm
+    views = orbit_views(medium.print_size_mm, s.views)
+    optics = resolve_optics(s.surface, s.phase, lab.profile.proof_optics)
+    if optics.surface != "none" and s.background == "empty":
+        raise DreamPrintError("--surface needs --background clear (the profile asks for a "
+                              f"{optics.surface} surface; give --surface none)")
+    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics.g)
+
+    yield ProofProgress("source", 0, len(views), el(), "rendering the source")
+    t1 = time.perf_counter()
+    field = sample_source(lab.source, lab.grid, medium.block_xyz, lab.density_scale,
+                          medium.cells_xyz, lo)
+    src_lin, src_alpha = [], []
+    floor_rho = 0.5 if s.floor else None
+    for i, v in enumerate(views):
+        if is_cancelled():
+            raise JobCancelled("the proof was cancelled")
+        rgb, a = render_source(field, v, s.resolution, floor_rho=floor_rho)
+        src_lin.append(rgb)
+        src_alpha.append(a)
+        yield ProofProgress("source", i + 1, len(views), el())
+    timings["source_render"] = time.perf_counter() - t1
+
+    t2 = time.perf_counter()
+    seeds = (s.seed, s.seed + 1) if s.noise_floor else (s.seed,)
+    box.clear()
+    prog["p"] = (0, 1)
+
+    def work_print() -> None:
+        try:
+            box["m"] = render_print_seeds(
+                sigma_t, albedo, lo, hi, views, s.resolution, s.spp, seeds, s.max_depth,
+                s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
+                cancelled=is_cancelled, sampler=s.sampler, optics=optics)
+        except BaseException as exc:  # noqa: BLE001
+            box["e"] = exc
+
+    yield from _in_thread(work_print, "print", prog, el, box, cancel)
+    prn_seeds, info = box["m"]
+    prn_bands = prn_seeds[0]
+    timings["print_render"] = time.perf_counter() - t2
+    # one render of one view (all bands); the noise floor renders each view once more
+    timings["print_render_per_view"] = timings["print_render"] / (len(views) * len(seeds))
+
+    t3 = time.perf_counter()
+    yield ProofProgress("compare", 0, len(views), el(), "comparing")
+    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    obs = bands.observer
+    to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
+    per_view, images = [], []
+    # the print at its real size on the frame (orthographic), seen from the viewing distance
+    spd = samples_per_degree(2.0 * views[0].half_mm / s.resolution, s.viewing_distance_mm)
+    for i, v in enumerate(views):
+        T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
+        prn_alpha = 1.0 - T @ y_w
+        src_xyz = src_lin[i] @ to_xyz.T
+        prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor, optics)
+        fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs, spd)
+        if s.noise_floor:
+            fig["noise_floor"] = noise_floor(
+                prn_xyz, print_xyz(bands, prn_seeds[1][i], T, s.floor, optics), prn_alpha,
+                obs, spd)
+        per_view.append({"view": i, **v.describe(), **fig})
+        images.append({"source": src_lin[i], "print": obs.XYZ_to_linear_sRGB(prn_xyz),
+                       "de2000": de})
+        yield ProofProgress("compare", i + 1, len(views), el())
+    timings["compare"] = time.perf_counter() - t3
+    timings["total"] = el()
+    report = {
+        "format": "dreamprint-proof", "format_version": 1,
+        "source": s.source, "method": s.method,
+        "halftoning": getattr(lab, "halftoning", {}),
+        "settings": {k: (list(v) if isinstance(v, tuple) else v)
+                     for k, v in asdict(s).items() if k not in ("output", "overwrite")},
+        "print_size_mm": [round(x, 4) for x in medium.print_size_mm],
+        "grid_dimensions": list(lab.shape_xyz),
+        "medium": medium.describe(),
+        "spectral": bands.describe(),
+        "km_to_rte": {"sigma_a": "K / 2", "sigma_s": "4 S / (3 (1 - g))",
+                      "phase": optics.describe()["phase"], "g": optics.g,
+                      "reference": "Gate 1974; Thennadil 2008 (diffuse incidence); reduced "
+                                   "scattering sigma_s (1 - g) kept (similarity relation)"},
+        "optics": {**optics.describe(),
+                   "from": ("command line" if s.surface is not None or s.phase is not None
+                            else "profile" if lab.profile.proof_optics else "defaults")},
+        "renderer": info,
+        "source_renderer": "emission-absorption ray march (dreamprint)",
+        "lighting": {"environment": "uniform white (D65), radiance 1",
+                     "key_light_irradiance": s.key_light, "floor": s.floor},
+        "viewing": {"distance_mm": s.viewing_distance_mm,
+                    "pixel_mm": round(2.0 * views[0].half_mm / s.resolution, 5),
+                    "pixels_per_degree": round(spd, 3),
+                    "metric": "S-CIELAB (Zhang & Wandell 1996) then CIEDE2000"},
+        "views": per_view,
+        "overall": summarise(per_view),
+        "noise_floor": (
+            {"method": f"the print rendered again at Mitsuba seed {s.seed + 1} (same labels, "
+                       "medium, cameras); figures between the two renders over the print's "
+                       "object pixels",
+             "seeds": list(seeds), **summarise_floor([v["noise_floor"] for v in per_view])}
+            if s.noise_floor else None),
+        "timings_s": timings,
+    }
+    return {"report": report, "images": images}
+
+
+def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool,
+              optics=None) -> np.ndarray:
+    """XYZ (res, res, 3) of a print view: Mitsuba's band images plus, without a floor or a
+    surface, the environment seen straight through (the renderer hides it; ``direct_T`` per
+    band is its exact expectation, :mod:`.print_render`)."""
+    return bands.to_XYZ(rendered + (direct_T if hides_direct(floor, optics) else 0.0))
+
+
+def _in_thread(fn, stage, prog, el, box, cancel):
+    th = threading.Thread(target=fn, name=f"dreamprint-proof-{stage}", daemon=True)
+    th.start()
+    last = None
+    try:
+        while th.is_alive():
+            th.join(0.2)
+            p = prog["p"]
+            if p != last:
+                last = p
+                yield ProofProgress(stage, p[0], p[1], el())
+    except BaseException:
+        if cancel is not None:
+            cancel.set()
+        th.join()
+        raise
+    if "e" in box:
+        raise box["e"]
+
+
+def write_proof(result: dict, folder: Path) -> None:
+    """Write the images, contact sheet and proof.json of ``result`` into ``folder``."""
+    from PIL import Image
+
+
+    rows = []
+    for i, im in enumerate(result["images"]):
+        src = to_display(im["source"])
+        prn = to_display(im["print"])
+        de = de_heatmap(im["de2000"])
+        Image.fromarray(src).save(folder / f"view_{i:02d}_source.png")
+        Image.fromarray(prn).save(folder / f"view_{i:02d}_print.png")
+        Image.fromarray(de).save(folder / f"view_{i:02d}_de2000.png")
+        rows.append((src, prn, de))
+    contact_sheet(rows, result["report"]).save(folder / "contact_sheet.png")
+    (folder / "proof.json").write_text(json.dumps(result["report"], indent=2) + "\n",
+                                       encoding="utf-8")
+
+
+def _check_target(out: Path, overwrite: bool, source: str | None = None) -> None:
+    if source is not None and source != "demo":
+        src, dst = Path(source).resolve(), out.resolve()
+        if src == dst or dst in src.parents:
+            # --overwrite would replace the source (or the job folder judged) by the proof
+            raise DreamPrintError(f"the output folder is, or contains, the source {source}; "
+                                  "choose another -o", out)
+    if out.exists() and not overwrite:
+        raise DreamPrintError("already exists (use --overwrite to replace it)", out)
+    if out.exists() and not out.is_dir():
+        raise DreamPrintError("exists and is not a folder", out)
+    parent = out.absolute().parent
+    if not parent.is_dir():
+        raise DreamPrintError("the folder to write into does not exist", parent)
+
+
+def run_proof(s: ProofSettings, cancel: threading.Event | None = None
+              ) -> Generator[ProofProgress, None, dict[str, Any]]:
+    """Render, compare and write ``s.output`` atomically; returns the report."""
+    if s.output is None:
+        raise DreamPrintError("no output folder given (-o DIR)")
+    out = Path(s.output)
+    _check_target(out, s.overwrite, s.source)
+    validate(s)
+    result = yield from render_proof(s, cancel)
+    if cancel is not None and cancel.is_set():
+        raise JobCancelled("the proof was cancelled")
+    yield ProofProgress("writing", 0, 1, result["report"]["timings_s"]["total"],
+                        "writing images")
+    tmp = out.absolute().parent / f".{out.name}.proof-tmp-{os.getpid()}"
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir()
+    try:
+        write_proof(result, tmp)
+        if cancel is not None and cancel.is_set():
+            raise JobCancelled("the proof was cancelled")
+        if out.exists():
+            old = out.absolute().parent / f".{out.name}.proof-old-{os.getpid()}"
+            os.replace(out, old)
+            os.replace(tmp, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    yield ProofProgress("done", 1, 1, result["report"]["timings_s"]["total"], str(out))
+    return result["report"]
