@@ -147,18 +147,37 @@ def _check_source(source: str) -> None:
 
 
 @cli.command()
-@click.argument("source")
+@click.argument("source", required=False)
 @click.option("-o", "--output", required=True, type=click.Path(),
               help="Folder to create (images, contact_sheet.png, proof.json).")
 @click.option("--method", default="paper", show_default=True,
               help="paper, no-alignment or brute-force (a source, not a job folder).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output folder.")
+@click.option("--chart", "chart", default=None, type=click.Path(dir_okay=False),
+              help="Chart proof: a recipes CSV (as calibrate --chart reads); each recipe is "
+                   "rendered as a flat patch instead of a SOURCE.")
+@click.option("--reflectance", default=None, type=click.Path(dir_okay=False),
+              help="Chart proof: the measured reflectance of the chart's patches (any format "
+                   "`dreamprint spectra` reads), one spectrum per recipe.")
+@click.option("--geometry", default="d:8", show_default=True,
+              help="Chart proof: instrument geometry, d:8 (specular included) or 45:0.")
+@click.option("--thickness-mm", type=float, default=None,
+              help="Chart proof: patch thickness over a black backing (default: optically "
+                   "thick).")
 @_common
-def proof(source, output, method, overwrite, **kw) -> None:
+def proof(source, output, method, overwrite, chart, reflectance, geometry, thickness_mm,
+          **kw) -> None:
     """Render SOURCE (a volume, 'demo', or an exported JOB folder) as printed, beside the
-    source, and measure how alike they look."""
+    source, and measure how alike they look; or, with --chart, a printed chart's recipes as
+    an instrument would measure them."""
     from dreamprint_gui.proof.runner import run_proof
 
+    if chart is not None or reflectance is not None:
+        _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickness_mm, kw)
+        return
+    if source is None:
+        raise DreamPrintError("give a SOURCE (a volume, 'demo' or a job folder), or --chart "
+                              "RECIPES.csv")
     _check_source(source)
     report = _drive(run_proof(_settings(source, output, method, kw, overwrite)))
     if report["renderer"]["variant"].startswith("scalar"):
@@ -178,6 +197,35 @@ def proof(source, output, method, overwrite, **kw) -> None:
         click.echo(f"noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 mean "
                    f"{f['mean_de2000']:.2f}, S-CIELAB dE2000 mean "
                    f"{f['mean_scielab_de2000']:.2f}")
+
+
+def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickness_mm,
+                 kw) -> None:
+    from dreamprint_gui.proof.chart import DEFAULT_CHART_SPP, ChartSettings, run_chart_proof
+
+    if source is not None:
+        raise DreamPrintError("--chart proofs a chart's recipes: give no SOURCE with it")
+    if chart is None:
+        raise DreamPrintError("--reflectance needs --chart RECIPES.csv (the recipes measured)")
+    ctx = click.get_current_context()
+    spp_given = ctx.get_parameter_source("spp") is not click.core.ParameterSource.DEFAULT
+    s = ChartSettings(recipes=chart, reflectance=reflectance, output=output,
+                      profile=kw["profile"], surface=kw["surface"], phase=kw["phase"],
+                      geometry=geometry, thickness_mm=thickness_mm,
+                      spp=kw["spp"] if spp_given else DEFAULT_CHART_SPP, bands=kw["bands"],
+                      seed=kw["seed"], max_depth=kw["max_depth"], overwrite=overwrite)
+    rep = run_chart_proof(s)
+    if kw["as_json"]:
+        click.echo(json.dumps(rep, indent=2))
+        return
+    msg = (f"wrote {output}: {rep['patches_count']} patches, {rep['geometry']}, surface "
+           f"{rep['optics']['surface']}, phase {rep['optics']['phase']}")
+    if "de2000" in rep:
+        d = rep["de2000"]
+        worst = ", ".join(f"{w['patch']} ({w['de2000']:.1f})" for w in d["worst_patches"][:3])
+        msg += (f"; dE2000 against the measurements mean {d['mean']:.2f}, p95 {d['p95']:.2f}, "
+                f"max {d['max']:.2f}; worst patches {worst}")
+    click.echo(msg)
 
 
 @evaluate.command("methods")
