@@ -48,7 +48,7 @@ def main() -> None:
     base = default_profile()
     c = read_recipes(Path(args.recipes))
     sf = read_spectra(args.reflectance, quantity="reflectance")
-    R = np.stack([s.resample(base.wavelengths_nm).values for s in sf.samples])
+    R = np.stack([s.resample(base.wavelengths_nm) for s in sf.samples])
     obs = observer_for(base.wavelengths_nm)
     lab = obs.spectra_to_Lab(R)
     print(f"{len(c)} patches, {args.geometry}, {args.spp} spp, {args.bands} bands; "

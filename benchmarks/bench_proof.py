@@ -31,7 +31,7 @@ def _medium(lab, block, layers_per_block):
     return block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block, layers_per_block)
 
 
-def _print_xyz(medium, bands, view, res, spp, seed, sampler=None):
+def _print_xyz(medium, bands, view, res, spp, seed, sampler=None, rr_depth=None):
     from dreamprint_gui.proof.medium import medium_coefficients
     from dreamprint_gui.proof.print_render import DEFAULT_SAMPLER, render_print
     from dreamprint_gui.proof.runner import print_xyz
@@ -41,7 +41,7 @@ def _print_xyz(medium, bands, view, res, spp, seed, sampler=None):
     lo, hi = medium.box_mm
     t0 = time.perf_counter()
     img, info = render_print(st, al, lo, hi, [view], res, spp, seed,
-                             sampler=sampler or DEFAULT_SAMPLER)
+                             sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth)
     t = time.perf_counter() - t0
     T = optical_depth(st, lo, medium.cell_mm, view, res, sub=3)
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
@@ -61,6 +61,7 @@ def speed(args) -> None:
 
     spps = [int(x) for x in (args.spp or str(DEFAULT_SPP)).split(",")]
     samplers = (args.samplers or DEFAULT_SAMPLER).split(",")
+    rrs = [None] if args.rr_depths is None else [int(x) for x in args.rr_depths.split(",")]
     s = ProofSettings(source="demo", height_mm=args.height_mm, resolution=args.resolution)
     print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {spps}, "
           f"samplers {samplers}, {os.cpu_count()} cores, load average "
@@ -84,15 +85,17 @@ def speed(args) -> None:
     print(f"source render (per view)      {time.perf_counter() - t3:7.1f} s")
     spd = samples_per_degree(2 * view.half_mm / args.resolution, s.viewing_distance_mm)
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
-    print(f"{'sampler':12s} {'spp':>5s} {'s/view':>7s} {'floor dE00 mean':>16s} "
+    print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'s/view':>7s} {'floor dE00 mean':>16s} "
           f"{'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}")
-    for sampler in samplers:
-        _print_xyz(med, bands, view, args.resolution, 1, 0, sampler)  # JIT warm-up, untimed
+    for sampler, rr in [(a, b) for a in samplers for b in rrs]:
+        _print_xyz(med, bands, view, args.resolution, 1, 0, sampler, rr)  # JIT warm-up
         for spp in spps:
-            a, alpha, ta, info = _print_xyz(med, bands, view, args.resolution, spp, 1, sampler)
-            b, _, tb, _ = _print_xyz(med, bands, view, args.resolution, spp, 2, sampler)
+            a, alpha, ta, info = _print_xyz(med, bands, view, args.resolution, spp, 1, sampler,
+                                            rr)
+            b, _, tb, _ = _print_xyz(med, bands, view, args.resolution, spp, 2, sampler, rr)
             f = noise_floor(a, b, alpha, bands.observer, spd)
-            print(f"{sampler:12s} {spp:5d} {(ta + tb) / 2:7.1f} {f['mean_de2000']:16.2f} "
+            print(f"{sampler:12s} {info['rr_depth']:4d} {spp:5d} {(ta + tb) / 2:7.1f} "
+                  f"{f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
                   f"{f['p95_scielab_de2000']:6.2f}", flush=True)
     print(f"({info['variant']}, {info['passes']} Mitsuba passes per render; s/view is one "
@@ -142,6 +145,8 @@ def main() -> None:
     ap.add_argument("--resolution", type=int, default=256)
     ap.add_argument("--spp", default=None, help="spp, or a comma-separated list (default: "
                     "the proof's default)")
+    ap.add_argument("--rr-depths", default=None, help="Mitsuba's rr_depth (Russian roulette "
+                    "from this bounce on), comma-separated (default: the proof's)")
     ap.add_argument("--samplers", default=None, help="Mitsuba samplers, comma-separated "
                     "(default: the proof's)")
     ap.add_argument("--block-error", action="store_true")

@@ -9,9 +9,9 @@ function by :mod:`.km_to_rte` with the proof's optics (:mod:`.optics`: surface, 
 by Mitsuba's ``volpath`` in the proof's spectral bands (:mod:`.spectral`) and integrated to XYZ
 and CIELAB with the CIE 1931 observer under D65, as the measured spectra are.
 
-Scene: the patches side by side in one slab (``PATCH_MM`` square each, ``THICK_MM`` deep unless
-a thickness is given: "optically thick", the inks' diffusion lengths are below 1 mm), a black
-backing behind it, the surface (if any) on the slab's faces. One orthographic camera sees the
+Scene: the patches side by side (``PATCH_MM`` square boxes each, ``THICK_MM`` deep unless a
+thickness is given: "optically thick", the inks' diffusion lengths are below 1 mm), a black
+backing behind them, the surface (if any) on each patch's faces. One orthographic camera sees the
 whole chart; each patch's reflectance factor is the mean of the pixels within ``SPOT_MM`` of
 its centre (its edges, within 3 mm, where light crosses from the neighbours, are not read).
 
@@ -57,6 +57,7 @@ from dreamprint_gui.proof.compare import to_display
 from dreamprint_gui.proof.medium import medium_coefficients
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics, resolve_optics
+from dreamprint_gui.proof.print_render import INTEGRATOR
 from dreamprint_gui.proof.spectral import SpectralBands, spectral_bands
 
 __all__ = ["ChartSettings", "load_chart", "render_chart", "run_chart_proof", "GEOMETRIES",
@@ -68,6 +69,7 @@ DEFAULT_CHART_SPP = 512
 PATCH_MM = 12.0
 THICK_MM = 10.0
 SPOT_MM = 6.0
+GAP_MM = 0.05
 PIXELS_PER_PATCH = 8
 MAX_PATCHES = 5000
 
@@ -122,7 +124,7 @@ def load_chart(s: ChartSettings) -> Chart:
             raise DreamPrintError(f"{len(sf.samples)} measured spectra but {len(recipes)} "
                                   f"recipes in {s.recipes}; one spectrum per recipe, in the "
                                   "same order", s.reflectance)
-        R = np.stack([smp.resample(profile.wavelengths_nm).values for smp in sf.samples])
+        R = np.stack([smp.resample(profile.wavelengths_nm) for smp in sf.samples])
         lab = observer_for(profile.wavelengths_nm).spectra_to_Lab(R)
     return Chart(recipes, lab, profile, optics)
 
@@ -135,37 +137,37 @@ def _layout(n: int) -> tuple[int, int]:
 def chart_scene(mi, sigma_t3: NDArray, albedo3: NDArray, optics: Optics, geometry: str,
                 thickness_mm: float, spp: int, max_depth: int) -> tuple[dict, View, float]:
     """Mitsuba scene of a chart (rows, cols, 3 bands) with its camera; returns the scene, the
-    view and the factor turning radiance into reflectance factor. The slab's face is the plane
-    x = 0 (normal +x), columns along +y, rows down along -z."""
+    view and the factor turning radiance into reflectance factor. The patches' faces are the
+    plane x = 0 (normal +x), columns along +y, rows down along -z. Each patch is its own box
+    with a homogeneous medium (its own majorant: one grid over the chart made delta tracking
+    step at the darkest ink's rate in every patch) and the surface on its faces; the patches
+    are ``GAP_MM`` apart (their sides are far from the spot read)."""
     T = mi.ScalarTransform4f
     rows, cols = sigma_t3.shape[:2]
     w, h, t = cols * PATCH_MM, rows * PATCH_MM, float(thickness_mm)
-    lo = np.array([-t, -w / 2, -h / 2])
-    ext = np.array([t, w, h])
-    # VolumeGrid: (z, y, x, channels); the top row at +z
-
-    def grid(a: NDArray):
-        return mi.VolumeGrid(np.ascontiguousarray(a[::-1, :, None, :], np.float32))
-
-    tf = T().translate(lo.tolist()) @ T().scale(ext.tolist())
     phase = ({"type": "isotropic"} if optics.g == 0 else {"type": "hg", "g": float(optics.g)})
-    medium = {"type": "heterogeneous", "scale": 1.0,
-              "sigma_t": {"type": "gridvolume", "filter_type": "nearest", "grid": grid(sigma_t3),
-                          "to_world": tf, "raw": True},
-              "albedo": {"type": "gridvolume", "filter_type": "nearest", "grid": grid(albedo3),
-                         "to_world": tf, "raw": True},
-              "phase": phase}
     d: dict = {"type": "scene",
-               "integrator": {"type": "volpath", "max_depth": int(max_depth),
+               "integrator": {"type": INTEGRATOR, "max_depth": int(max_depth),
                               "rr_depth": int(max_depth), "hide_emitters": False},
-               "slab": {"type": "cube", "to_world": T().translate((lo + ext / 2).tolist())
-                        @ T().scale((ext / 2).tolist()),
-                        "bsdf": optics.bsdf() or {"type": "null"}, "interior": medium},
                "backing": {"type": "rectangle",
                            "to_world": T().translate([-t - 1e-3, 0.0, 0.0])
                            @ T().rotate([0, 1, 0], 90) @ T().scale([2 * w, 2 * h, 1.0]),
                            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb",
                                                                        "value": [0.0] * 3}}}}
+    for r in range(rows):
+        for c in range(cols):
+            st = np.asarray(sigma_t3[r, c], np.float64)
+            scale = float(max(st.max(), 1e-6))
+            medium = {"type": "homogeneous", "scale": scale,
+                      "sigma_t": {"type": "rgb", "value": (st / scale).tolist()},
+                      "albedo": {"type": "rgb",
+                                 "value": np.clip(albedo3[r, c], 0, 1).astype(float).tolist()},
+                      "phase": dict(phase)}
+            centre = [-t / 2, -w / 2 + (c + 0.5) * PATCH_MM, h / 2 - (r + 0.5) * PATCH_MM]
+            half = [t / 2, PATCH_MM / 2 - GAP_MM, PATCH_MM / 2 - GAP_MM]
+            d[f"patch_{r:03d}_{c:03d}"] = {
+                "type": "cube", "to_world": T().translate(centre) @ T().scale(half),
+                "bsdf": optics.bsdf() or {"type": "null"}, "interior": medium}
     if geometry == "d:8":
         d["environment"] = {"type": "constant", "radiance": {"type": "rgb", "value": [1.0] * 3}}
         view_el, factor = 8.0, 1.0
@@ -238,7 +240,7 @@ def render_chart(recipes: NDArray, profile: InkProfile, optics: Optics, bands: S
         for k, idx in enumerate(_spots(view, res, rows, cols, n)):
             out[k, 3 * p:3 * p + 3] = factor * flat[idx].mean(axis=0)
     info = {"renderer": "mitsuba", "version": mi.__version__, "variant": variant, "note": note,
-            "integrator": "volpath (no Russian roulette)", "spp": int(spp),
+            "integrator": f"{INTEGRATOR} (no Russian roulette)", "spp": int(spp),
             "max_depth": int(max_depth), "passes": passes}
     return out[:, :nb], info
 
