@@ -45,7 +45,12 @@ def job_cost(a) -> None:
 
     import numpy as np
 
-    from dreamprint_gui.job.correction import Correction, save_correction, source_fingerprint
+    from dreamprint_gui.job.correction import (
+        Correction,
+        placement_key,
+        save_correction,
+        source_fingerprint,
+    )
     from dreamprint_gui.job.plan import ConvertSettings, prepare_job
     from dreamprint_gui.job.run import run_conversion
 
@@ -61,8 +66,8 @@ def job_cost(a) -> None:
             gain[...] = (0.9, 0.9, 0.9, 1.1)
             corr = os.path.join(tmp, "c.npz")
             save_correction(Correction(gain, src, source_fingerprint(src), size,
-                                       ctx.printer.name, ctx.profile_fingerprint, "clear"),
-                            corr)
+                                       ctx.printer.name, ctx.profile_fingerprint, "clear",
+                                       placement=placement_key(ctx)), corr)
             out = []
             for tag, comp in (("plain", None), ("corrected", corr)):
                 s = ConvertSettings(source=src, height_mm=a.height_mm, workers=1,

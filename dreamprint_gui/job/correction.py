@@ -43,8 +43,8 @@ from numpy.typing import NDArray
 from dreamprint_gui.core.errors import DreamPrintError
 
 __all__ = ["Correction", "save_correction", "load_correction", "check_correction",
-           "source_fingerprint", "apply_correction", "axis_weights", "FORMAT", "VERSION",
-           "MAX_CELLS"]
+           "source_fingerprint", "apply_correction", "axis_weights", "placement_key",
+           "FORMAT", "VERSION", "MAX_CELLS"]
 
 FORMAT = "dreamprint-correction"
 VERSION = 1
@@ -61,6 +61,7 @@ class Correction:
     profile_fingerprint: str = ""
     background: str = "clear"
     report: dict[str, Any] = field(default_factory=dict)
+    placement: str = ""                       # the job's orientation and fit (JSON text)
 
     @property
     def is_identity(self) -> bool:
@@ -71,7 +72,8 @@ class Correction:
                 "source_fingerprint": self.source_fingerprint,
                 "print_size_mm": [float(v) for v in self.print_size_mm],
                 "printer": self.printer, "profile_fingerprint": self.profile_fingerprint,
-                "background": self.background, "cells_xyz": list(self.gain.shape[2::-1]),
+                "background": self.background, "placement": self.placement,
+                "cells_xyz": list(self.gain.shape[2::-1]),
                 "report": self.report}
 
     def describe(self) -> dict[str, Any]:
@@ -151,7 +153,8 @@ def load_correction(path: str | os.PathLike) -> Correction:
         size = tuple(float(v) for v in meta["print_size_mm"])
         corr = Correction(gain, str(meta["source"]), str(meta["source_fingerprint"]),
                           size, str(meta["printer"]), str(meta["profile_fingerprint"]),
-                          str(meta.get("background", "clear")), dict(meta.get("report") or {}))
+                          str(meta.get("background", "clear")), dict(meta.get("report") or {}),
+                          str(meta.get("placement", "")))
     except (KeyError, TypeError, ValueError) as exc:
         raise DreamPrintError(f"correction file lacks or has a malformed field: {exc}",
                               p) from None
@@ -162,7 +165,7 @@ def load_correction(path: str | os.PathLike) -> Correction:
 
 def check_correction(corr: Correction, path: str | os.PathLike, *, source: str,
                      print_size_mm: tuple[float, float, float], printer: str,
-                     profile_fingerprint: str, background: str) -> None:
+                     profile_fingerprint: str, background: str, placement: str = "") -> None:
     """Refuse (one line) a correction made for another source, size, printer, profile or
     background than the job's."""
     fp = source_fingerprint(source)
@@ -181,9 +184,20 @@ def check_correction(corr: Correction, path: str | os.PathLike, *, source: str,
                               f"job prints on '{printer}'", path)
     if corr.profile_fingerprint != profile_fingerprint:
         raise DreamPrintError("the correction was made with another ink profile", path)
+    if corr.placement != placement:
+        raise DreamPrintError("the correction was made for another orientation or fit of the "
+                              "source (--up, --rotate, --fit)", path)
     if corr.background != background:
         raise DreamPrintError(f"the correction was made with --background {corr.background}, "
                               f"this job has {background}", path)
+
+
+def placement_key(ctx: Any) -> str:
+    """The orientation and fit of a job (:class:`..plan.JobContext`) as the text a correction
+    records."""
+    pj = ctx.placement_json() if hasattr(ctx, "placement_json") else {}
+    return json.dumps({"orientation": pj.get("orientation"),
+                       "fit": (pj.get("fit") or {}).get("mode")}, sort_keys=True)
 
 
 def axis_weights(n: int, g: int, start: int = 0, count: int | None = None

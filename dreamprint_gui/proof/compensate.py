@@ -50,13 +50,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.job.correction import Correction, save_correction, source_fingerprint
+from dreamprint_gui.job.correction import (
+    Correction,
+    placement_key,
+    save_correction,
+    source_fingerprint,
+)
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.proof.cameras import View, orbit_views
 from dreamprint_gui.proof.compare import compare_view, summarise
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
+from dreamprint_gui.proof.optics import resolve_optics
 from dreamprint_gui.proof.print_render import render_print
 from dreamprint_gui.proof.runner import ProofProgress, ProofSettings, _in_thread, print_xyz
+from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import (
     SourceField,
     optical_depth,
@@ -99,6 +106,9 @@ class CompensateSettings:
     table_size: int = 100
     source_options: tuple[tuple[str, Any], ...] = ()
     overwrite: bool = False
+    up: str | None = None
+    rotate: int = 0
+    fit: str = "occupied"
 
     def proof_settings(self, method: str = "paper") -> ProofSettings:
         return ProofSettings(source=self.source, height_mm=self.height_mm, size_mm=self.size_mm,
@@ -108,7 +118,8 @@ class CompensateSettings:
                              density_scale=self.density_scale, background=self.background,
                              max_cells=self.max_cells, layers_per_block=self.layers_per_block,
                              bands=self.bands, max_depth=self.max_depth,
-                             table_size=self.table_size, source_options=self.source_options)
+                             table_size=self.table_size, source_options=self.source_options,
+                             up=self.up, rotate=self.rotate, fit=self.fit)
 
 
 def validate(s: CompensateSettings) -> None:
@@ -284,7 +295,7 @@ class _Loop:
         return Correction(np.asarray(gain, np.float32), self.s.source,
                           source_fingerprint(self.s.source), self.print_size,
                           ctx.printer.name, ctx.profile_fingerprint, self.s.background,
-                          report or {})
+                          report or {}, placement_key(ctx))
 
     def medium(self, gain: NDArray, progress=None):
         self.lab.ctx.correction = self.correction(gain)
@@ -308,9 +319,13 @@ class _Loop:
         s, bands = self.s, self.bands
         lo, hi = medium.box_mm
         sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S)
+        ps = s.proof_settings()
+        optics = resolve_optics(ps.surface, ps.phase, self.lab.profile.proof_optics)
+        spd = samples_per_degree(2.0 * self.views[0].half_mm / s.resolution,
+                                 ps.viewing_distance_mm)
         prn_bands, self.render_info = render_print(
             sigma_t, albedo, lo, hi, self.views, s.resolution, s.spp, seed, s.max_depth,
-            progress=progress, cancelled=self.cancelled)
+            progress=progress, cancelled=self.cancelled, optics=optics)
         y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
         obs = bands.observer
         to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
@@ -318,8 +333,9 @@ class _Loop:
         for i, v in enumerate(self.views):
             T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
             a_p = 1.0 - T @ y_w
-            xyz = print_xyz(bands, prn_bands[i], T, False)
-            fig, _ = compare_view(self.src_lin[i] @ to_xyz.T, xyz, self.src_alpha[i], a_p, obs)
+            xyz = print_xyz(bands, prn_bands[i], T, False, optics)
+            fig, _ = compare_view(self.src_lin[i] @ to_xyz.T, xyz, self.src_alpha[i], a_p, obs,
+                                  spd)
             lins.append(obs.XYZ_to_linear_sRGB(xyz))
             alphas.append(a_p)
             figs.append(fig)
@@ -384,8 +400,8 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
                                             lambda p, m=medium: loop.proof(m, s.seed, p))
         o = summarise(figs)
         history.append({"iteration": it, "elapsed_s": round(el(), 2),
-                        **{k: o[k] for k in ("mean_de2000", "p95_de2000", "coverage_error",
-                                             "coverage_abs_error")}})
+                        **{k: o[k] for k in ("mean_de2000", "p95_de2000", "mean_scielab_de2000",
+                                             "coverage_error", "coverage_abs_error")}})
         if it == 0:
             t_first = el()
         left = "" if it == 0 or it == n_it else \

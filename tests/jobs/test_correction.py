@@ -12,6 +12,7 @@ from dreamprint_gui.job.correction import (
     Correction,
     apply_correction,
     load_correction,
+    placement_key,
     save_correction,
     source_fingerprint,
 )
@@ -33,7 +34,8 @@ def _matching(gain, **over):
     size = tuple(n * v for n, v in zip(ctx.shape_xyz, ctx.printer.voxel_mm, strict=True))
     kw = dict(source="demo", source_fingerprint=source_fingerprint("demo"), print_size_mm=size,
               printer=ctx.printer.name, profile_fingerprint=ctx.profile_fingerprint,
-              background="clear", report={"figures": {"before": {"mean_de2000": 9.0}}})
+              background="clear", report={"figures": {"before": {"mean_de2000": 9.0}}},
+              placement=placement_key(ctx))
     kw.update(over)
     return Correction(np.asarray(gain, np.float32), **kw)
 
@@ -94,7 +96,8 @@ def test_bad_files_are_refused_in_one_line(tmp_path, damage, words):
     ("print_size_mm", (1.0, 2.0, 3.0), "print of 1.00 x 2.00 x 3.00 mm"),
     ("printer", "voxelprint-14um", "printer"),
     ("profile_fingerprint", "x", "ink profile"),
-    ("background", "empty", "--background empty")])
+    ("background", "empty", "--background empty"),
+    ("placement", "{}", "orientation")])
 def test_mismatched_corrections_are_refused(tmp_path, capsys, field, value, words):
     p = tmp_path / "c.npz"
     save_correction(_matching(np.ones((2, 2, 2, 4)), **{field: value}), p)
