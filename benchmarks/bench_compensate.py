@@ -97,6 +97,7 @@ def floor_only(a) -> None:
     from dreamprint_gui.proof.medium import block_for_cell
     from dreamprint_gui.proof.methods import _convert_settings
     from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
+    from dreamprint_gui.proof.scielab import samples_per_degree
     from dreamprint_gui.proof.source_render import render_source, sample_source
     from dreamprint_gui.proof.spectral import spectral_bands
 
@@ -114,8 +115,10 @@ def floor_only(a) -> None:
             views = orbit_views(size, 4)
             src = [render_source(field, v, a.resolution) for v in views]
             obs = spectral_bands(lab.profile, 12).observer
+            spd = samples_per_degree(2 * views[0].half_mm / a.resolution,
+                                     ps.viewing_distance_mm)
             f = gamut_floor(lab, field, views, a.resolution, [x[0] for x in src],
-                            [x[1] for x in src], obs)
+                            [x[1] for x in src], obs, spd)
             print(f"{name:7s} {bg:6s} gamut floor dE {f['mean_de2000']:5.2f}/"
                   f"{f['p95_de2000']:5.2f} cov {f['coverage_error']:+.3f} "
                   f"({time.perf_counter() - t0:.0f} s)", flush=True)
@@ -182,8 +185,10 @@ def main() -> None:
                    "load_before": load0, "load_after": load1}
             rows.append(row)
             print(f"{name:7s} {bg:6s} paper dE {p['mean_de2000']:5.2f}/{p['p95_de2000']:5.2f} "
+                  f"S-CIELAB {p['mean_scielab_de2000']:5.2f} "
                   f"cov {p['coverage_error']:+.3f} | compensated dE {c['mean_de2000']:5.2f}/"
-                  f"{c['p95_de2000']:5.2f} cov {c['coverage_error']:+.3f} | "
+                  f"{c['p95_de2000']:5.2f} S-CIELAB {c['mean_scielab_de2000']:5.2f} "
+                  f"cov {c['coverage_error']:+.3f} | "
                   f"{-100 * row['reduction_de_mean']:+.0f}% dE mean | floor dE "
                   f"{floor['mean_de2000']:5.2f} | optimise {t_opt:.0f} s "
                   f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)

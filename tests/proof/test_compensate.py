@@ -111,13 +111,16 @@ def test_gamut_floor_of_an_identity_table_is_the_source(monkeypatch):
     views = orbit_views((2.0, 2.0, 2.0), 2)
     src = [render_source(field, v, 16) for v in views]
     obs = spectral_bands(lab.profile, 12).observer
-    f = gamut_floor(lab, field, views, 16, [s[0] for s in src], [s[1] for s in src], obs)
+    from dreamprint_gui.proof.scielab import samples_per_degree
+
+    spd = samples_per_degree(2 * views[0].half_mm / 16, 400.0)
+    f = gamut_floor(lab, field, views, 16, [s[0] for s in src], [s[1] for s in src], obs, spd)
     assert f["object_pixels"] > 0
     assert f["mean_de2000"] < 0.05 and abs(f["coverage_error"]) < 1e-9
 
 
 def test_evaluate_methods_compensated_row_and_gamut_floor(capsys):
-    code = main(["evaluate", "methods", "demo", "--methods", "paper,compensated",
+    code = main(["evaluate", "methods", "demo", "--method", "paper", "--method", "compensated",
                  "--height-mm", "3", "--views", "1", "--resolution", "16", "--spp", "2",
                  "--cells", "12", "--table-size", "17", "--iterations", "1",
                  "--training-views", "1", "--json"])
