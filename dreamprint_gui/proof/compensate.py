@@ -59,7 +59,9 @@ from dreamprint_gui.job.correction import (
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.proof.cameras import View, orbit_views
 from dreamprint_gui.proof.compare import compare_view, summarise
+from dreamprint_gui.proof.labels import EngineLabels
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
+from dreamprint_gui.proof.methods import _convert_settings
 from dreamprint_gui.proof.optics import resolve_optics
 from dreamprint_gui.proof.print_render import render_print
 from dreamprint_gui.proof.runner import ProofProgress, ProofSettings, _in_thread, print_xyz
@@ -272,9 +274,6 @@ class _Loop:
 
     def __init__(self, s: CompensateSettings, views: list[View],
                  cancelled: Callable[[], bool]) -> None:
-        from dreamprint_gui.proof.labels import EngineLabels
-        from dreamprint_gui.proof.methods import _convert_settings
-
         self.s = s
         self.cancelled = cancelled
         self.lab = EngineLabels(_convert_settings(s.proof_settings()))
@@ -378,8 +377,6 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
                 box["e"] = exc
         yield from _in_thread(work, stage, prog, el, box, cancel)
         return box["r"]
-
-    from dreamprint_gui.proof.labels import EngineLabels  # noqa: F401 - fail early
 
     loop = _Loop(s, [], is_cancelled)
     size0 = loop.print_size

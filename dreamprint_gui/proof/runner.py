@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.gamut.alignment import predicted_appearance
 from dreamprint_gui.job.halftone import HALFTONE_METHODS
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.proof.cameras import orbit_views
@@ -46,7 +47,12 @@ from dreamprint_gui.proof.methods import METHODS, method_labels
 from dreamprint_gui.proof.optics import resolve_optics
 from dreamprint_gui.proof.print_render import SAMPLERS, hides_direct, render_print_seeds
 from dreamprint_gui.proof.scielab import samples_per_degree
-from dreamprint_gui.proof.source_render import optical_depth, render_source, sample_source
+from dreamprint_gui.proof.source_render import (
+    SourceField,
+    optical_depth,
+    render_source,
+    sample_source,
+)
 from dreamprint_gui.proof.spectral import spectral_bands
 
 __all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_proof",
@@ -313,9 +319,6 @@ def gamut_floor(lab, field, views, resolution: int, src_lin: list, src_alpha: li
     background threshold empty), compared with the source render. No light transport between
     voxels and no background block: what any method with these inks could at best show. None
     for a job folder (no tables)."""
-    from dreamprint_gui.gamut.alignment import predicted_appearance
-    from dreamprint_gui.proof.source_render import SourceField
-
     ctx = getattr(lab, "ctx", None)
     if ctx is None or ctx.tables is None:
         return None

@@ -90,7 +90,7 @@ def test_cancel_writes_nothing(tmp_path):
 def test_gamut_floor_of_an_identity_table_is_the_source(monkeypatch):
     """With tables that deposit exactly the asked colour and density the floor's render is the
     source's own: dE2000 0 and coverage error 0 (the plumbing of runner.gamut_floor)."""
-    from dreamprint_gui.gamut import alignment
+    from dreamprint_gui.proof import runner
     from dreamprint_gui.proof.cameras import orbit_views
     from dreamprint_gui.proof.labels import EngineLabels
     from dreamprint_gui.proof.methods import _convert_settings
@@ -105,7 +105,7 @@ def test_gamut_floor_of_an_identity_table_is_the_source(monkeypatch):
     sigma[sigma < 5] = 0.0
     field = SourceField(sigma, rng.uniform(0, 1, (6, 6, 6, 3)).astype(np.float32),
                         np.array([-1.0, -1, -1]), np.full(3, 2 / 6))
-    monkeypatch.setattr(alignment, "predicted_appearance",
+    monkeypatch.setattr(runner, "predicted_appearance",
                         lambda tables, profile, rgb, s: (np.asarray(rgb), np.asarray(s)))
     assert lab.ctx.halftoner.threshold < 5.0  # every non-empty cell is printed
     views = orbit_views((2.0, 2.0, 2.0), 2)
