@@ -48,6 +48,36 @@ def cli(debug: bool) -> None:
     """DreamPrint: radiance volumes to PolyJet print jobs."""
 
 
+def placement_options(f):
+    """``--up``, ``--rotate`` and ``--fit``: how a source stands and what its size measures
+    (:mod:`..io.volumes.orient`)."""
+    opts = [
+        click.option("--up", type=click.Choice(["auto", "x", "-x", "y", "-y", "z", "-z"]),
+                     default="auto", show_default=True,
+                     help="The source axis that becomes the print's up (+z). auto: the "
+                          "source's known convention (Gaussian splats PLY/.splat/SOG -y, SPZ "
+                          "y, InstantNGP z), else z."),
+        click.option("--rotate", default="0", show_default=True,
+                     help="Turn the print about its z: 0, 90, 180 or 270 degrees "
+                          "(counter-clockwise seen from above)."),
+        click.option("--fit", type=click.Choice(["occupied", "box"]), default="occupied",
+                     show_default=True,
+                     help="What --height-mm / --size-mm measure: occupied (the object's "
+                          "non-empty bounds, empty margins cropped) or box (the file's "
+                          "declared box)."),
+    ]
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def placement_values(up: str, rotate: str) -> tuple[str | None, int]:
+    """(up or None for auto, rotate in degrees) from the CLI's values."""
+    from dreamprint_gui.io.volumes.orient import parse_rotate
+
+    return (None if up == "auto" else up), parse_rotate(rotate)
+
+
 @cli.group()
 def evaluate() -> None:
     """Reproduce the paper's evaluations and check finished jobs."""

@@ -4,9 +4,11 @@ Defines
 -------
 - :class:`ConvertSettings`: everything ``dreamprint convert`` takes.
 - :class:`ConvertProgress`: what the conversion yields (layers done/total, voxels, elapsed, ETA).
-- :class:`JobContext` and :func:`prepare_job`: resolve settings into the source, the printer
-  grid, the colour tables (paper section 4.1-4.2), the halftoner and the printer; refuse a job
-  larger than the tray before any work.
+- :class:`JobContext` and :func:`prepare_job`: resolve settings into the source (turned by
+  ``--up`` / ``--rotate`` or its known convention, :mod:`..io.volumes.orient`), the printer
+  grid (over the occupied or the declared bounds, ``--fit``; :func:`fitted_bounds`), the colour
+  tables (paper section 4.1-4.2), the halftoner and the printer; refuse a job larger than the
+  tray before any work.
 - :func:`_slabs`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan), and
   :func:`_scheduler_kind`: which Dask scheduler runs them (:mod:`.run`).
 """
@@ -30,14 +32,20 @@ from dreamprint_gui.gamut.mapping import canonical_intent
 from dreamprint_gui.gamut.optimise import canonical_objective
 from dreamprint_gui.gamut.tables import build_estimate, resolve_choice
 from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.io.volumes.orient import (
+    FIT_MODES,
+    choose_orientation,
+    occupied_bounds,
+    orient_source,
+)
 from dreamprint_gui.io.volumes.registry import reader_options
 from dreamprint_gui.job.content import CONTENT_MODES, apply_content
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
 from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
-           "JobCancelled",
-           "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings"]
+           "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
+           "fitted_bounds"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 
@@ -69,6 +77,9 @@ class ConvertSettings:
     source_options: dict[str, Any] = field(default_factory=dict)
     content: str = "auto"                 # "fog" | "solid" | "auto" (job.content)
     sampling: str | None = None           # None: the reader's default; "nearest" | "linear"
+    up: str | None = None                 # source axis that becomes +z; None: auto (orient)
+    rotate: int = 0                       # degrees about the print's z (quarter turns)
+    fit: str = "occupied"                 # "occupied" (non-empty bounds) | "box" (declared)
 
 
 @dataclass(frozen=True)
@@ -164,6 +175,21 @@ class JobContext:
     # the source file's size and mtime when the job was planned (:func:`_stamp`): part of a
     # worker's cache key, so a long-lived worker reopens a source edited since its last job
     source_stamp: tuple = ()
+    orientation: Any = None  # io.volumes.orient.Orientation (resolved: never "auto")
+    fit: dict = field(default_factory=dict)  # placement_json()'s "fit"
+
+    @property
+    def fit_bounds(self):
+        """The bounds the grid covers: the occupied ones (``--fit occupied``), or None for the
+        source's declared box."""
+        return self.fit.get("bounds") if self.fit.get("mode") == "occupied" else None
+
+    def placement_json(self) -> dict[str, Any]:
+        """The orientation and fit of the job (manifest ``placement``, pre-flight)."""
+        o = self.orientation
+        return {"orientation": o.to_json() if o is not None else None,
+                "orientation_text": o.describe() if o is not None else "up = source z",
+                "fit": dict(self.fit), "object_size_mm": list(self.grid.size_mm)}
 
     @property
     def shape_xyz(self) -> tuple[int, int, int]:
@@ -193,14 +219,17 @@ class JobContext:
         if self.source is not None and self.tables is not None:
             return self.source, self.tables
         s = self.settings
+        o = self.orientation
         key = (s.source, self.source_stamp, repr(sorted(s.source_options.items())),
                str(s.profile), self.printer.layer_thickness_mm, s.objective, s.table_size,
-               s.content, s.sampling, s.intent)
+               s.content, s.sampling, s.intent, None if o is None else (o.up, o.rotate))
         with _WORKER_LOCK:
             if key not in _WORKER_CACHE:
 
                 mode = self.content.mode if self.content is not None else "fog"
                 src = _open_source(s.source, s.source_options, s.content, s.sampling)
+                if self.orientation is not None:
+                    src = orient_source(src, self.orientation)
                 src, _ = apply_content(src, mode, self.halftoner.threshold)
                 _, tables = _tables_for(s.profile, self.printer.layer_thickness_mm,
                                         s.objective, s.table_size, s.intent)
@@ -229,6 +258,23 @@ def _clear_sigma(profile) -> float:
                               profile.density_samples))
 
 
+def fitted_bounds(source, fit: str) -> tuple[Any, dict[str, Any]]:
+    """The bounds a job's grid covers for ``--fit`` (``occupied``: the source's non-empty
+    bounds, :func:`..io.volumes.orient.occupied_bounds`; ``box``: its declared bounds) and
+    the manifest's ``fit`` record (mode, both boxes in print-frame source units, and what
+    happened when nothing is occupied)."""
+    declared = [list(source.bounds[0]), list(source.bounds[1])]
+    if fit == "box":
+        return None, {"mode": "box", "bounds": declared, "declared_bounds": declared}
+    occ = occupied_bounds(source)
+    if occ is None:
+        return None, {"mode": "box", "requested": "occupied", "bounds": declared,
+                      "declared_bounds": declared,
+                      "note": "nothing occupied: the file's declared box is used"}
+    return occ, {"mode": "occupied", "bounds": [list(occ[0]), list(occ[1])],
+                 "declared_bounds": declared}
+
+
 def check_settings(settings: ConvertSettings) -> None:
     """The checks of a job's settings that need no file: a bad or missing choice (a missing
     --height-mm / --size-mm included) is reported before the source is opened or any message
@@ -253,6 +299,8 @@ def check_settings(settings: ConvertSettings) -> None:
         raise DreamPrintError(f"--workers must be at least 1, got {s.workers}")
     if s.content not in CONTENT_MODES:
         raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
+    if s.fit not in FIT_MODES:
+        raise DreamPrintError(f"--fit must be occupied or box, not '{s.fit}'")
 
 
 # Seconds numba takes to compile, on the 2-core development machine (bench_preflight --samples
@@ -299,8 +347,12 @@ def prepare_job(settings: ConvertSettings,
     if notify is not None:
         for msg in _compile_notices(source):
             notify(msg)
+    orientation = choose_orientation(source, s.up, s.rotate)
+    source = orient_source(source, orientation)
+    bounds, fit = fitted_bounds(source, s.fit)
     grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
-                           size_mm=tuple(s.size_mm) if s.size_mm is not None else None)
+                           size_mm=tuple(s.size_mm) if s.size_mm is not None else None,
+                           bounds=bounds)
     shape = tuple(int(v) for v in grid.shape_xyz)
     if min(shape) < 1:
         raise DreamPrintError(f"the job would have no voxels (grid {shape[0]} x {shape[1]} x "
@@ -324,7 +376,8 @@ def prepare_job(settings: ConvertSettings,
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
                      palette=printer.palette(), profile_name=profile.name,
                      profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
-                     content=content, source_stamp=_stamp(s.source))
+                     content=content, source_stamp=_stamp(s.source), orientation=orientation,
+                     fit=fit)
     return ctx
 
 

@@ -114,6 +114,7 @@ class Preflight:
     background: str
     warnings: list[PreflightWarning] = field(default_factory=list)
     estimate_seconds: float = 0.0             # what this pre-flight took
+    placement: dict[str, Any] = field(default_factory=dict)  # orientation, fit, object size
     printed_fraction: float = 0.0             # of the job, at or above the background threshold
     clamped_printed_fraction: float = 0.0     # of the printed voxels, clamped high
     # at safe_density_scale, the share of the printed voxels that would fall to the background
@@ -143,6 +144,7 @@ class Preflight:
             f"job: {nx} x {ny} x {nz} voxels ({sx:.2f} x {sy:.2f} x {sz:.2f} mm), "
             f"{nz:,} slices, {self.total_voxels:,} voxels",
             f"content: {self.content.get('mode')} ({self.content.get('reason')})",
+            *_placement_lines(self.placement),
             f"materials (estimated from {self.sampled_voxels:,} voxels): {fr}",
             f"disk: about {_human_bytes(self.disk_bytes)}; conversion: "
             f"{_about_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
@@ -166,6 +168,7 @@ class Preflight:
             "seconds_estimate": self.seconds,
             "rate_voxels_per_second": self.rate_voxels_per_s, "rate_source": self.rate_source,
             "content": dict(self.content), "background": self.background,
+            "placement": dict(self.placement),
             "warnings": [w.to_json() for w in self.warnings],
             "estimate_seconds": self.estimate_seconds,
             "printed_fraction": self.printed_fraction,
@@ -471,10 +474,25 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
         printed_fraction=printed / n,
         clamped_printed_fraction=float(stats[1]) / printed if printed else 0.0,
         lost_at_safe_scale=lost, max_unclamped_density_scale=up,
-        intent=getattr(tables, "intent", "colorimetric"))
+        intent=getattr(tables, "intent", "colorimetric"),
+        placement=ctx.placement_json())
     pf.warnings = _warnings(pf)
     pf.estimate_seconds = time.perf_counter() - t0
     return pf
+
+
+def _placement_lines(place: dict) -> list[str]:
+    """``orientation: ...`` and ``size: ...`` of a job's placement (``JobContext.placement_json``)
+    : how it stands and what the printed object measures."""
+    if not place:
+        return []
+    fit = place.get("fit") or {}
+    size = " x ".join(f"{v:.2f}" for v in place.get("object_size_mm", ()))
+    what = ("the object's occupied bounds, empty margins cropped" if fit.get("mode") ==
+            "occupied" else "the file's declared box" + (f" ({fit['note']})"
+                                                         if fit.get("note") else ""))
+    return [f"orientation: {place.get('orientation_text', '')}",
+            f"printed object: {size} mm (x, y, z; --fit {fit.get('mode', 'box')}: {what})"]
 
 
 # A lower --density-scale is suggested against clamping only when it keeps the content's look:
