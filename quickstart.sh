@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # DreamPrint quick start: `./quickstart.sh app` or `./quickstart.sh test`.
-# Installs what a fresh Debian machine lacks (apt packages for Qt/VTK, Xvfb, the OpenVDB
-# helper interpreter), creates .venv, installs the package, then runs the app or the tests.
+# Installs what a fresh Debian machine lacks (apt packages for Qt/VTK, Xvfb, OpenVDB's own
+# library, which only the tests use to cross-check DreamPrint's .vdb reader), creates .venv,
+# installs the package, then runs the app or the tests.
 set -euo pipefail
 cd "$(dirname "$0")"
 what="${1:-app}"; shift || true

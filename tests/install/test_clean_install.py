@@ -37,7 +37,6 @@ ROOT = Path(__file__).resolve().parents[2]
 TESTS = ROOT / "tests"
 pytestmark = pytest.mark.clean_install
 
-UNTIL_VDB = pytest.mark.xfail(reason="until branch vdb lands", strict=True)
 
 
 def _module(rel: str):
@@ -187,8 +186,7 @@ def test_the_environment_is_isolated(clean_env):
     print(f"fresh venv + pip install: {seconds:.0f} s")
 
 
-@pytest.mark.parametrize("fmt", [pytest.param(f, marks=UNTIL_VDB) if f == "openvdb" else f
-                                 for f in ROWS])
+@pytest.mark.parametrize("fmt", ROWS)
 def test_inspect_every_format(clean_env, fmt):
     path = clean_env[2][fmt]
     r = _run(clean_env, "inspect", "--json", path)
@@ -218,7 +216,6 @@ def test_convert_a_voxel_model(clean_env, tmp_path):
     _convert(clean_env, clean_env[2]["vox"], tmp_path)
 
 
-@UNTIL_VDB
 def test_convert_the_openvdb_sample(clean_env, tmp_path):
     _convert(clean_env, clean_env[2]["openvdb"], tmp_path)
 
