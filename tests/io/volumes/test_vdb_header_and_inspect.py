@@ -119,7 +119,7 @@ def test_inspect_vector_grid_ranges_and_units(vdbs, capsys):
     assert "values per component x 0.2 .. 0.2, y 0.5 .. 0.5, z 1 .. 1" in text
     assert "source units" in text and "index i 0 .. 15, j 0 .. 23, k 0 .. 9" in text
     # box of 16 x 24 x 10 voxels of 0.25 units: z extent 2.5 units -> 20 mm, 8 mm per unit
-    assert "1 source unit = 8 mm; the bounds span 32.00 x 48.00 x 20.00 mm" in text
+    assert "1 source unit = 8 mm; the print is 32.00 x 48.00 x 20.00 mm (x, y, z)" in text
 
 
 def test_inspect_level_set_content(vdbs, capsys):
