@@ -29,10 +29,14 @@ line under a job says when the probe found the disk in that state.
     python benchmarks/bench_convert.py --source all --sizes 1e8,1e9 --repeat 1 --no-speedup
     python benchmarks/bench_convert.py --scale-out --source demo     # 1e9: LocalCluster 1 -> 2
 
+The conversion's CPU seconds per voxel (all its threads) are printed too, with the rate two
+fully busy cores would give: on a shared machine, where the wall clock also counts the time
+other processes hold the cores, they are the steadier figure.
+
 ``--source`` takes a source kind of :mod:`bench_sources` (demo, openvdb, openvdb-manta,
 nanovdb, vtk, vtk-legacy, metaimage, nrrd, radiance, radiance-linear, inria, inria-sample,
-compressed-ply, spz, vox; ``all`` for every one; generated files are made on first use), or a
-file. The job's height is chosen from the source's bounds so that the job has about the asked
+compressed-ply, spz, vox, ingp; ``all`` for every one; generated files are made on first use),
+or a file. The job's height is chosen from the source's bounds so that the job has about the asked
 number of voxels. Per job the benchmark prints, besides the line above, the stages in ns per
 voxel (worker-seconds / voxels): "load" the source's one-time opening (reading, the OpenVDB
 helper's transfer, the Gaussians' set-up) in the converting process, "prepare" the rest of
@@ -323,7 +327,9 @@ def stage_line(r: dict) -> str:
              ("encode", st.get("png", 0.0)), ("write", st.get("write", 0.0))]
     text = ", ".join(f"{k} {s / v * 1e9:.1f}" for k, s in parts if s > 0)
     end = v / (r["wall_s"] + r["prepare_s"])
-    return f"ns/voxel: {text}; end to end (load included) {end / 1e6:.1f} Mvox/s"
+    cpu = r["cpu_s"] / v * 1e9
+    return (f"ns/voxel: {text}; end to end (load included) {end / 1e6:.1f} Mvox/s; "
+            f"conversion CPU {cpu:.1f} ns/voxel (2 cores busy: {2e3 / cpu:.0f} Mvox/s)")
 
 
 def _peak_rss_mb() -> float:

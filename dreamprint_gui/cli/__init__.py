@@ -10,6 +10,7 @@ mistyped option answer at once, without loading numba, colour-science and the co
 
 from __future__ import annotations
 
+import os
 import sys
 
 import click
@@ -17,7 +18,30 @@ import click
 from dreamprint_gui.core.errors import DreamPrintError
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    """The top-level group: a reader that closes the pipe early (``dreamprint ... | head -1``)
+    ends the command quietly with status 0, as for any Unix filter."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError:
+            _stdout_to_devnull()
+            raise click.exceptions.Exit(0) from None
+
+
+def _stdout_to_devnull() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush of what is still buffered
+    does not fail on the closed pipe (Python's documented recipe, library/signal.html)."""
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    except (OSError, ValueError, AttributeError):  # no real file descriptor (tests)
+        pass
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--debug", is_flag=True, help="Show a traceback on error.")
 @click.version_option(package_name="dreamprint", prog_name="dreamprint")
 def cli(debug: bool) -> None:

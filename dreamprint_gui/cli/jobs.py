@@ -72,9 +72,12 @@ def _fmt_time(s: float | None) -> str:
               help="Voxel models (.vox): nearest (default, sharp edges) or linear (smooth).")
 @click.option("--objective", type=click.Choice(["srgb", "cielab", "de2000"]), default=None,
               help="Colour table objective (default: the profile's, else de2000).")
-@click.option("--intent", type=click.Choice(["colorimetric", "perceptual"]), default=None,
-              help="Rendering intent for colours outside the printable gamut (default: the "
-                   "profile's, else colorimetric).")
+@click.option("--intent", type=click.Choice(["colorimetric", "relative", "perceptual"]),
+              default=None,
+              help="Rendering intent: colorimetric (nearest printable colour), relative (the "
+                   "source white maps to the printable white, then colorimetric) or perceptual "
+                   "(sRGB compressed into the gamut). Default: the profile's, else "
+                   "colorimetric.")
 @click.option("--table-size", type=int, default=100, hidden=True,
               help="Colour table nodes per axis (tests use small tables).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")

@@ -20,6 +20,7 @@ something to draw (:class:`.volume_view.ViewHost`); until then it says what is b
 from __future__ import annotations
 
 import logging
+import time
 from html import escape
 from pathlib import Path
 
@@ -33,6 +34,7 @@ from PySide6.QtWidgets import (
     QGroupBox,
     QHBoxLayout,
     QLabel,
+    QProgressBar,
     QSlider,
     QSplitter,
     QTabWidget,
@@ -123,6 +125,14 @@ class PreviewPage(QWidget):
         self.placement_note.setObjectName("contentNote")
         self.status = QLabel("no source")
         self.status.setWordWrap(True)
+        # the preview's computation: busy while preparing, the fraction while predicting
+        self.busy = QProgressBar(minimum=0, maximum=0)
+        self.busy.setTextVisible(False)
+        self.busy.setMaximumHeight(10)
+        self.busy.setVisible(False)
+        self._wait: dict | None = None
+        self._wait_clock = QTimer(self, interval=500)
+        self._wait_clock.timeout.connect(self._tick_wait)
         # The footnote of the 3D views (preview grid, downsampling) in the application's font,
         # under the views.
         self.note = QLabel("")
@@ -185,6 +195,7 @@ class PreviewPage(QWidget):
         self.preflight = None  # the engine's Preflight of the shown settings
         side_l.addWidget(box)
         side_l.addWidget(self.status)
+        side_l.addWidget(self.busy)
         side_l.addWidget(self.warnings_box)
         side_l.addStretch(1)
         side.setMinimumWidth(280)
@@ -351,32 +362,74 @@ class PreviewPage(QWidget):
             layer_thickness_mm=self.printer.layer_thickness_mm)  # as the job's tables
 
         def job(report, cancel):
+            report(("prepare", None))
             ctx = job_context(settings, previous)
-            return ctx, profile, compute_preview(ctx, profile, progress=report, cancel=cancel)
+            report(("predict", 0.0))
+            return ctx, profile, compute_preview(
+                ctx, profile, progress=lambda f: report(("predict", float(f))), cancel=cancel)
 
         name = Path(str(self.source_path)).name
-        self.show_waiting(f"sampling {name} and predicting the print ...")
+        self._wait = {"name": name, "stage": "prepare", "fraction": None,
+                      "t0": time.monotonic(), "first": previous is None}
         task = Task(job, "preview")
-        task.progress.connect(lambda f, name=name: self.show_waiting(
-            f"sampling {name} and predicting the print ... {100 * f:.0f}%"))
+        task.progress.connect(self._preview_progress)
         task.succeeded.connect(self._show)
         task.failed.connect(self._failed)
         task.done.connect(self._task_done)
         self._task = run_task(task)
+        self.busy.setRange(0, 0)
+        self.busy.setVisible(True)
+        self._tick_wait()
+        self._wait_clock.start()
+
+    def _preview_progress(self, update) -> None:
+        stage, fraction = update
+        self._wait.update(stage=stage, fraction=fraction)
+        if fraction is None:
+            self.busy.setRange(0, 0)   # no fraction to tell: a busy bar and the seconds
+        else:
+            self.busy.setRange(0, 100)
+            self.busy.setValue(int(100 * fraction))
+        self._tick_wait()
+
+    def wait_text(self) -> str:
+        """What the preview is doing, with the seconds it has taken so far."""
+        w = self._wait
+        secs = f"{time.monotonic() - w['t0']:.0f} s"
+        if w["stage"] == "prepare":
+            extra = (" (the first time on this computer the halftone mask and the compiled "
+                     "kernels are built: this can take a minute or two)") if w["first"] else ""
+            return f"preparing {w['name']}: opening it, the halftone mask, the kernels{extra} "\
+                   f"... {secs}"
+        pct = f"{100 * (w['fraction'] or 0.0):.0f}%"
+        return f"sampling {w['name']} and predicting the print ... {pct}, {secs}"
+
+    def _tick_wait(self) -> None:
+        if self._wait is not None:
+            self.show_waiting(self.wait_text())
+
+    def _stop_wait(self) -> None:
+        self._wait_clock.stop()
+        self._wait = None
+        self.busy.setVisible(False)
 
     def _task_done(self) -> None:
+        if not self._pending:
+            self._stop_wait()
         if self._pending:
             self._pending = False
             self._task = None
             self.recompute()
 
     def _failed(self, message: str, _tb: str) -> None:
+        self._stop_wait()
         self.show_waiting("no preview")  # the message itself: the window's status bar
         self.failed.emit(f"Preview failed: {message}")
 
     def _show(self, result) -> None:
         if self._pending:
             return
+        self._stop_wait()
         self.ctx, self.profile_eff, data = result
         self.data = data
         # The halftoned layer is computed on a worker while this thread draws the volumes.
@@ -405,9 +458,7 @@ class PreviewPage(QWidget):
             pl.renderer.reset_camera(render=False)  # the plotter-level one always renders
         self._framing = framing
         pl.render()
-        sx, sy, sz = data.size_mm
-        self.status.setText(f"{Path(str(self.source_path)).name}: print "
-                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {printer_name(self.printer)}")
+        self.status.setText(self.size_text())
         self.note.setText(data.downsample_note())
         choice = self.ctx.content
         if choice is None:
@@ -424,6 +475,19 @@ class PreviewPage(QWidget):
         self._start_preflight()
         if not self.slice_slider.isEnabled():
             self._emit_rendered()
+
+    def size_text(self) -> str:
+        """The print's size as `dreamprint inspect --height-mm` states it (the source's bounds
+        at the job's scale, two decimals), then the printer grid that holds it."""
+        g = self.ctx.grid
+        lo, hi = (np.asarray(b, dtype=np.float64) for b in self.ctx.source.bounds)
+        obj = (hi - lo) * g.mm_per_unit
+        nx, ny, nz = g.shape_xyz
+        gx, gy, gz = g.size_mm
+        return (f"{Path(str(self.source_path)).name}: print "
+                + " x ".join(f"{v:.2f}" for v in obj)
+                + f" mm on {printer_name(self.printer)} (a grid of {nx} x {ny} x {nz} voxels, "
+                f"{gx:.2f} x {gy:.2f} x {gz:.2f} mm)")
 
     # pre-flight -------------------------------------------------------------------------------
     def _start_preflight(self) -> None:
@@ -471,9 +535,19 @@ class PreviewPage(QWidget):
         self.slice_slider.setEnabled(True)
         self._slice_moved(at_once)
 
-    def _slice_moved(self, at_once: bool = False) -> None:
+    def layer_z_mm(self, layer: int) -> tuple[float, float]:
+        """The bottom and top of printer layer ``layer`` above the build plate, in mm (layer 0
+        is the first printed, each one layer thickness high)."""
+        t = float(self.printer.voxel_mm[2]) if self.printer is not None else 0.0
+        return layer * t, (layer + 1) * t
+
+    def _layer_text(self, layer: int) -> str:
         nz = self.slice_slider.maximum() + 1
-        self.slice_label.setText(f"layer {self.slice_slider.value()} of {nz}")
+        z0, z1 = self.layer_z_mm(layer)
+        return f"layer {layer} of {nz}, z {z0:.3f}-{z1:.3f} mm"
+
+    def _slice_moved(self, at_once: bool = False) -> None:
+        self.slice_label.setText(self._layer_text(self.slice_slider.value()))
         if at_once:  # new preview data: no dragging to wait for
             self._slice_debounce.stop()
             self._compute_slice()
@@ -531,8 +605,7 @@ class PreviewPage(QWidget):
         self.slice_view.set_layer(img, (vx, vy))
         counts = np.bincount(labels.ravel(), minlength=len(names))
         self.legend.set_counts(colours, names, counts)
-        self.slice_label.setText(f"layer {layer} of {self.slice_slider.maximum() + 1} "
-                                 f"({w} x {h} voxels)")
+        self.slice_label.setText(f"{self._layer_text(layer)} ({w} x {h} voxels)")
         self.shown_layer = layer
         if self._await_slice:
             self._emit_rendered()

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -29,6 +30,7 @@ from dreamprint_gui.gamut import get_tables
 from dreamprint_gui.gamut.alignment import kernel_table
 from dreamprint_gui.gamut.mapping import canonical_intent
 from dreamprint_gui.gamut.optimise import canonical_objective
+from dreamprint_gui.gamut.tables import build_estimate, resolve_choice
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.orient import (
     FIT_MODES,
@@ -38,11 +40,12 @@ from dreamprint_gui.io.volumes.orient import (
 )
 from dreamprint_gui.io.volumes.registry import reader_options
 from dreamprint_gui.job.content import CONTENT_MODES, apply_content
-from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner
+from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
 from dreamprint_gui.physics.density import scalar_sigma
 
-__all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "JobCancelled",
-           "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings", "fitted_bounds"]
+__all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
+           "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
+           "fitted_bounds"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 
@@ -127,10 +130,31 @@ def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
     return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
-def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None):
+def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None,
+                notify: Callable[[str], None] | None = None):
+    """The profile at the printer's layer and its tables; a first-use build is announced with
+    its estimated time and its progress through ``notify``."""
 
     profile = load_profile(profile_spec).with_settings(layer_thickness_mm=layer_mm)
-    return profile, get_tables(profile, objective=objective, size=size, intent=intent)
+    progress = None
+    est = build_estimate(profile, objective, size, intent) if notify is not None else None
+    if est is not None:
+        obj, how = resolve_choice(profile, objective, intent)
+        notify(f"building colour tables ({obj}, {how}, {size}^3) for this profile and "
+               f"{layer_mm * 1000:g} um layers: first use, about {_seconds(est)}; cached after")
+        last = [-1]
+
+        def progress(f: float) -> None:
+            if int(10 * f) != last[0]:
+                last[0] = int(10 * f)
+                notify(f"building colour tables: {int(100 * f):3d} %")
+
+    return profile, get_tables(profile, objective=objective, size=size, intent=intent,
+                               progress=progress)
+
+
+def _seconds(s: float) -> str:
+    return f"{s:.0f} s" if s < 90 else f"{s / 60:.1f} min"
 
 
 @dataclass
@@ -251,15 +275,15 @@ def fitted_bounds(source, fit: str) -> tuple[Any, dict[str, Any]]:
                  "declared_bounds": declared}
 
 
-def prepare_job(settings: ConvertSettings) -> JobContext:
-    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables."""
-
+def check_settings(settings: ConvertSettings) -> None:
+    """The checks of a job's settings that need no file: a bad or missing choice (a missing
+    --height-mm / --size-mm included) is reported before the source is opened or any message
+    says it is being opened."""
     s = settings
     if s.halftone not in HALFTONE_METHODS:
         raise DreamPrintError(f"unknown halftoning '{s.halftone}' "
                               f"(use {' or '.join(HALFTONE_METHODS)})")
     if s.objective is not None or s.intent is not None:
-
         try:
             canonical_objective(s.objective, "cielab")
             canonical_intent(s.intent)
@@ -277,8 +301,52 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
         raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
     if s.fit not in FIT_MODES:
         raise DreamPrintError(f"--fit must be occupied or box, not '{s.fit}'")
+
+
+# Seconds numba takes to compile, on the 2-core development machine (bench_preflight --samples
+# after a source change: 16-38 s under load 15): the job's kernels, and a reader's own.
+COMPILE_SECONDS = 30.0
+COMPILE_READER_SECONDS = 15.0
+
+
+def _compile_notices(source) -> list[str]:
+    """Announcements of the kernels numba has not compiled yet (its cache folder holds none of
+    the job kernels', or of the source reader module's): the first run after an install or
+    upgrade, or of a source kind. Judged from the cache's index files (``*.nbi``)."""
+    import sys
+    from pathlib import Path
+
+    from numba.core.dispatcher import Dispatcher
+
+    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or "")
+    if not os.environ.get("NUMBA_CACHE_DIR"):
+        return []
+    out = []
+    if not any(folder.glob("*/layer_kernel.*.nbi")):
+        out.append("compiling the conversion kernels: first run after an install or upgrade, "
+                   f"about {_seconds(COMPILE_SECONDS)}; cached after")
+    module = sys.modules.get(type(source).__module__)
+    name = type(source).__module__.rsplit(".", 1)[-1]
+    if module is not None and any(isinstance(v, Dispatcher) for v in vars(module).values()) \
+            and not any(folder.glob(f"*/{name}.*.nbi")):
+        out.append(f"compiling the {name} reader's kernels: first use of this source kind, "
+                   f"about {_seconds(COMPILE_READER_SECONDS)}; cached after")
+    return out
+
+
+def prepare_job(settings: ConvertSettings,
+                notify: Callable[[str], None] | None = None) -> JobContext:
+    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables.
+
+    ``notify(message)`` is told of each first-use build (compiled kernels, colour tables,
+    blue-noise mask) before it starts, with its estimated time, and of the tables' progress."""
+    s = settings
+    check_settings(s)
     printer = load_printer(s.printer)
     source = _open_source(s.source, s.source_options, s.content, s.sampling)
+    if notify is not None:
+        for msg in _compile_notices(source):
+            notify(msg)
     orientation = choose_orientation(source, s.up, s.rotate)
     source = orient_source(source, orientation)
     bounds, fit = fitted_bounds(source, s.fit)
@@ -291,12 +359,18 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
                               f"{shape[2]}); choose a larger size")
     check_tray(shape, printer)  # before any expensive work
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
-                                  s.table_size, s.intent)
+                                  s.table_size, s.intent, notify)
     sigma_clear = getattr(tables, "sigma_clear", None)
     if sigma_clear is None:
         sigma_clear = _clear_sigma(profile)
     thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
     bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
+    if notify is not None and s.halftone == "blue-noise":
+        est = mask_build_estimate(printer.voxel_mm)
+        if est is not None:
+            vx, vy, vz = (1000 * v for v in printer.voxel_mm)
+            notify(f"building the blue-noise mask for {vx:g} x {vy:g} x {vz:g} um voxels: "
+                   f"first use, about {_seconds(est)}; cached after")
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
     source, content = apply_content(source, s.content, thr)
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
@@ -305,6 +379,8 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
                      content=content, source_stamp=_stamp(s.source), orientation=orientation,
                      fit=fit)
     return ctx
+
+
 # ----------------------------------------------------------------------------- scheduling
 def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
     nx, ny, nz = ctx.shape_xyz

@@ -120,12 +120,10 @@ WRITE_LS = textwrap.dedent('''
 
 
 @pytest.fixture(scope="module")
-def level_set(tmp_path_factory):
-    from dreamprint_gui.io.volumes.openvdb import helper_command
-
+def level_set(tmp_path_factory, openvdb_python):
     out = tmp_path_factory.mktemp("ls")
     (out / "w.py").write_text(WRITE_LS)
-    subprocess.run([helper_command()[0], "-I", str(out / "w.py"), str(out / "sphere.vdb")],
+    subprocess.run([openvdb_python, "-I", str(out / "w.py"), str(out / "sphere.vdb")],
                    check=True)
     return out / "sphere.vdb"
 
