@@ -68,6 +68,11 @@ import time
 from pathlib import Path
 
 VOXEL = (0.084, 0.028, 0.014)  # j850-paper
+# Jobs are made on the paper's grid over the file's declared box (not the default printer and
+# --fit occupied), so that figures stay comparable with earlier rounds; --up turns the source
+# (z: no turn; any other axis takes the turned-source path, io/volumes/orient.py).
+PRINTER = "j850-paper"
+_UP = ["z"]
 
 
 def height_for(n_voxels: float) -> float:
@@ -76,14 +81,15 @@ def height_for(n_voxels: float) -> float:
 
 
 def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
-        source: str = "demo", height: float | None = None) -> dict:
+        source: str = "demo", height: float | None = None, up: str = "z") -> dict:
     from dreamprint_gui.job import plan
     from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.job.run import run_conversion
 
     s = ConvertSettings(source=source, output=out,
                         height_mm=height if height else height_for(n), workers=workers,
-                        halftone=halftone, scheduler=scheduler, overwrite=True)
+                        halftone=halftone, scheduler=scheduler, overwrite=True,
+                        printer=PRINTER, fit="box", up=up)
     # Preparation (source, tables and mask from their caches, compiled kernels from numba's
     # cache) is timed on its own: it is per job, not per voxel. The source's opening (its
     # one-time load) is timed inside it.
@@ -182,7 +188,8 @@ def child(n: float, workers: int, halftone: str, scheduler: str | None, source: 
     probe = file_probe()
     path = source_file(source)
     cmd = [sys.executable, __file__, "--one", str(n), "--workers", str(workers),
-           "--out", os.path.join(tmp, "JOB"), "--halftone", halftone, "--source", path]
+           "--out", os.path.join(tmp, "JOB"), "--halftone", halftone, "--source", path,
+           f"--up={_UP[0]}"]
     if path != "demo":
         cmd += ["--height", repr(height_of(path, n))]
     if scheduler:
@@ -233,10 +240,13 @@ def main() -> None:
     ap.add_argument("--scale-out", action="store_true", help="the --scale-size job on a "
                     "dask.distributed LocalCluster of 1, then 2 worker processes")
     ap.add_argument("--scale-size", type=float, default=1e9)
+    ap.add_argument("--up", default="z", help="the source axis that becomes the print's up "
+                    "(z: unturned; e.g. -y: the turned-source path)")
     a = ap.parse_args()
+    _UP[0] = a.up
     if a.one:
         print(json.dumps(one(a.one, a.workers, a.out, a.halftone, a.scheduler, a.source,
-                             a.height)))
+                             a.height, a.up)))
         return
     if a.source == "all":
         sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -255,8 +265,8 @@ def main() -> None:
             for d in _KEEP:
                 shutil.rmtree(d, ignore_errors=True)
         return
-    print(f"machine: {os.cpu_count()} cores; source {a.source} on j850-paper; "
-          f"halftone {a.halftone}")
+    print(f"machine: {os.cpu_count()} cores; source {a.source} on {PRINTER}, --fit box, "
+          f"--up {a.up}; halftone {a.halftone}")
     print(f"{'voxels':>12} {'grid (x,y,z)':>20} {'workers':>7} {'wall s':>8} {'Mvox/s':>8} "
           f"{'peak RSS MB':>11} {'job MB':>8} {'cores busy':>10} {'load':>5} {'prepare s':>9} "
           f"{'file us':>7}")

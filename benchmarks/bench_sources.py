@@ -82,17 +82,22 @@ _WRITE_VDB = textwrap.dedent("""
 """)
 
 
+def _openvdb_python() -> str:
+    """An interpreter with pyopenvdb to write the benchmark's .vdb files (Debian's
+    python3-openvdb; DREAMPRINT_TEST_OPENVDB_PYTHON to choose another). The product reads
+    them without it."""
+    return os.environ.get("DREAMPRINT_TEST_OPENVDB_PYTHON", "/usr/bin/python3")
+
+
 def _make_vdb() -> tuple[Path, Path, Path]:
     half, full = DATA / "cloud_320x256x288_half.vdb", DATA / "cloud_320x256x288.vdb"
     colour = DATA / "cloud_320x256x288_cd.vdb"
     if not (half.exists() and full.exists() and colour.exists()):
-        from dreamprint_gui.io.volumes.openvdb import helper_command
-
         npy = DATA / "cloud.npy"
         np.save(npy, _cloud_field())
         script = DATA / "write_vdb.py"
         script.write_text(_WRITE_VDB)
-        subprocess.run([helper_command()[0], "-I", str(script), str(npy), str(half), str(full),
+        subprocess.run([_openvdb_python(), "-I", str(script), str(npy), str(half), str(full),
                         str(colour)], check=True)
         npy.unlink()
     return half, full, colour

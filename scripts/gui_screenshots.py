@@ -6,8 +6,10 @@ Run under a virtual screen:  xvfb-run -a -s "-screen 0 1280x800x24" \
 Drives the application as an operator would: the main window on the default profile and the demo
 volume (preview), the gamut page with a picked colour and the hexagon chart, a voxel model (the
 sample .vox: preview, export dialog with its pre-flight, the finished job's summary), and the
-calibration wizard fitting ink measurements (generated from the default profile with the forward
-model and written as instrument files, so the wizard has something real to read).
+calibration wizard's measurements page and its fit of a two-thickness calibration set (ink
+measurements generated from the default profile with the forward model, 1 % noise, written as
+instrument files, so the wizard has something real to read; the clear resin's real absorbance
+file stated as absorbance).
 """
 
 from __future__ import annotations
@@ -136,23 +138,59 @@ def main() -> int:
 
     prof = default_profile()
     wl = prof.wavelengths_nm
-    t = 0.4
-    R, T = reflectance_transmittance(prof.K, prof.S, t)
     rng = np.random.default_rng(1)
     tmp = Path(tempfile.mkdtemp())
-    noisy = [Sample(ink, wl, np.clip(R[i] * (1 + 0.01 * rng.standard_normal(wl.size)), 0, 1))
-             for i, ink in enumerate(INKS)]
-    write_spectra(tmp / "inks_R.csv", noisy, quantity="reflectance", format="csv-rows")
-    write_spectra(tmp / "inks_T.csv", [Sample(ink, wl, T[i]) for i, ink in enumerate(INKS)],
-                  quantity="transmittance", format="csv-columns")
+
+    def noisy(x):  # a spectrophotometer's 1 % noise
+        return np.clip(x * (1 + 0.01 * rng.standard_normal(wl.size)), 0, 1)
+
+    # the measurements page: one swatch of 0.4 mm per ink in two instrument files, and the
+    # clear resin's absorbance (a file that does not say what it holds) stated as absorbance
+    R, T = reflectance_transmittance(prof.K, prof.S, 0.4)
+    write_spectra(tmp / "inks_R.csv", [Sample(ink, wl, noisy(R[i])) for i, ink in
+                                       enumerate(INKS)], quantity="reflectance", format="csv-rows")
+    write_spectra(tmp / "inks_T.csv", [Sample(ink, wl, noisy(T[i])) for i, ink in
+                                       enumerate(INKS)], quantity="transmittance",
+                  format="csv-columns")
     wiz = CalibrationWizard(w, settings=w.settings, base_profile=prof)
-    wiz.move(40, 40)
+    wiz.move(0, 0)
+    wiz.resize(*(int(v) for v in args.size.split("x")))
     wiz.show()
     for ink in INKS[:5]:
         row = wiz.measurements_page.rows[ink]
-        row.thickness.setValue(t)
+        row.thickness.setValue(0.4)
         row.load("R", str(tmp / "inks_R.csv"))
         row.load("T", str(tmp / "inks_T.csv"))
+    resin = DATA / "spectra" / "formats" / "resin_PR48_absorbance_2015-07-27.csv"
+    if resin.is_file():
+        row = wiz.measurements_page.rows["Cl"]
+        row.set_file_quantity("T", "absorbance")
+        row.load("T", str(resin))
+    settle()
+    grab_window(wiz, str(out / "wizard-measurements.png"))
+    wiz.close()
+
+    # the fit page: a calibration set of two thicknesses per ink, so each is held out in turn
+    layers = []
+    r_samples, t_samples = [], []
+    for t in (0.2, 0.6):
+        R, T = reflectance_transmittance(prof.K, prof.S, t)
+        for i, ink in enumerate(INKS[:5]):
+            name = f"{ink} {t:g} mm"
+            r_samples.append(Sample(name, wl, noisy(R[i])))
+            t_samples.append(Sample(name, wl, noisy(T[i])))
+            layers.append(f'[[layer]]\nink = "{ink}"\nthickness_mm = {t}\n'
+                          f'R = {{ file = "R.csv", sample = "{name}" }}\n'
+                          f'T = {{ file = "T.csv", sample = "{name}" }}\n')
+    write_spectra(tmp / "R.csv", r_samples, quantity="reflectance", format="csv-rows")
+    write_spectra(tmp / "T.csv", t_samples, quantity="transmittance", format="csv-rows")
+    (tmp / "set.toml").write_text('format = "dreamprint-calibration-set"\nversion = 1\n\n'
+                                  + "\n".join(layers))
+    wiz = CalibrationWizard(w, settings=w.settings, base_profile=prof,
+                            calibration_set=str(tmp / "set.toml"))
+    wiz.move(0, 0)
+    wiz.resize(*(int(v) for v in args.size.split("x")))
+    wiz.show()
     wiz.next()
     wiz.next()
     wait(wiz.fit_page.fitted)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import time
 from pathlib import Path
 
 from PySide6.QtCore import Qt, QTimer, Signal
@@ -89,10 +90,13 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      output: str | os.PathLike | None = None, overwrite: bool = False,
                      workers: int | None = None, scheduler: str | None = None,
                      table_size: int | None = None, content: str = "auto",
-                     sampling: str | None = None, intent: str | None = None):
+                     sampling: str | None = None, intent: str | None = None,
+                     up: str | None = None, rotate: int = 0, fit: str = "occupied"):
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
     ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear";
-    ``intent`` the rendering intent, None for the profile's)."""
+    ``intent`` the rendering intent, None for the profile's; ``up`` the source axis that
+    becomes +z, None or "auto" for the source's convention; ``rotate`` quarter turns about z
+    in degrees; ``fit`` "occupied" or "box")."""
     from dreamprint_gui.job.plan import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
@@ -106,7 +110,30 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            density_scale=float(density_scale), halftone=halftone,
                            seed=int(seed), workers=workers, scheduler=scheduler,
                            background=background, content=content, sampling=sampling,
-                           overwrite=overwrite, **extra)
+                           overwrite=overwrite, up=None if up in (None, "auto") else up,
+                           rotate=int(rotate), fit=fit, **extra)
+
+
+def placement_combos(params: dict | None = None) -> tuple[QComboBox, QComboBox, QComboBox]:
+    """The Up, Turn and Size-of combo boxes (``--up``, ``--rotate``, ``--fit``), set from
+    ``params`` (the preview's ``params()``: up, rotate, fit)."""
+    from dreamprint_gui.gui.names import FITS, TURNS, UPS
+
+    p = params or {}
+    up, turn, fit = QComboBox(), QComboBox(), QComboBox()
+    for combo, items in ((up, UPS), (fit, FITS)):
+        for key, name, tip in items:
+            combo.addItem(name, key)
+            combo.setItemData(combo.count() - 1, tip, Qt.ItemDataRole.ToolTipRole)
+    for deg, name in TURNS:
+        turn.addItem(name, deg)
+    up.setToolTip("The source axis that becomes the print's up (build direction)")
+    turn.setToolTip("Turn the print about its vertical axis (counter-clockwise from above)")
+    fit.setToolTip("What the height (or box) measures: the object itself or the file's box")
+    for combo, key, default in ((up, "up", "auto"), (turn, "rotate", 0), (fit, "fit",
+                                                                           "occupied")):
+        combo.setCurrentIndex(max(0, combo.findData(p.get(key, default))))
+    return up, turn, fit
 
 
 def export_job(settings, preflight=True):
@@ -149,10 +176,30 @@ def _num(v, fmt: str = ",.0f") -> str:
     return format(v, fmt) if isinstance(v, int | float) else str(v)
 
 
-def manifest_summary(manifest: dict, target: str) -> str:
+def _seconds(x: float) -> str:
+    """A measured duration: tenths of a second below a minute (a small job's "0 s" says
+    nothing), else minutes and seconds."""
+    return f"{x:.1f} s" if x < 59.95 else format_duration(x)
+
+
+def time_text(timings: dict, elapsed_s: float | None = None) -> str:
+    """The job's time as measured: ``elapsed_s`` (the dialog's clock, from Export to the
+    finished job) when given, else the manifest's total; then where it went."""
+    total = timings.get("total")
+    head = (f"{_seconds(elapsed_s)} from Export to the finished job" if elapsed_s is not None
+            else (f"{_seconds(total)}" if isinstance(total, int | float) else "-"))
+    parts = [f"{what} {_seconds(timings[key])}" for key, what in (
+        ("prepare", "preparing"), ("preflight", "of which pre-flight"),
+        ("convert", "converting")) if isinstance(timings.get(key), int | float)
+        and (key != "preflight" or timings[key] >= 0.05)]
+    return head + (f" ({', '.join(parts)})" if parts else "")
+
+
+def manifest_summary(manifest: dict, target: str, elapsed_s: float | None = None) -> str:
     """HTML summary of a finished job from its manifest: everything the operator checks
     (where, what from, which printer, size, halftoning, background, materials, clamping,
-    time), with human names for the printer and the background (the ids stay in the file)."""
+    time), with human names for the printer and the background (the ids stay in the file).
+    ``elapsed_s``: the job's wall-clock time as the dialog measured it (else the manifest's)."""
     from html import escape
 
     nx, ny, nz = manifest["grid_dimensions"]
@@ -231,7 +278,7 @@ def manifest_summary(manifest: dict, target: str) -> str:
         + (f" below {threshold:.3g} /mm" if isinstance(threshold, float) else "")
         + "</td></tr>"
         f"<tr><td><b>Clamped densities</b></td><td>{clamp_text}</td></tr>"
-        f"<tr><td><b>Time</b></td><td>{format_duration(t.get('total'))}"
+        f"<tr><td><b>Time</b></td><td>{time_text(t, elapsed_s)}"
         + (f", {t['voxels_per_second']:,.0f} voxels/s" if "voxels_per_second" in t else "")
         + run_on + "</td></tr></table>"
         "<p><b>Materials</b></p>"
@@ -280,6 +327,8 @@ class ExportDialog(QDialog):
         self.table_size = table_size
         self.task: Task | None = None
         self.manifest: dict | None = None
+        self.elapsed_s: float | None = None  # the last job's wall-clock time, Export to done
+        self._t_start = 0.0
         self.target: str | None = None
         self.setWindowTitle("Export print job")
         self.setMinimumWidth(560)
@@ -335,6 +384,7 @@ class ExportDialog(QDialog):
             self.content.setItemData(self.content.count() - 1, tip,
                                      Qt.ItemDataRole.ToolTipRole)
         self.content.setCurrentIndex(max(0, self.content.findData(pp.get("content", "auto"))))
+        self.up, self.turn, self.fit = placement_combos(pp)
         self.halftone = QComboBox()
         self.halftone.addItem("blue noise (low noise, default)", "blue-noise")
         self.halftone.addItem("random (paper's stochastic)", "random")
@@ -343,6 +393,7 @@ class ExportDialog(QDialog):
         self.intent = QComboBox()  # rendering intent (ConvertSettings.intent; "" = profile's)
         self.intent.addItem("the profile's (colorimetric unless it says otherwise)", "")
         self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
+        self.intent.addItem("relative (source white to printable white)", "relative")
         self.intent.addItem("perceptual (compress sRGB into the gamut)", "perceptual")
         self.intent.setCurrentIndex(max(0, self.intent.findData(
             self.settings.get("export/intent", "", str))))
@@ -387,6 +438,9 @@ class ExportDialog(QDialog):
         form.addRow("Density scale", self.density_scale)
         form.addRow("Background", self.background)
         form.addRow("Content", self.content)
+        form.addRow("Up", self.up)
+        form.addRow("Turn", self.turn)
+        form.addRow("Size of", self.fit)
         form.addRow("Halftoning", self.halftone)
         form.addRow("Rendering intent", self.intent)
         form.addRow("Seed", self.seed)
@@ -574,7 +628,8 @@ class ExportDialog(QDialog):
             output=self.target_path(), overwrite=self.overwrite.isChecked(),
             workers=workers, scheduler=scheduler, table_size=self.table_size,
             content=str(self.content.currentData()), sampling=self.sampling_choice,
-            intent=str(self.intent.currentData()) or None)
+            intent=str(self.intent.currentData()) or None, up=str(self.up.currentData()),
+            rotate=int(self.turn.currentData()), fit=str(self.fit.currentData()))
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:
@@ -599,6 +654,8 @@ class ExportDialog(QDialog):
         self.start_button.setEnabled(False)
         self.progress.setValue(0)
         self.remaining.setText("preparing ...")
+        self._t_start = time.monotonic()
+        self.elapsed_s = None
         same = _same_job(settings, self._preflight_settings) and self.preflight is not None
         task = Task(export_job(settings, self.preflight if same else True), "export")
         task.progress.connect(self._progress)
@@ -624,9 +681,10 @@ class ExportDialog(QDialog):
 
     def _succeeded(self, manifest: dict) -> None:
         self.manifest = manifest
+        self.elapsed_s = time.monotonic() - self._t_start  # Export to here, as the operator waited
         self.progress.setValue(1000)
         self.remaining.setText("done")
-        self.summary.setHtml(manifest_summary(manifest, str(self.target)))
+        self.summary.setHtml(manifest_summary(manifest, str(self.target), self.elapsed_s))
         self.form_box.setVisible(False)
         self.preflight_box.setVisible(False)
         self.summary.setVisible(True)

@@ -84,12 +84,15 @@ def srgb_gamut_mesh(profile, n: int = 17) -> GamutMesh:
     return GamutMesh(np.column_stack([lab[:, 1], lab[:, 2], lab[:, 0]]), np.vstack(faces), rgb)
 
 
-def pick_colour(profile, tables, rgb) -> dict:
-    """What the printer makes of sRGB ``rgb``: table concentrations (C, M, Y, K, W), the
-    reproduced colour (``predict`` at the reference thickness) and its dE2000 to the target,
-    under the tables' rendering intent (``intent``: the mapping source -> printed colour)."""
-    from dreamprint_gui.core.profile import COLOUR_INKS
-    from dreamprint_gui.gamut import lookup
+def pick_colour(profile, tables, rgb, density: float | None = None) -> dict:
+    """What the printer makes of sRGB ``rgb`` (encoded, 0-1 as ``dreamprint lookup --rgb``):
+    table concentrations (C, M, Y, K, W), the reproduced colour (``predict`` at the reference
+    thickness) and its dE2000 to the target, under the tables' rendering intent (``intent``:
+    the mapping source -> printed colour); and, as ``dreamprint lookup`` reports them, the
+    voxel's inks after density alignment (``aligned``: all six, Clear included) for a density
+    ``density`` (1/mm; None: the mixture's own, so no Clear)."""
+    from dreamprint_gui.core.profile import COLOUR_INKS, INKS
+    from dreamprint_gui.gamut import align_density, lookup
     from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for, srgb_to_lab
     from dreamprint_gui.physics.mixture import predict
 
@@ -99,13 +102,21 @@ def pick_colour(profile, tables, rgb) -> dict:
     pred = predict(profile, conc)
     lab_t = np.asarray(srgb_to_lab(target, observer_for(profile.wavelengths_nm)))
     lab_r = np.asarray(pred.Lab).reshape(3)
+    own = float(np.asarray(pred.sigma_per_mm).reshape(()))
+    al = align_density(tables, target[None, :], conc[None, :],
+                       np.array([own if density is None else float(density)]), profile)
     return {
         "rgb": target.tolist(),
         "concentrations": dict(zip(COLOUR_INKS, conc.tolist(), strict=True)),
+        "aligned": dict(zip(INKS, np.asarray(al.conc).reshape(len(INKS)).tolist(),
+                            strict=True)),
         "sRGB": np.asarray(pred.sRGB).reshape(3).tolist(),
         "Lab": lab_r.tolist(),
         "target_Lab": lab_t.reshape(3).tolist(),
         "dE2000": float(np.asarray(delta_E2000(lab_t, lab_r)).reshape(())),
-        "sigma_per_mm": float(np.asarray(pred.sigma_per_mm).reshape(())),
+        "sigma_per_mm": own,
+        "aligned_sigma_per_mm": float(np.asarray(al.sigma).reshape(-1)[0]),
+        "density_clamped": {-1: "low", 0: None, 1: "high"}[int(np.asarray(al.clamped)
+                                                               .reshape(-1)[0])],
         "intent": getattr(tables, "intent", "colorimetric"),
     }

@@ -5,8 +5,11 @@ widget). Left, two pages: a pyvista view with two linked cameras (the printable 
 active profile, convex hull of predicted mixture colours, each vertex in its own colour; and the
 sRGB gamut with the printable gamut as a wireframe inside it, the camera framing the sRGB solid
 so that neither is cropped), and the paper's Fig. 7-style hexagon chart (target vs reproduced per
-cell) drawn by the engine's ``gamut.charts.hexagon_chart`` on a worker thread. Right, a colour
-picker: any colour -> the table's C, M, Y, K, W concentrations, the colour the table prints
+cell) drawn by the engine's ``gamut.charts.hexagon_chart`` on a worker thread; the axes are
+named a*, b*, L*. Right, a colour picker: any colour (encoded sRGB 0-1, the scale of
+``dreamprint lookup --rgb``) and optionally a density -> the voxel's six inks as ``dreamprint
+lookup`` reports them (the table's C, M, Y, K, W, density-aligned with Clear; each share written
+beside its bar), the colour the table prints
 beside the requested one with their dE2000 and whether the requested colour is in gamut (the
 engine's rule, ``evaluation.IN_GAMUT_DE2000``); both colours are marked in the 3D view. Below
 it, the share of sRGB that is printable (the table nodes within that dE2000, as ``dreamprint
@@ -26,26 +29,27 @@ from __future__ import annotations
 import logging
 
 from PySide6.QtCore import QRect, QSize, Qt, Signal
-from PySide6.QtGui import QColor, QImage, QPainter
+from PySide6.QtGui import QColor, QDoubleValidator, QImage, QPainter
 from PySide6.QtWidgets import (
     QColorDialog,
     QComboBox,
+    QDoubleSpinBox,
     QFormLayout,
     QGridLayout,
     QGroupBox,
     QHBoxLayout,
     QLabel,
+    QLineEdit,
     QProgressBar,
     QPushButton,
     QSizePolicy,
-    QSpinBox,
     QSplitter,
     QTabWidget,
     QVBoxLayout,
     QWidget,
 )
 
-from dreamprint_gui.core.profile import COLOUR_INKS
+from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.gui.gamut_data import pick_colour, printable_gamut_mesh, srgb_gamut_mesh
 from dreamprint_gui.gui.volume_view import ViewHost
 from dreamprint_gui.gui.workers import Task, run_task
@@ -133,13 +137,27 @@ class GamutPage(QWidget):
         # colour picker
         self.pick_button = QPushButton("Pick a colour...")
         self.pick_button.clicked.connect(self._pick_dialog)
+        # encoded sRGB in 0-1, the scale of `dreamprint lookup --rgb R,G,B`
         self.spins = []
         rgb_row = QHBoxLayout()
-        for ch, v in zip("RGB", (200, 120, 60), strict=True):
-            s = QSpinBox(minimum=0, maximum=255, value=v, prefix=f"{ch} ")
+        for ch, v in zip("RGB", (0.784, 0.471, 0.235), strict=True):
+            s = QDoubleSpinBox(minimum=0.0, maximum=1.0, value=v, decimals=3, singleStep=0.01,
+                               prefix=f"{ch} ")
+            s.setToolTip("encoded sRGB from 0 to 1, as `dreamprint lookup --rgb R,G,B` takes it "
+                         "(255 = 1.000)")
             s.valueChanged.connect(self._spins_changed)
             self.spins.append(s)
             rgb_row.addWidget(s)
+        self.rgb_scale = QLabel("sRGB, 0 to 1 (as <tt>dreamprint lookup --rgb</tt>)")
+        self.rgb_scale.setObjectName("rgbScale")
+        self.density = QLineEdit()
+        self.density.setPlaceholderText("the mixture's own (no Clear)")
+        self.density.setValidator(QDoubleValidator(0.0, 1e6, 4))
+        self.density.setToolTip("The voxel's density sigma in 1/mm, as `dreamprint lookup "
+                                "--density`: a lower one mixes Clear into the voxel")
+        self.density.editingFinished.connect(self._spins_changed)
+        density_row = QFormLayout()
+        density_row.addRow("Density (1/mm)", self.density)
         self.target_swatch = QLabel()
         self.repro_swatch = QLabel()
         for w in (self.target_swatch, self.repro_swatch):
@@ -157,21 +175,31 @@ class GamutPage(QWidget):
         self.de_label.setWordWrap(True)
         self.lab_label = QLabel("")
         self.lab_label.setWordWrap(True)
+        # the voxel's six inks (Clear included), the share written beside each bar (never on
+        # it, where the style overdraws the text with the bar's chunk)
         self.bars = {}
-        conc_form = QFormLayout()
-        for ink in COLOUR_INKS:
-            bar = QProgressBar(minimum=0, maximum=1000, textVisible=True)
-            bar.setFormat("%p%")
-            self.bars[ink] = bar
-            conc_form.addRow(ink, bar)
+        self.bar_values = {}
+        conc_form = QGridLayout()
+        for row, ink in enumerate(INKS):
+            bar = QProgressBar(minimum=0, maximum=1000, textVisible=False)
+            bar.setMaximumHeight(14)
+            value = QLabel("-")
+            value.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+            value.setMinimumWidth(value.fontMetrics().horizontalAdvance("100.0 %") + 4)
+            self.bars[ink], self.bar_values[ink] = bar, value
+            conc_form.addWidget(QLabel(ink), row, 0)
+            conc_form.addWidget(bar, row, 1)
+            conc_form.addWidget(value, row, 2)
         picker = QWidget()
         pl = QVBoxLayout(picker)
         pl.addWidget(self.pick_button)
+        pl.addWidget(self.rgb_scale)
         pl.addLayout(rgb_row)
+        pl.addLayout(density_row)
         pl.addLayout(sw)
         pl.addWidget(self.de_label)
         pl.addWidget(self.lab_label)
-        cbox = QGroupBox("Concentrations (table lookup)")
+        cbox = QGroupBox("The voxel's inks (table lookup, density aligned)")
         cbox.setLayout(conc_form)
         pl.addWidget(cbox)
         # the printable share of sRGB (the table nodes in gamut, as `dreamprint gamut` says)
@@ -379,7 +407,7 @@ class GamutPage(QWidget):
         pl.add_mesh(printable, scalars="rgb", rgb=True, name="printable", smooth_shading=True,
                     render=False)
         pl.add_text(f"Printable gamut ({profile.name})", font_size=10, name="t0", render=False)
-        pl.show_axes()
+        pl.add_axes(xlabel="a*", ylabel="b*", zlabel="L*")
         pl.subplot(0, 1)
         pl.add_mesh(srgb, scalars="rgb", rgb=True, name="srgb", opacity=0.55,
                     render=False)
@@ -387,6 +415,7 @@ class GamutPage(QWidget):
                     line_width=1, opacity=0.6, render=False)
         pl.add_text("sRGB gamut, printable as wireframe", font_size=10, name="t1",
                     render=False)
+        pl.add_axes(xlabel="a*", ylabel="b*", zlabel="L*")
         pl.subplot(0, 0)
         pl.view_isometric(render=False)
         # The cameras are linked: frame the larger solid (sRGB, which holds most of the
@@ -422,7 +451,7 @@ class GamutPage(QWidget):
 
     # colour picker ----------------------------------------------------------------------------
     def _pick_dialog(self) -> None:
-        r, g, b = (s.value() for s in self.spins)
+        r, g, b = (int(round(255 * s.value())) for s in self.spins)
         colour = QColorDialog.getColor(QColor(r, g, b), self, "Colour to reproduce")
         if colour.isValid():
             self.set_colour((colour.red() / 255, colour.green() / 255, colour.blue() / 255))
@@ -430,18 +459,26 @@ class GamutPage(QWidget):
     def set_colour(self, rgb) -> None:
         for s, v in zip(self.spins, rgb, strict=True):
             s.blockSignals(True)
-            s.setValue(int(round(255 * v)))
+            s.setValue(float(v))
             s.blockSignals(False)
         self._spins_changed()
 
+    def density_value(self) -> float | None:
+        """The density the operator entered (1/mm), or None: the mixture's own."""
+        text = self.density.text().strip().replace(",", ".")
+        try:
+            return float(text) if text else None
+        except ValueError:
+            return None
+
     def _spins_changed(self) -> None:
-        rgb = [s.value() / 255 for s in self.spins]
+        rgb = [s.value() for s in self.spins]
         self.target_swatch.setStyleSheet(_swatch_style(rgb))
         if self.tables is None or self.profile is None:
             self.de_label.setText("dE2000 - (colour tables not ready)")
             return
         try:
-            result = pick_colour(self.profile, self.tables, rgb)
+            result = pick_colour(self.profile, self.tables, rgb, self.density_value())
         except Exception as exc:  # noqa: BLE001 - said once, by the window
             self.de_label.setText("dE2000 - (not available)")
             self.problem.emit(f"The colour lookup failed: {exc}")
@@ -461,9 +498,12 @@ class GamutPage(QWidget):
         self.lab_label.setText(
             f"target L*a*b* {lt[0]:.1f}, {lt[1]:.1f}, {lt[2]:.1f}<br>"
             f"reproduced {lr[0]:.1f}, {lr[1]:.1f}, {lr[2]:.1f}<br>"
-            f"density sigma {result['sigma_per_mm']:.2f} /mm")
-        for ink, v in result["concentrations"].items():
+            f"density sigma {result['aligned_sigma_per_mm']:.2f} /mm"
+            + (f" (the nearest reachable: clamped {result['density_clamped']})"
+               if result["density_clamped"] else ""))
+        for ink, v in result["aligned"].items():
             self.bars[ink].setValue(int(round(1000 * v)))
+            self.bar_values[ink].setText(f"{100 * v:.1f} %")
         self._mark_pick()
         self.picked.emit(result)
 

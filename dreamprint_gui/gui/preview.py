@@ -20,6 +20,7 @@ something to draw (:class:`.volume_view.ViewHost`); until then it says what is b
 from __future__ import annotations
 
 import logging
+import time
 from html import escape
 from pathlib import Path
 
@@ -33,6 +34,7 @@ from PySide6.QtWidgets import (
     QGroupBox,
     QHBoxLayout,
     QLabel,
+    QProgressBar,
     QSlider,
     QSplitter,
     QTabWidget,
@@ -115,8 +117,22 @@ class PreviewPage(QWidget):
         self.sampling.setToolTip("Voxel models: sharp voxel edges (nearest) or smooth "
                                  "(trilinear); other sources are always smooth")
         self.sampling.setEnabled(False)
+        from dreamprint_gui.gui.export import placement_combos
+
+        self.up, self.turn, self.fit = placement_combos()
+        self.placement_note = QLabel("")  # how the print stands and what it measures
+        self.placement_note.setWordWrap(True)
+        self.placement_note.setObjectName("contentNote")
         self.status = QLabel("no source")
         self.status.setWordWrap(True)
+        # the preview's computation: busy while preparing, the fraction while predicting
+        self.busy = QProgressBar(minimum=0, maximum=0)
+        self.busy.setTextVisible(False)
+        self.busy.setMaximumHeight(10)
+        self.busy.setVisible(False)
+        self._wait: dict | None = None
+        self._wait_clock = QTimer(self, interval=500)
+        self._wait_clock.timeout.connect(self._tick_wait)
         # The footnote of the 3D views (preview grid, downsampling) in the application's font,
         # under the views.
         self.note = QLabel("")
@@ -132,6 +148,10 @@ class PreviewPage(QWidget):
         form.addRow("", self.content_note)
         form.addRow("Voxel edges", self.sampling)
         form.setRowVisible(self.sampling, False)  # shown for sources that offer the choice
+        form.addRow("Up", self.up)
+        form.addRow("Turn", self.turn)
+        form.addRow("Size of", self.fit)
+        form.addRow("", self.placement_note)
         self.form = form
         box = QGroupBox("Print")
         box.setLayout(form)
@@ -153,8 +173,8 @@ class PreviewPage(QWidget):
         body = QHBoxLayout()
         body.addWidget(self.slice_view, 1)
         legend_col = QVBoxLayout()
-        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(colours as in the "
-                                    "slice files)"))
+        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(slice file codes; "
+                                    "Clear shown<br>light blue for legibility)"))
         legend_col.addWidget(self.legend)
         legend_col.addStretch(1)
         body.addLayout(legend_col)
@@ -175,6 +195,7 @@ class PreviewPage(QWidget):
         self.preflight = None  # the engine's Preflight of the shown settings
         side_l.addWidget(box)
         side_l.addWidget(self.status)
+        side_l.addWidget(self.busy)
         side_l.addWidget(self.warnings_box)
         side_l.addStretch(1)
         side.setMinimumWidth(280)
@@ -205,7 +226,7 @@ class PreviewPage(QWidget):
         self._slice_debounce.timeout.connect(self._compute_slice)
         for w in (self.height_mm, self.density_scale):
             w.valueChanged.connect(self._params_changed)
-        for w in (self.background, self.content, self.sampling):
+        for w in (self.background, self.content, self.sampling, self.up, self.turn, self.fit):
             w.currentIndexChanged.connect(self._params_changed)
         self.slice_slider.valueChanged.connect(lambda _v: self._slice_moved())
 
@@ -229,13 +250,21 @@ class PreviewPage(QWidget):
                 "density_scale": float(self.density_scale.value()),
                 "background": str(self.background.currentData()),
                 "content": str(self.content.currentData()),
-                "sampling": self.sampling.currentData() if self.sampling.isEnabled() else None}
+                "sampling": self.sampling.currentData() if self.sampling.isEnabled() else None,
+                "up": str(self.up.currentData()), "rotate": int(self.turn.currentData()),
+                "fit": str(self.fit.currentData())}
 
     _KEEP = object()
 
     def set_params(self, height_mm: float | None = None, density_scale: float | None = None,
                    background: str | None = None, content: str | None = None,
-                   sampling=_KEEP) -> None:
+                   sampling=_KEEP, up: str | None = None, rotate: int | None = None,
+                   fit: str | None = None) -> None:
+        for combo, value in ((self.up, up), (self.turn, rotate), (self.fit, fit)):
+            if value is not None:
+                i = combo.findData(value)
+                if i >= 0:
+                    combo.setCurrentIndex(i)
         if height_mm is not None:
             self.height_mm.setValue(height_mm)
         if density_scale is not None:
@@ -259,13 +288,14 @@ class PreviewPage(QWidget):
             takes = reader_options(path)
         except Exception:  # noqa: BLE001 - an unreadable file is reported when opened
             takes = set()
-        for combo in (self.content, self.sampling):
+        for combo in (self.content, self.sampling, self.up, self.turn):
             combo.blockSignals(True)
-            combo.setCurrentIndex(0)
+            combo.setCurrentIndex(0)  # each file starts on auto content, auto up, no turn
             combo.blockSignals(False)
         self.sampling.setEnabled("sampling" in takes)
         self.form.setRowVisible(self.sampling, "sampling" in takes)
         self.content_note.setText("")
+        self.placement_note.setText("")
 
     _UNSET = object()
 
@@ -312,7 +342,8 @@ class PreviewPage(QWidget):
                                 height_mm=p["height_mm"], density_scale=p["density_scale"],
                                 background=p["background"], output=output,
                                 table_size=self.table_size, content=p["content"],
-                                sampling=p["sampling"])
+                                sampling=p["sampling"], up=p["up"], rotate=p["rotate"],
+                                fit=p["fit"])
 
     def recompute(self) -> None:
         if not self.ready_to_compute():
@@ -331,32 +362,74 @@ class PreviewPage(QWidget):
             layer_thickness_mm=self.printer.layer_thickness_mm)  # as the job's tables
 
         def job(report, cancel):
+            report(("prepare", None))
             ctx = job_context(settings, previous)
-            return ctx, profile, compute_preview(ctx, profile, progress=report, cancel=cancel)
+            report(("predict", 0.0))
+            return ctx, profile, compute_preview(
+                ctx, profile, progress=lambda f: report(("predict", float(f))), cancel=cancel)
 
         name = Path(str(self.source_path)).name
-        self.show_waiting(f"sampling {name} and predicting the print ...")
+        self._wait = {"name": name, "stage": "prepare", "fraction": None,
+                      "t0": time.monotonic(), "first": previous is None}
         task = Task(job, "preview")
-        task.progress.connect(lambda f, name=name: self.show_waiting(
-            f"sampling {name} and predicting the print ... {100 * f:.0f}%"))
+        task.progress.connect(self._preview_progress)
         task.succeeded.connect(self._show)
         task.failed.connect(self._failed)
         task.done.connect(self._task_done)
         self._task = run_task(task)
+        self.busy.setRange(0, 0)
+        self.busy.setVisible(True)
+        self._tick_wait()
+        self._wait_clock.start()
+
+    def _preview_progress(self, update) -> None:
+        stage, fraction = update
+        self._wait.update(stage=stage, fraction=fraction)
+        if fraction is None:
+            self.busy.setRange(0, 0)   # no fraction to tell: a busy bar and the seconds
+        else:
+            self.busy.setRange(0, 100)
+            self.busy.setValue(int(100 * fraction))
+        self._tick_wait()
+
+    def wait_text(self) -> str:
+        """What the preview is doing, with the seconds it has taken so far."""
+        w = self._wait
+        secs = f"{time.monotonic() - w['t0']:.0f} s"
+        if w["stage"] == "prepare":
+            extra = (" (the first time on this computer the halftone mask and the compiled "
+                     "kernels are built: this can take a minute or two)") if w["first"] else ""
+            return f"preparing {w['name']}: opening it, the halftone mask, the kernels{extra} "\
+                   f"... {secs}"
+        pct = f"{100 * (w['fraction'] or 0.0):.0f}%"
+        return f"sampling {w['name']} and predicting the print ... {pct}, {secs}"
+
+    def _tick_wait(self) -> None:
+        if self._wait is not None:
+            self.show_waiting(self.wait_text())
+
+    def _stop_wait(self) -> None:
+        self._wait_clock.stop()
+        self._wait = None
+        self.busy.setVisible(False)
 
     def _task_done(self) -> None:
+        if not self._pending:
+            self._stop_wait()
         if self._pending:
             self._pending = False
             self._task = None
             self.recompute()
 
     def _failed(self, message: str, _tb: str) -> None:
+        self._stop_wait()
         self.show_waiting("no preview")  # the message itself: the window's status bar
         self.failed.emit(f"Preview failed: {message}")
 
     def _show(self, result) -> None:
         if self._pending:
             return
+        self._stop_wait()
         self.ctx, self.profile_eff, data = result
         self.data = data
         # The halftoned layer is computed on a worker while this thread draws the volumes.
@@ -385,9 +458,7 @@ class PreviewPage(QWidget):
             pl.renderer.reset_camera(render=False)  # the plotter-level one always renders
         self._framing = framing
         pl.render()
-        sx, sy, sz = data.size_mm
-        self.status.setText(f"{Path(str(self.source_path)).name}: print "
-                            f"{sx:.1f} x {sy:.1f} x {sz:.1f} mm on {printer_name(self.printer)}")
+        self.status.setText(self.size_text())
         self.note.setText(data.downsample_note())
         choice = self.ctx.content
         if choice is None:
@@ -396,9 +467,27 @@ class PreviewPage(QWidget):
             self.content_note.setText(f"auto: {choice.mode}, {choice.reason}")
         else:
             self.content_note.setText(choice.reason)
+        place = self.ctx.placement_json()
+        fit = place["fit"].get("mode", "box")
+        self.placement_note.setText(
+            f"{place['orientation_text']}; height of "
+            + ("the object" if fit == "occupied" else "the file's box"))
         self._start_preflight()
         if not self.slice_slider.isEnabled():
             self._emit_rendered()
+
+    def size_text(self) -> str:
+        """The print's size as `dreamprint inspect --height-mm` states it (the source's bounds
+        at the job's scale, two decimals), then the printer grid that holds it."""
+        g = self.ctx.grid
+        lo, hi = (np.asarray(b, dtype=np.float64) for b in self.ctx.source.bounds)
+        obj = (hi - lo) * g.mm_per_unit
+        nx, ny, nz = g.shape_xyz
+        gx, gy, gz = g.size_mm
+        return (f"{Path(str(self.source_path)).name}: print "
+                + " x ".join(f"{v:.2f}" for v in obj)
+                + f" mm on {printer_name(self.printer)} (a grid of {nx} x {ny} x {nz} voxels, "
+                f"{gx:.2f} x {gy:.2f} x {gz:.2f} mm)")
 
     # pre-flight -------------------------------------------------------------------------------
     def _start_preflight(self) -> None:
@@ -446,9 +535,19 @@ class PreviewPage(QWidget):
         self.slice_slider.setEnabled(True)
         self._slice_moved(at_once)
 
-    def _slice_moved(self, at_once: bool = False) -> None:
+    def layer_z_mm(self, layer: int) -> tuple[float, float]:
+        """The bottom and top of printer layer ``layer`` above the build plate, in mm (layer 0
+        is the first printed, each one layer thickness high)."""
+        t = float(self.printer.voxel_mm[2]) if self.printer is not None else 0.0
+        return layer * t, (layer + 1) * t
+
+    def _layer_text(self, layer: int) -> str:
         nz = self.slice_slider.maximum() + 1
-        self.slice_label.setText(f"layer {self.slice_slider.value()} of {nz}")
+        z0, z1 = self.layer_z_mm(layer)
+        return f"layer {layer} of {nz}, z {z0:.3f}-{z1:.3f} mm"
+
+    def _slice_moved(self, at_once: bool = False) -> None:
+        self.slice_label.setText(self._layer_text(self.slice_slider.value()))
         if at_once:  # new preview data: no dragging to wait for
             self._slice_debounce.stop()
             self._compute_slice()
@@ -506,8 +605,7 @@ class PreviewPage(QWidget):
         self.slice_view.set_layer(img, (vx, vy))
         counts = np.bincount(labels.ravel(), minlength=len(names))
         self.legend.set_counts(colours, names, counts)
-        self.slice_label.setText(f"layer {layer} of {self.slice_slider.maximum() + 1} "
-                                 f"({w} x {h} voxels)")
+        self.slice_label.setText(f"{self._layer_text(layer)} ({w} x {h} voxels)")
         self.shown_layer = layer
         if self._await_slice:
             self._emit_rendered()

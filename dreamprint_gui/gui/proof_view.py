@@ -2,10 +2,12 @@
 
 Defines :class:`ProofPage`. It takes the job settings the preview would export (source, profile,
 printer, height, density scale, background) from a callable, so the proof judges exactly what
-the operator is about to print; Render runs :func:`..engine.proof.runner.render_proof` on the
+the operator is about to print; Render runs :func:`dreamprint_gui.proof.runner.render_proof` on the
 background worker (:mod:`.workers`) with progress and Cancel; the result shows source | print |
 dE2000 map of the chosen view and the figures. Change the size, density or profile on the
-preview page and press Render again.
+preview page and press Render again. The images scale with the page (:class:`ScaledImage`:
+the aspect kept, pixels shown as blocks when enlarged) and the dE2000 map has its colour bar
+(:class:`ColourBar`).
 """
 
 from __future__ import annotations
@@ -14,8 +16,8 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QImage, QPixmap
+from PySide6.QtCore import QRect, QSize, Qt, Signal
+from PySide6.QtGui import QImage, QPainter, QPixmap
 from PySide6.QtWidgets import (
     QComboBox,
     QFormLayout,
@@ -23,6 +25,7 @@ from PySide6.QtWidgets import (
     QLabel,
     QProgressBar,
     QPushButton,
+    QSizePolicy,
     QSpinBox,
     QVBoxLayout,
     QWidget,
@@ -30,7 +33,7 @@ from PySide6.QtWidgets import (
 
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
-__all__ = ["ProofPage", "to_pixmap"]
+__all__ = ["ProofPage", "to_pixmap", "ScaledImage", "ColourBar"]
 
 
 def to_pixmap(rgb: np.ndarray) -> QPixmap:
@@ -39,6 +42,88 @@ def to_pixmap(rgb: np.ndarray) -> QPixmap:
     h, w, _ = a.shape
     img = QImage(a.data, w, h, 3 * w, QImage.Format.Format_RGB888)
     return QPixmap.fromImage(img.copy())
+
+
+class ScaledImage(QWidget):
+    """A rendered image as large as its widget allows, aspect kept, centred.
+
+    Enlarged, each rendered pixel is a block (no smoothing: a 192 px render is not made to look
+    sharper than it is); reduced, it is filtered.
+    """
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._pixmap: QPixmap | None = None
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+        self.setMinimumSize(64, 64)
+
+    def sizeHint(self) -> QSize:  # noqa: N802 - Qt override
+        return QSize(320, 320)
+
+    def setPixmap(self, pixmap: QPixmap) -> None:  # noqa: N802 - QLabel's name
+        self._pixmap = pixmap
+        self.update()
+
+    def pixmap(self) -> QPixmap:
+        return self._pixmap if self._pixmap is not None else QPixmap()
+
+    def image_rect(self) -> QRect:
+        """Where the image is drawn, in widget coordinates (empty without an image)."""
+        if self._pixmap is None or self._pixmap.isNull():
+            return QRect()
+        box = self.contentsRect()
+        size = self._pixmap.size().scaled(box.size(), Qt.AspectRatioMode.KeepAspectRatio)
+        return QRect(box.x() + (box.width() - size.width()) // 2,
+                     box.y() + (box.height() - size.height()) // 2,
+                     size.width(), size.height())
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
+        r = self.image_rect()
+        if r.isEmpty():
+            return
+        p = QPainter(self)
+        p.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform,
+                        r.width() < self._pixmap.width())
+        p.drawPixmap(r, self._pixmap)
+        p.end()
+
+
+class ColourBar(QWidget):
+    """The dE2000 map's scale: the heat map's colours from 0 to ``vmax``, with ticks."""
+
+    def __init__(self, vmax: float, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        from dreamprint_gui.proof.compare import de_heatmap
+
+        self.vmax = vmax
+        ramp = de_heatmap(np.linspace(0.0, vmax, 256)[None, :].repeat(2, axis=0), vmax=vmax)
+        self.ramp = to_pixmap(ramp)
+        self.ticks = [v for v in np.linspace(0.0, vmax, 5)]
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
+        self.setFixedHeight(self.fontMetrics().height() * 2 + 16)
+        self.setToolTip("dE2000 between the source and the print per pixel (CIEDE2000; about "
+                        "1 is a just noticeable difference); white: no object in either image")
+
+    def bar_rect(self) -> QRect:
+        fm = self.fontMetrics()
+        pad = fm.horizontalAdvance(f"{self.vmax:g}+") // 2 + 2
+        return QRect(pad, 2, max(1, self.width() - 2 * pad), fm.height())
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
+        p = QPainter(self)
+        r = self.bar_rect()
+        p.drawPixmap(r, self.ramp)
+        p.setPen(self.palette().windowText().color())
+        p.drawRect(r.adjusted(0, 0, -1, -1))
+        fm = self.fontMetrics()
+        y = r.bottom() + 4
+        for i, v in enumerate(self.ticks):
+            x = r.left() + round(i / (len(self.ticks) - 1) * (r.width() - 1))
+            p.drawLine(x, r.bottom() + 1, x, y)
+            label = f"{v:g}" + ("+" if i == len(self.ticks) - 1 else "")
+            w = fm.horizontalAdvance(label)
+            p.drawText(x - w // 2, y + fm.ascent(), label)
+        p.end()
 
 
 class ProofPage(QWidget):
@@ -75,8 +160,9 @@ class ProofPage(QWidget):
         self.view_pick = QSpinBox(minimum=0, maximum=0)
         self.view_pick.setPrefix("view ")
         self.view_pick.valueChanged.connect(self._show_view)
-        self.image_labels = [QLabel(alignment=Qt.AlignmentFlag.AlignCenter) for _ in range(3)]
+        self.image_labels = [ScaledImage() for _ in range(3)]
         self.figures = QLabel()
+        self.figures.setWordWrap(True)
         self.figures.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
 
         form = QFormLayout()
@@ -93,12 +179,20 @@ class ProofPage(QWidget):
         side.addWidget(self.progress)
         side.addWidget(self.status)
         side.addStretch(1)
+        from dreamprint_gui.proof.compare import DE_MAP_MAX
+
         pics = QHBoxLayout()
-        for title, lab in zip(("source (emission-absorption)", "print (Mitsuba volpath)",
-                               "dE2000 (0..20)"), self.image_labels, strict=True):
+        self.colour_bar = ColourBar(DE_MAP_MAX)
+        for k, (title, lab) in enumerate(zip(
+                ("source (emission-absorption)", "print (Mitsuba volpath)",
+                 "dE2000, source vs print"), self.image_labels, strict=True)):
             col = QVBoxLayout()
             col.addWidget(QLabel(title, alignment=Qt.AlignmentFlag.AlignCenter))
             col.addWidget(lab, 1)
+            if k == 2:
+                col.addWidget(self.colour_bar)
+            else:  # the images stay level with the dE map above its bar
+                col.addSpacing(self.colour_bar.height())
             pics.addLayout(col)
         right = QVBoxLayout()
         right.addWidget(self.view_pick)
@@ -169,9 +263,14 @@ class ProofPage(QWidget):
         self.view_pick.setMaximum(len(self.images) - 1)
         self._show_view(self.view_pick.value())
         o = self.result["overall"]
+        f = self.result.get("noise_floor")
+        floor = (f"; noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 "
+                 f"{f['mean_de2000']:.2f}, S-CIELAB {f['mean_scielab_de2000']:.2f}" if f else "")
         self.figures.setText(
             f"overall: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "
-            f"PSNR {o['psnr_db']:.1f} dB; SSIM {o['ssim']:.3f}; coverage "
+            f"S-CIELAB dE2000 mean {o['mean_scielab_de2000']:.2f} at "
+            f"{self.result['viewing']['distance_mm']:g} mm{floor}; PSNR {o['psnr_db']:.1f} dB; "
+            f"SSIM {o['ssim']:.3f}; coverage "
             f"{o['source_coverage']:.3f} (source) -> {o['print_coverage']:.3f} (print); "
             f"{self.result['renderer']['variant']}, {self.result['timings_s']['total']:.0f} s")
         self._end("succeeded", "done")

@@ -3,16 +3,23 @@
 Defines :class:`CalibrationWizard` (a QWizard) and its pages:
 
 1. :class:`MeasurementsPage`: per ink, the files holding its reflectance and transmittance (any
-   format ``io.spectra.read_spectra`` reads), the sample in each, and the swatch thickness; or a
-   calibration set (TOML, ``io.spectra.calibration_set``). Every parsed spectrum is plotted at
-   once, resampled onto the profile's grid; each file's problem shows on its own row.
+   format ``io.spectra.read_spectra`` reads), the sample in each (the picked one is the one used:
+   only its own impossible values refuse it, naming it; ``calibration_set.measured_values``),
+   what each file holds when it does not say (the CLI's ``--file-quantity``: an absorbance file
+   is read as T = 10^-A), and the swatch thickness, required (no default: the page names the
+   inks lacking it); or a calibration set (TOML, ``io.spectra.calibration_set``; several
+   thicknesses per ink). Every parsed spectrum is plotted at once, resampled onto the profile's
+   grid; each file's problem shows on its own row.
 2. :class:`ChartPage` (optional): a mixture chart, recipes (``--mix-file`` CSV) and the measured
    reflectance of each patch.
 3. :class:`FitPage`: runs ``calibration.calibrate_profile`` (and ``chart_calibration.fit_chart``)
    on a worker thread, showing the stage and the elapsed time, with a Stop button that returns
    the page at once (the fit has no cancel token: it is abandoned, ``workers.abandonable``,
-   and its result dropped); then plots measured vs fitted R and T per ink, the residuals, and
-   the chart's cross-validated dE2000.
+   and its result dropped); then a table of what can be checked per ink (with several
+   thicknesses, the held-out R/T error of ``calibration.leave_one_thickness_out``; with one R/T
+   pair, that the fit is exact by construction), and plots: measured vs fitted R and T, the
+   fitted K and S, the held-out and residual error per wavelength, the chart's cross-validated
+   dE2000.
 4. :class:`SavePage`: name and file; saving makes the profile active (``profileSaved``).
 """
 
@@ -80,60 +87,114 @@ class _Channel:
     file = None  # SpectraFile
     values: np.ndarray | None = None  # resampled onto the profile grid
     error: str = ""
+    file_quantity: str | None = None  # what the operator says the file holds (None: the file)
+
+
+# What a file holds, as the operator may state it (the CLI's --file-quantity): None = as the file
+# says (a file that does not say is read as the column's quantity).
+FILE_QUANTITIES = (("file says", None), ("reflectance", "reflectance"),
+                   ("transmittance", "transmittance"), ("absorbance", "absorbance"))
+QUANTITY_NAMES = {"R": "reflectance", "T": "transmittance"}
 
 
 class _InkRow:
     """The widgets of one ink on the measurements page."""
 
-    def __init__(self, page: MeasurementsPage, ink: str, grid: QGridLayout, row: int) -> None:
-        self.page, self.ink = page, ink
+    def __init__(self, page: MeasurementsPage, ink: str, extra: bool = False) -> None:
+        """``extra``: another thickness of ``ink`` (removable), not the ink's first row."""
+        self.page, self.ink, self.extra = page, ink, extra
         self.channels = {"R": _Channel(), "T": _Channel()}
         self.edits: dict[str, QLineEdit] = {}
         self.combos: dict[str, QComboBox] = {}
-        name = QLabel(f"<b>{ink}</b>")
-        grid.addWidget(name, row, 0)
+        self.holds: dict[str, QComboBox] = {}
+        self.cells: list[tuple[QWidget, int]] = []  # (widget, column) of the row's line
+        name = QLabel(f"<b>{ink}</b>" if not extra else f"<b>{ink}</b> +")
+        self.cells.append((name, 0))
         col = 1
         for q in ("R", "T"):
             edit = QLineEdit()
-            edit.setPlaceholderText(f"{ink} {'reflectance' if q == 'R' else 'transmittance'} file")
+            edit.setPlaceholderText(f"{ink} {QUANTITY_NAMES[q]} file")
             edit.editingFinished.connect(lambda q=q: self.load(q, self.edits[q].text()))
             browse = QPushButton("...")
             browse.setMaximumWidth(32)
             browse.clicked.connect(lambda _=False, q=q: self.browse(q))
             combo = QComboBox()
-            combo.setMinimumWidth(120)
+            combo.setMinimumWidth(110)
+            combo.setToolTip("the sample of the file that is this ink's "
+                             f"{QUANTITY_NAMES[q]}")
             combo.currentIndexChanged.connect(lambda _i, q=q: self.sample_changed(q))
-            self.edits[q], self.combos[q] = edit, combo
-            grid.addWidget(edit, row, col)
-            grid.addWidget(browse, row, col + 1)
-            grid.addWidget(combo, row, col + 2)
-            col += 3
-        self.thickness = QDoubleSpinBox(decimals=3, minimum=0.001, maximum=100.0, value=1.0,
+            holds = QComboBox()
+            for text, _ in FILE_QUANTITIES:
+                holds.addItem(text)
+            holds.setToolTip("what the file holds, when it does not say (like the CLI's "
+                             "--file-quantity): an absorbance file is read as T = 10^-A")
+            holds.currentIndexChanged.connect(lambda _i, q=q: self.quantity_changed(q))
+            self.edits[q], self.combos[q], self.holds[q] = edit, combo, holds
+            self.cells += [(edit, col), (browse, col + 1), (combo, col + 2), (holds, col + 3)]
+            col += 4
+        # No default: a thickness the operator did not enter would silently scale K and S.
+        self.thickness = QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, value=0.0,
                                         suffix=" mm", singleStep=0.1)
+        self.thickness.setSpecialValueText("thickness?")
+        self.thickness.setToolTip("the measured swatch's thickness (required for every ink "
+                                  "with a measurement)")
         self.thickness.valueChanged.connect(page.changed)
-        grid.addWidget(self.thickness, row, col)
+        self.cells.append((self.thickness, col))
+        # another thickness of this ink (the held-out check needs two), or remove this one
+        self.more = QPushButton("-" if extra else "+")
+        self.more.setMaximumWidth(28)
+        self.more.setToolTip(f"remove this thickness of {ink}" if extra else
+                             f"add another thickness of {ink} (two or more let the fit page "
+                             "check the fit on a thickness it did not see)")
+        self.more.clicked.connect(lambda: page.remove_row(self) if extra else page.add_row(ink))
+        self.cells.append((self.more, col + 1))
+        self.columns = col + 1
         self.error = QLabel("")
         self.error.setStyleSheet(ERROR_STYLE)
         self.error.setWordWrap(True)
         self.error.setVisible(False)
-        grid.addWidget(self.error, row + 1, 1, 1, col)
+
+    def place(self, grid: QGridLayout, row: int) -> None:
+        """Put the row's widgets on grid line ``row`` (its problem on the line below)."""
+        for w, col in self.cells:
+            grid.addWidget(w, row, col)
+        grid.addWidget(self.error, row + 1, 1, 1, self.columns - 1)
+
+    def widgets(self) -> list[QWidget]:
+        return [w for w, _ in self.cells] + [self.error]
 
     def browse(self, q: str) -> None:
         path, _ = QFileDialog.getOpenFileName(
-            self.page, f"{self.ink}: {'reflectance' if q == 'R' else 'transmittance'}",
+            self.page, f"{self.ink}: {QUANTITY_NAMES[q]}",
             self.page.settings.last_folder("spectra"), SPECTRA_FILTER)
         if path:
             self.page.settings.set_last_folder("spectra", path)
             self.edits[q].setText(path)
             self.load(q, path)
 
-    def load(self, q: str, path: str, sample: str | int | None = None) -> None:
-        """Read ``path`` as the ink's R or T; a problem is shown on this row."""
+    def set_file_quantity(self, q: str, quantity: str | None) -> None:
+        """State what the R or T file holds (``None``: as the file says); the file is re-read."""
+        self.holds[q].setCurrentIndex([v for _, v in FILE_QUANTITIES].index(quantity))
+
+    def quantity_changed(self, q: str) -> None:
+        ch = self.channels[q]
+        if ch.path:
+            self.load(q, ch.path, sample=ch.sample, force=True)
+
+    def load(self, q: str, path: str, sample: str | int | None = None,
+             force: bool = False) -> None:
+        """Read ``path`` as the ink's R or T; a problem is shown on this row.
+
+        ``sample`` (name or 0-based index) is the one to pick; by default the one named after
+        the ink, else the file's first usable one.
+        """
         ch = self.channels[q]
         path = path.strip()
-        if path == ch.path and sample is None and ch.file is not None:
+        file_quantity = FILE_QUANTITIES[self.holds[q].currentIndex()][1]
+        if (path == ch.path and sample is None and ch.file is not None and not force
+                and file_quantity == ch.file_quantity):
             return
-        self.channels[q] = ch = _Channel(path=path)
+        self.channels[q] = ch = _Channel(path=path, file_quantity=file_quantity)
         combo = self.combos[q]
         combo.blockSignals(True)
         combo.clear()
@@ -144,8 +205,8 @@ class _InkRow:
             from dreamprint_gui.io.spectra import read_spectra
 
             try:
-                ch.file = read_spectra(path, quantity="reflectance" if q == "R"
-                                       else "transmittance")
+                ch.file = read_spectra(path, quantity=QUANTITY_NAMES[q],
+                                       file_quantity=file_quantity)
                 ch.names = list(ch.file.names)
             except DreamPrintError as exc:
                 ch.error = str(exc)
@@ -156,9 +217,10 @@ class _InkRow:
                 combo.addItems(ch.names)
                 combo.blockSignals(False)
                 idx = 0
-                if sample is not None:
-                    idx = sample if isinstance(sample, int) else max(0, ch.names.index(sample)
-                                                                     if sample in ch.names else 0)
+                if isinstance(sample, int) and 0 <= sample < len(ch.names):
+                    idx = sample
+                elif isinstance(sample, str) and sample in ch.names:
+                    idx = ch.names.index(sample)
                 elif self.ink in ch.names:
                     idx = ch.names.index(self.ink)
                 elif not ch.file.usable[0] and any(ch.file.usable):
@@ -170,6 +232,9 @@ class _InkRow:
         self.page.changed()
 
     def sample_changed(self, q: str) -> None:
+        """Use the picked sample; only its own problems are its problems."""
+        from dreamprint_gui.io.spectra.calibration_set import measured_values
+
         ch = self.channels[q]
         ch.error = ""
         ch.values = None
@@ -177,16 +242,9 @@ class _InkRow:
             i = self.combos[q].currentIndex()
             ch.sample = ch.names[i]
             try:
-                ch.values = np.asarray(ch.file.resample(i, self.page.wavelengths()))
+                ch.values = measured_values(ch.file, ch.file.sample(i), self.page.wavelengths())
             except DreamPrintError as exc:
                 ch.error = str(exc)
-            if ch.values is not None and ch.file.problems:
-                ch.error = "; ".join(ch.file.problems[:2])
-                bad = ~np.isfinite(ch.values) | (ch.values < 0) | (ch.values > 1)
-                if bad.any():
-                    ch.values = None
-                else:
-                    ch.error = ""
         self.show_errors()
         self.page.changed()
 
@@ -195,11 +253,17 @@ class _InkRow:
         self.error.setText("\n".join(errors))
         self.error.setVisible(bool(errors))
 
+    def has_data(self) -> bool:
+        return any(c.values is not None for c in self.channels.values())
+
+    def lacks_thickness(self) -> bool:
+        return self.has_data() and not self.thickness.value() > 0
+
     def measurement(self):
         from dreamprint_gui.core.calibration_types import LayerMeasurement
 
         R, T = self.channels["R"].values, self.channels["T"].values
-        if R is None and T is None:
+        if (R is None and T is None) or not self.thickness.value() > 0:
             return None
         src = "; ".join(f"{q}: {c.path} [{c.sample}]" for q, c in self.channels.items()
                         if c.values is not None)
@@ -220,13 +284,19 @@ class MeasurementsPage(QWizardPage):
         self.set_path: str | None = None
         self.setTitle("Ink measurements")
         self.setSubTitle("Choose, for each ink you measured, the file holding its reflectance "
-                         "(R) and transmittance (T) and the swatch thickness. Inks you leave "
-                         "empty keep the active profile's values. Or load a calibration set.")
+                         "(R) and transmittance (T), the sample in it, what the file holds if it "
+                         "does not say, and the swatch thickness; + adds another thickness of "
+                         "the ink (two or more let the fit be checked). Inks you leave empty "
+                         "keep the active profile's values. Or load a calibration set.")
         grid = QGridLayout()
-        for c, text in enumerate(("ink", "R file", "", "R sample", "T file", "", "T sample",
-                                  "thickness")):
+        for c, text in enumerate(("ink", "R file", "", "R sample", "file holds", "T file", "",
+                                  "T sample", "file holds", "thickness")):
             grid.addWidget(QLabel(f"<i>{text}</i>"), 0, c)
-        self.rows = {ink: _InkRow(self, ink, grid, 1 + 2 * i) for i, ink in enumerate(INKS)}
+        self.grid = grid
+        # every layer row, in page order; ``rows`` the first of each ink
+        self.layer_rows = [_InkRow(self, ink) for ink in INKS]
+        self.rows = {r.ink: r for r in self.layer_rows}
+        self._relayout()
         set_row = QHBoxLayout()
         self.set_button = QPushButton("Load a calibration set (TOML)...")
         self.set_button.clicked.connect(self._browse_set)
@@ -237,16 +307,50 @@ class MeasurementsPage(QWizardPage):
         set_row.addWidget(self.set_button)
         set_row.addWidget(self.clear_set_button)
         set_row.addWidget(self.set_label, 1)
+        self.missing = QLabel("")
+        self.missing.setObjectName("missingThickness")
+        self.missing.setStyleSheet(ERROR_STYLE)
+        self.missing.setWordWrap(True)
         self.figure, self.canvas = _canvas((7, 3))
         self.canvas.setMinimumHeight(220)
         lay = QVBoxLayout(self)
         lay.addLayout(grid)
+        lay.addWidget(self.missing)
         lay.addLayout(set_row)
         lay.addWidget(self.canvas, 1)
         self.changed()
 
     def wavelengths(self) -> np.ndarray:
         return self.wiz.base_profile.wavelengths_nm
+
+    def _relayout(self) -> None:
+        for r in self.layer_rows:
+            for w in r.widgets():
+                self.grid.removeWidget(w)
+        for i, r in enumerate(self.layer_rows):
+            r.place(self.grid, 1 + 2 * i)
+
+    def add_row(self, ink: str) -> _InkRow:
+        """Another thickness of ``ink``: a row under the ink's last one."""
+        row = _InkRow(self, ink, extra=True)
+        last = max(i for i, r in enumerate(self.layer_rows) if r.ink == ink)
+        self.layer_rows.insert(last + 1, row)
+        self._relayout()
+        enabled = self.set_measurements is None
+        for w in row.widgets():
+            w.setEnabled(enabled)
+        self.changed()
+        return row
+
+    def remove_row(self, row: _InkRow) -> None:
+        if not row.extra:
+            return
+        self.layer_rows.remove(row)
+        for w in row.widgets():
+            self.grid.removeWidget(w)
+            w.deleteLater()
+        self._relayout()
+        self.changed()
 
     def _browse_set(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Calibration set",
@@ -274,34 +378,57 @@ class MeasurementsPage(QWizardPage):
                 self.set_label.setStyleSheet(ERROR_STYLE)
         else:
             self.set_label.setText("")
-        for row in self.rows.values():
-            for w in (*row.edits.values(), *row.combos.values(), row.thickness):
+        for row in self.layer_rows:
+            for w in (*row.edits.values(), *row.combos.values(), *row.holds.values(),
+                      row.thickness, row.more):
                 w.setEnabled(self.set_measurements is None)
         self.changed()
 
     def measurements(self) -> list:
         if self.set_measurements is not None:
             return list(self.set_measurements)
-        return [m for m in (row.measurement() for row in self.rows.values()) if m is not None]
+        return [m for m in (row.measurement() for row in self.layer_rows) if m is not None]
+
+    def lacking_thickness(self) -> list[str]:
+        """The inks with a measurement but no thickness (none when a set is loaded)."""
+        if self.set_measurements is not None:
+            return []
+        return list(dict.fromkeys(r.ink for r in self.layer_rows if r.lacks_thickness()))
 
     def changed(self) -> None:
+        lacking = self.lacking_thickness()
+        self.missing.setText(
+            f"Enter the swatch thickness of {', '.join(lacking)}: the fit needs the thickness "
+            "of every measured layer (there is no default)." if lacking else "")
+        self.missing.setVisible(bool(lacking))
         self._plot()
         self.completeChanged.emit()
 
     def isComplete(self) -> bool:  # noqa: N802 - Qt override
         # Measurements are optional when a chart is given on the next page; a row with a
-        # problem must be fixed or cleared first.
+        # problem or without its thickness must be fixed or cleared first.
         return self.set_measurements is not None or not any(
-            r.has_error() for r in self.rows.values())
+            r.has_error() or r.lacks_thickness() for r in self.layer_rows)
+
+    def _plotted(self) -> list:
+        """The measurements to plot: also those of rows still lacking their thickness."""
+        if self.set_measurements is not None:
+            return list(self.set_measurements)
+        from dreamprint_gui.core.calibration_types import LayerMeasurement
+
+        return [LayerMeasurement(r.ink, float(r.thickness.value()), r.channels["R"].values,
+                                 r.channels["T"].values) for r in self.layer_rows
+                if r.has_data()]
 
     def _plot(self) -> None:
         fig = self.figure
         fig.clear()
         ax_r, ax_t = fig.subplots(1, 2, sharex=True)
         wl = self.wavelengths()
-        for m in self.measurements():
+        for m in self._plotted():
             colour = INK_COLOURS[m.ink]
-            label = f"{m.ink} {m.thickness_mm:g} mm"
+            label = f"{m.ink} {m.thickness_mm:g} mm" if m.thickness_mm > 0 else \
+                f"{m.ink} (thickness?)"
             if m.R is not None:
                 ax_r.plot(wl, m.R, color=colour, label=label)
             if m.T is not None:
@@ -406,6 +533,72 @@ class ChartPage(QWizardPage):
         self.canvas.draw_idle()
 
 
+def _held_out(measurements: list, base) -> dict[str, tuple[list, list[str]]]:
+    """Leave-one-thickness-out of each ink with several thicknesses (worker thread)."""
+    from dreamprint_gui.physics.calibration import leave_one_thickness_out
+
+    out = {}
+    for ink in INKS:
+        layers = [m for m in measurements if m.ink == ink]
+        if len({m.thickness_mm for m in layers}) > 1:
+            out[ink] = leave_one_thickness_out(layers, base.wavelengths_nm.size)
+    return out
+
+
+def _fmt_err(x: float | None) -> str:
+    if x is None:
+        return "-"
+    return "&lt; 0.0001" if x < 5e-5 else f"{x:.4f}"
+
+
+FIT_TABLE_HEAD = ("<tr><th align='left'>ink</th><th align='left'>layers</th>"
+                  "<th>held-out rms R</th><th>held-out rms T</th><th>worst held out</th>"
+                  "<th>fit residual R / T</th><th align='left'>what this says</th></tr>")
+
+
+def _fit_row(fit, layers: list, held: list, notes: list[str]) -> str:
+    """One ink's row of the fit table: what can be checked of its fit.
+
+    Held-out error (leave-one-thickness-out) with several thicknesses; one layer with R and T
+    is fitted exactly by construction, which the row says instead of a zero residual.
+    """
+    from dreamprint_gui.physics.calibration import exact_by_construction
+
+    ts = sorted({m.thickness_mm for m in layers})
+    layer_text = f"{len(layers)} at {', '.join(f'{t:g}' for t in ts)} mm"
+    cells = [f"<b>{fit.ink}</b>", layer_text]
+    s = fit.summary()
+    residual = f"{_fmt_err(s['max_rms_R'])} / {_fmt_err(s['max_rms_T'])}"
+    if exact_by_construction(layers):
+        cells += ["-", "-", "-", "-",
+                  "exact by construction (one R and T pair, two unknowns per wavelength): "
+                  "nothing to check; measure a second thickness"]
+    elif len(layers) == 1:
+        q = "T" if layers[0].R is None else "R"
+        cells += ["-", "-", "-", "-",
+                  f"only {q}: matched exactly, K and S not separable; measure R and T"]
+    elif held:
+        worst = max(held, key=lambda h: max(h.overall_R or 0.0, h.overall_T or 0.0))
+        rms = {q: [getattr(h, f"overall_{q}") for h in held] for q in "RT"}
+        agg = {q: (None if all(v is None for v in vals) else
+                   float(np.sqrt(np.mean([v * v for v in vals if v is not None]))))
+               for q, vals in rms.items()}
+        per = "; ".join(f"{h.thickness_mm:g} mm: R {_fmt_err(h.overall_R)}, "
+                        f"T {_fmt_err(h.overall_T)}" for h in held)
+        cells += [_fmt_err(agg["R"]), _fmt_err(agg["T"]), f"{worst.thickness_mm:g} mm",
+                  residual, f"each thickness predicted from the others ({per})"]
+    elif len(ts) == 1:
+        cells += ["-", "-", "-", residual,
+                  "one thickness: nothing to hold out; the residual is the repeats' spread"]
+    else:
+        cells += ["-", "-", "-", residual, ""]
+    if notes:
+        cells[-1] += ("; " if cells[-1] else "") + "; ".join(notes)
+    aligns = ["left", "left", "center", "center", "center", "center", "left"]
+    return "<tr>" + "".join(f"<td align='{a}'>{c}</td>" for a, c in
+                            zip(aligns, cells, strict=True)) + "</tr>"
+
+
 class FitPage(QWizardPage):
     """Fits on a worker thread; plots measured vs fitted R and T, residuals, chart dE2000."""
 
@@ -415,6 +608,7 @@ class FitPage(QWizardPage):
         super().__init__()
         self.wiz = wizard
         self.result = None  # (profile, fits, chart_fit)
+        self.held_out: dict[str, tuple[list, list[str]]] = {}
         self.error_text = ""
         self._task: Task | None = None
         self.setTitle("Fit")
@@ -443,10 +637,12 @@ class FitPage(QWizardPage):
         self._clock.timeout.connect(self._tick)
         self.tabs = QTabWidget()
         self.fit_fig, self.fit_canvas = _canvas((8, 4.5))
+        self.ks_fig, self.ks_canvas = _canvas((8, 4.5))
         self.res_fig, self.res_canvas = _canvas((8, 3))
         self.chart_fig, self.chart_canvas = _canvas((8, 3))
         self.tabs.addTab(self.fit_canvas, "Measured vs fitted")
-        self.tabs.addTab(self.res_canvas, "Residuals")
+        self.tabs.addTab(self.ks_canvas, "Fitted K and S")
+        self.tabs.addTab(self.res_canvas, "Held-out and residual error")
         self.tabs.addTab(self.chart_canvas, "Chart dE2000")
         lay = QVBoxLayout(self)
         lay.addLayout(run_row)
@@ -509,11 +705,17 @@ class FitPage(QWizardPage):
             if not measurements and recipes is None:
                 raise DreamPrintError("nothing to fit: choose ink measurements (first page) or "
                                       "a mixture chart (second page)")
+            held: dict[str, tuple[list, list[str]]] = {}
             if measurements:
                 report("fitting K and S of each ink:")
                 profile, fits = abandonable(
                     lambda: calibrate_profile(measurements, base, name=name), cancel,
                     name="calibrate-profile")
+                if any(len({m.thickness_mm for m in measurements if m.ink == f.ink}) > 1
+                       for f in fits):
+                    report("holding out each thickness in turn:")
+                    held = abandonable(lambda: _held_out(measurements, base), cancel,
+                                       name="leave-one-thickness-out")
             else:
                 profile, fits = base.with_settings(name=name), []
             chart_fit = None
@@ -527,7 +729,7 @@ class FitPage(QWizardPage):
                     lambda: fit_chart(start, recipes, refl, name=name, folds=folds), cancel,
                     name="fit-chart")
                 profile = chart_fit.profile
-            return profile, fits, chart_fit, measurements
+            return profile, fits, chart_fit, measurements, held
 
         self.status.setText("")
         self.status.setStyleSheet("")
@@ -566,25 +768,25 @@ class FitPage(QWizardPage):
         self.status.setStyleSheet(ERROR_STYLE)
 
     def _done(self, result) -> None:
-        profile, fits, chart_fit, measurements = result
+        profile, fits, chart_fit, measurements, held = result
         self.result = (profile, fits, chart_fit)
-        lines = []
-        for f in fits:
-            s = f.summary()
-            parts = [f"<b>{f.ink}</b> ({s['method']})"]
-            for key in ("max_rms_R", "max_rms_T"):
-                if s.get(key) is not None:
-                    parts.append(f"worst rms {key[-1]} {s[key]:.4f}")
-            lines.append(", ".join(parts))
+        self.held_out = held
+        text = ""
+        if fits:
+            rows = [_fit_row(f, [m for m in measurements if m.ink == f.ink],
+                             *held.get(f.ink, ([], []))) for f in fits]
+            text = ("<table cellspacing='0' cellpadding='3'>" + FIT_TABLE_HEAD + "".join(rows)
+                    + "</table>")
         if chart_fit is not None:
             cv = chart_fit.report()["cross_validated_dE2000"]
-            lines.append(f"<b>chart</b>: cross-validated dE2000 mean {cv['mean']:.2f}, "
-                         f"p95 {cv['p95']:.2f}, max {cv['max']:.2f}")
-        self.status.setText("<br>".join(lines))
+            text += (f"<b>chart</b>: cross-validated dE2000 mean {cv['mean']:.2f}, "
+                     f"p95 {cv['p95']:.2f}, max {cv['max']:.2f}")
+        self.status.setText(text)
         self._plot_fit(profile, measurements)
-        self._plot_residuals(fits)
+        self._plot_ks(profile, [f.ink for f in fits])
+        self._plot_residuals(fits, held)
         self._plot_chart(chart_fit)
-        self.tabs.setTabEnabled(2, chart_fit is not None)
+        self.tabs.setTabEnabled(3, chart_fit is not None)
         self.fitted.emit(self.result)
 
     def _plot_fit(self, profile, measurements) -> None:
@@ -614,22 +816,54 @@ class FitPage(QWizardPage):
             ax.set_xlabel("nm", fontsize=7)
         self.fit_canvas.draw_idle()
 
-    def _plot_residuals(self, fits) -> None:
+    def _plot_ks(self, profile, inks: list[str]) -> None:
+        """The fitted K and S (1/mm) of each fitted ink, on a log scale."""
+        fig = self.ks_fig
+        fig.clear()
+        inks = [ink for ink in INKS if ink in inks]
+        if not inks:
+            self.ks_canvas.draw_idle()
+            return
+        axes = fig.subplots(1, len(inks), sharey=True, squeeze=False)[0]
+        wl = profile.wavelengths_nm
+        for ax, ink in zip(axes, inks, strict=True):
+            i = INKS.index(ink)
+            ax.plot(wl, profile.K[i], "-", color=INK_COLOURS[ink], lw=1.5, label="K")
+            ax.plot(wl, profile.S[i], "--", color="#555", lw=1.2, label="S")
+            ax.set_yscale("log")
+            ax.set_title(ink, fontsize=9)
+            ax.set_xlabel("wavelength (nm)", fontsize=7)
+            ax.tick_params(labelsize=6)
+            ax.legend(fontsize=7)
+        axes[0].set_ylabel("K (absorption), S (scattering): 1/mm", fontsize=7)
+        self.ks_canvas.draw_idle()
+
+    def _plot_residuals(self, fits, held) -> None:
+        """Held-out error per wavelength (solid) where there is one, else the fit residual
+        (dotted; exactly zero for one layer, which is said in the title)."""
         fig = self.res_fig
         fig.clear()
         ax_r, ax_t = fig.subplots(1, 2, sharey=True)
         wl = self.wiz.base_profile.wavelengths_nm
         for f in fits:
-            if np.isfinite(f.rms_R).any():
-                ax_r.plot(wl, f.rms_R, color=INK_COLOURS[f.ink], label=f.ink)
-            if np.isfinite(f.rms_T).any():
-                ax_t.plot(wl, f.rms_T, color=INK_COLOURS[f.ink], label=f.ink)
+            colour = INK_COLOURS[f.ink]
+            outs = held.get(f.ink, ([], []))[0]
+            for ax, q in ((ax_r, "R"), (ax_t, "T")):
+                curves = [getattr(h, f"rms_{q}") for h in outs
+                          if np.isfinite(getattr(h, f"rms_{q}")).any()]
+                if curves:
+                    with np.errstate(invalid="ignore"):
+                        ho = np.sqrt(np.nanmean(np.square(curves), axis=0))
+                    ax.plot(wl, ho, "-", color=colour, label=f"{f.ink} held out")
+                res = getattr(f, f"rms_{q}")
+                if np.isfinite(res).any():
+                    ax.plot(wl, res, ":", color=colour, label=f"{f.ink} fit residual")
         for ax, q in ((ax_r, "R"), (ax_t, "T")):
-            ax.set_title(f"rms residual of {q} per wavelength", fontsize=9)
+            ax.set_title(f"rms error of {q} per wavelength", fontsize=9)
             ax.set_xlabel("wavelength (nm)", fontsize=8)
             ax.tick_params(labelsize=7)
             if ax.lines:
-                ax.legend(fontsize=7)
+                ax.legend(fontsize=6)
         self.res_canvas.draw_idle()
 
     def _plot_chart(self, chart_fit) -> None:

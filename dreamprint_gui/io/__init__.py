@@ -1,1 +1,3 @@
-"""Readers and writers: spectra, volumes, print jobs. Never imports Qt."""
+"""Readers: instrument spectra (:mod:`.spectra`), volume sources (:mod:`.volumes`), recipe and
+measurement tables (:mod:`.recipes`, :mod:`.measurements_csv`). Imports only
+:mod:`dreamprint_gui.core`; never Qt."""

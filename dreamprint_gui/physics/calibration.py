@@ -4,10 +4,15 @@ Defines
 -------
 - :func:`invert_closed_form`: Kubelka's explicit inversion of one layer's R, T at thickness t.
 - :func:`fit_ink`: Levenberg-Marquardt over one or several layers (thicknesses, R and/or T;
-  an optically thick patch, thickness inf, contributes R_inf), started from the closed form;
-  per-wavelength residuals.
+  an optically thick patch, thickness inf, contributes R_inf), started from the closed form
+  with a faint pull towards that start (weight ``_PRIOR`` per unit of ln K, ln S: it decides
+  only where the data leave K and S free, e.g. layers all opaque); per-wavelength residuals.
 - :func:`calibrate_profile`: all measured inks -> an :class:`InkProfile` plus a fit report; inks
   without measurements keep the base profile's K and S (and the report says so).
+- :func:`leave_one_thickness_out`: what can be checked of a fit. One layer with R and T is
+  reproduced exactly by construction (two unknowns, two data per wavelength), so its residual says
+  nothing; with several thicknesses, each is left out in turn, K and S are fitted to the others
+  and the left-out layer's R and T are predicted: the held-out error.
 
 Closed form (Kubelka 1948, eqs. for a layer of known thickness)::
 
@@ -36,8 +41,11 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS, InkProfile, now_iso
 from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
-__all__ = ["invert_closed_form", "fit_ink", "InkFit", "calibrate_profile", "LayerMeasurement"]
+__all__ = ["invert_closed_form", "fit_ink", "InkFit", "calibrate_profile", "LayerMeasurement",
+           "HeldOut", "leave_one_thickness_out", "exact_by_construction"]
 
+_T_FLOOR = 1e-12  # the smallest transmittance the starts invert (T = 0 has no finite K)
+_PRIOR = 1e-4  # weight of the pull towards the start, per unit of ln K or ln S (fit_ink)
 _FLOOR = 1e-9  # 1/mm: below this a coefficient is indistinguishable from 0 at mm thicknesses
 
 
@@ -143,14 +151,17 @@ def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
     for j in range(n_wavelengths):
         starts = []
         for i in np.flatnonzero(both):
-            k0, s0 = invert_closed_form(R[i, j], T[i, j], t[i])
+            # T measured as 0 (a filter's blocked band, noise clipped at 0) has no finite
+            # inverse: start from the floor the Beer-Lambert guess below uses, T = 1e-12.
+            tij = T[i, j] if T[i, j] > 0 else _T_FLOOR
+            k0, s0 = invert_closed_form(R[i, j], tij, t[i])
             if np.isfinite(k0) and np.isfinite(s0):
                 starts.append((float(k0), float(s0)))
         if starts:
             k0, s0 = np.median(np.asarray(starts), axis=0)
         else:
             sel = hasT[:, j] & (T[:, j] > 0) & np.isfinite(t)
-            k0 = float(np.median(-np.log(np.clip(T[sel, j], 1e-12, 1)) / t[sel])) if sel.any() \
+            k0 = float(np.median(-np.log(np.clip(T[sel, j], _T_FLOOR, 1)) / t[sel])) if sel.any() \
                 else 1.0
             s0 = 0.1 * k0
         x0 = np.log(np.maximum([k0, s0], _FLOOR))
@@ -158,14 +169,16 @@ def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
             K[j], S[j] = k0, s0
             continue
 
-        def residuals(x: NDArray, j: int = j) -> NDArray:
+        def residuals(x: NDArray, j: int = j, x0: NDArray = x0) -> NDArray:
             r, tt = reflectance_transmittance(np.exp(x[0]), np.exp(x[1]), t)
-            out = np.concatenate([(r - R[:, j])[hasR[:, j]], (tt - T[:, j])[hasT[:, j]]])
-            return out
+            # A faint pull towards the start: where the layers are all opaque, R fixes only
+            # K/S and T ~ 0 nothing else, so the data leave a flat valley along which LM
+            # wandered to K, S ~ 1e9 (refused by the profile); the pull keeps the start's
+            # scale there and moves a determined solution by ~ (_PRIOR / slope)^2, nothing.
+            return np.concatenate([(r - R[:, j])[hasR[:, j]], (tt - T[:, j])[hasT[:, j]],
+                                   _PRIOR * (x - x0)])
 
-        n_res = int(hasR[:, j].sum() + hasT[:, j].sum())
-        method = "lm" if n_res >= 2 else "trf"
-        sol = least_squares(residuals, x0, method=method, xtol=1e-15, ftol=1e-15, gtol=1e-15,
+        sol = least_squares(residuals, x0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15,
                             max_nfev=2000)
         K[j], S[j] = np.exp(sol.x)
     K = np.where(K <= _FLOOR * 1.000001, 0.0, K)
@@ -220,3 +233,78 @@ def calibrate_profile(measurements: list[LayerMeasurement], base: InkProfile,
                    for f in fits},
     )
     return profile, fits
+
+
+def exact_by_construction(layers: list[LayerMeasurement]) -> bool:
+    """True when the layers are one thickness measured once with both R and T: K and S then
+    reproduce them exactly (the closed form), and the fit residual checks nothing."""
+    return (len(layers) == 1 and layers[0].R is not None and layers[0].T is not None
+            and bool(np.isfinite(layers[0].thickness_mm)))
+
+
+@dataclass
+class HeldOut:
+    """The error predicting the layers of one thickness from a fit to the other thicknesses.
+
+    ``rms_R`` / ``rms_T`` are per wavelength (NaN where that thickness has no R / T);
+    ``fitted_on`` lists the thicknesses (mm) the fit used.
+    """
+
+    ink: str
+    thickness_mm: float
+    rms_R: NDArray[np.float64]
+    rms_T: NDArray[np.float64]
+    fitted_on: list[float]
+
+    @staticmethod
+    def _overall(x: NDArray) -> float | None:
+        x = x[np.isfinite(x)]
+        return float(np.sqrt(np.mean(x * x))) if x.size else None
+
+    @property
+    def overall_R(self) -> float | None:
+        """rms over wavelengths of the held-out R error (None: no R at this thickness)."""
+        return self._overall(self.rms_R)
+
+    @property
+    def overall_T(self) -> float | None:
+        return self._overall(self.rms_T)
+
+
+def leave_one_thickness_out(layers: list[LayerMeasurement], n_wavelengths: int
+                            ) -> tuple[list[HeldOut], list[str]]:
+    """Held-out R/T error of one ink: each distinct thickness left out in turn.
+
+    For thickness ``t_k``, K and S are fitted (:func:`fit_ink`) to the layers of every other
+    thickness, then R and T of the layers at ``t_k`` are predicted with eqs. 3-4 and compared
+    with their measurements (rms over those layers, per wavelength). A thickness whose
+    remaining layers have no transmittance cannot be held out (K and S are not separable
+    from reflectance of one thickness); it is skipped and named in the returned notes.
+    Returns ``([], [why])`` with fewer than two distinct thicknesses.
+    """
+    if not layers:
+        return [], []
+    ink = layers[0].ink
+    thicknesses = sorted({float(m.thickness_mm) for m in layers})
+    if len(thicknesses) < 2:
+        return [], [f"{ink}: one thickness measured; nothing to hold out"]
+    out: list[HeldOut] = []
+    notes: list[str] = []
+    for t in thicknesses:
+        rest = [m for m in layers if float(m.thickness_mm) != t]
+        held = [m for m in layers if float(m.thickness_mm) == t]
+        if not any(m.T is not None for m in rest):
+            notes.append(f"{ink}: {t:g} mm not held out (the other thicknesses have no "
+                         "transmittance)")
+            continue
+        fit = fit_ink(rest, n_wavelengths)
+        tt, R, T, hasR, hasT = _layer_arrays(held, n_wavelengths)
+        Rm, Tm = reflectance_transmittance(fit.K, fit.S, tt[:, None])
+        with np.errstate(invalid="ignore"):
+            rms_R = np.sqrt(np.nanmean(np.where(hasR, (Rm - R) ** 2, np.nan), axis=0)) \
+                if hasR.any() else np.full(n_wavelengths, np.nan)
+            rms_T = np.sqrt(np.nanmean(np.where(hasT, (Tm - T) ** 2, np.nan), axis=0)) \
+                if hasT.any() else np.full(n_wavelengths, np.nan)
+        out.append(HeldOut(ink, t, rms_R, rms_T,
+                           sorted({float(m.thickness_mm) for m in rest})))
+    return out, notes

@@ -50,6 +50,12 @@ def test_gamut_page(qtbot, gl_display, job_profile, table_size):
     ink_white = np.clip(predict(job_profile, np.eye(len(INKS))[INKS.index("W")]).sRGB, 0, 1)
     assert min(ink_white) > 0.6  # the grey is darker than white ink: inside the gamut
     assert f"{pick['dE2000']:.2f}" in page.de_label.text()
+    # the 3D views name their axes as CIELAB does
+    for i in (0, 1):
+        actor = page.plotter.renderers[i].axes_actor
+        assert (actor.GetXAxisLabelText(), actor.GetYAxisLabelText(),
+                actor.GetZAxisLabelText()) == ("a*", "b*", "L*")
+    _picker_matches_the_cli(qtbot, page, job_profile, table_size)
 
     # the perceptual intent: the chart and the picker show its mapping (source -> printed)
     page.set_colour((0.0, 0.0, 1.0))  # sRGB blue, far outside the printable gamut
@@ -65,6 +71,46 @@ def test_gamut_page(qtbot, gl_display, job_profile, table_size):
     src_hue = np.degrees(np.arctan2(mapped["target_Lab"][2], mapped["target_Lab"][1]))
     # perceptual keeps the (CAM16-UCS) hue of the source: closer to it in CIELAB than clipping
     assert abs(hue[0] - src_hue) < abs(hue[1] - src_hue) + 1.0
+
+
+def _picker_matches_the_cli(qtbot, page, profile, table_size) -> None:
+    """The picker takes sRGB on the CLI's 0-1 scale and shows the six inks `dreamprint lookup`
+    reports for that colour and density, Clear included, each share beside its bar."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from dreamprint_gui.cli import cli
+    from dreamprint_gui.core.profile import save_profile
+
+    assert [s.maximum() for s in page.spins] == [1.0, 1.0, 1.0]
+    assert "0 to 1" in page.rgb_scale.text() and "lookup --rgb" in page.rgb_scale.text()
+    assert list(page.bars) == list(INKS)           # Clear has its bar
+    page.spins[0].setValue(0.2)
+    page.spins[1].setValue(0.45)
+    page.spins[2].setValue(0.7)
+    page.density.setText("2.5")
+    page.density.editingFinished.emit()
+    gui = page.last_pick["aligned"]
+    with tempfile.TemporaryDirectory() as d:
+        prof_path = Path(d) / "p.json"
+        save_profile(profile, prof_path)
+        res = CliRunner().invoke(cli, ["lookup", "--rgb", "0.2,0.45,0.7", "--density", "2.5",
+                                       "--profile", str(prof_path), "--size", str(table_size),
+                                       "--json"])
+    assert res.exit_code == 0, res.output
+    cli_rec = json.loads(res.output)[0]
+    for ink in INKS:
+        assert gui[ink] == pytest.approx(cli_rec["aligned"][ink], abs=1e-6), ink
+        assert page.bar_values[ink].text() == f"{100 * cli_rec['aligned'][ink]:.1f} %"
+        assert page.bars[ink].value() == round(1000 * cli_rec["aligned"][ink])
+        assert not page.bars[ink].isTextVisible()   # nothing drawn over the bar's chunk
+    assert gui["Cl"] > 0.05                        # a thin voxel: Clear fills the rest
+    page.density.setText("")
+    page.density.editingFinished.emit()
+    assert page.last_pick["aligned"]["Cl"] == pytest.approx(0.0, abs=1e-9)
 
 
 def _dialog(qtbot, tmp_path, table_size, height_mm):
@@ -84,19 +130,26 @@ def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
     assert dlg.settings_for_job().intent == "colorimetric"
     dlg.intent.setCurrentIndex(dlg.intent.findData("perceptual"))
     assert dlg.settings_for_job().intent == "perceptual"
+    dlg.intent.setCurrentIndex(dlg.intent.findData("relative"))
+    assert dlg.settings_for_job().intent == "relative"
 
 
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
+    import time
+
+    from dreamprint_gui.gui.export import time_text
     from dreamprint_gui.gui.names import gui_wording
 
     dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
     qtbot.waitUntil(lambda: dlg.preflight is not None, timeout=120000)
     seen = []
+    t0 = time.monotonic()
     dlg.start()
     dlg.task.progress.connect(seen.append)
     with qtbot.waitSignal(dlg.task.done, timeout=180000):
         pass
     qtbot.waitUntil(lambda: dlg.manifest is not None or dlg.error.text(), timeout=5000)
+    waited = time.monotonic() - t0
     assert dlg.task.outcome == "succeeded", dlg.error.text()
     manifest = dlg.manifest
     nx, ny, nz = manifest["grid_dimensions"]
@@ -113,9 +166,16 @@ def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     assert dlg.summary.horizontalScrollBar().maximum() == 0
     for lab, info in manifest["labels"].items():
         assert info["material"] in text, lab
-    assert PRINTER_NAMES["j850-paper"] in text and "j850-paper" not in text
+    assert PRINTER_NAMES["voxelprint-27um"] in text and "voxelprint-27um" not in text
     assert "Clear resin" in text
-    assert manifest["printer"]["name"] == "j850-paper"  # the id stays in the file
+    assert manifest["printer"]["name"] == "voxelprint-27um"  # the default; the id stays in the file
+    # the time is the job's as the operator waited for it: the dialog's clock from Export to
+    # the finished job, which holds the manifest's own total (begun later, ended earlier)
+    t = manifest["timings_s"]
+    assert t["total"] <= dlg.elapsed_s <= waited
+    assert time_text(t, dlg.elapsed_s) in text
+    assert f"{dlg.elapsed_s:.1f} s from Export to the finished job" in text
+    assert f"converting {t['convert']:.1f} s" in text
     # the pre-flight the dialog showed is the one the manifest records, warnings in the summary
     assert manifest["preflight"]["material_fractions"] == dlg.preflight.fractions
     for w in manifest["preflight"]["warnings"]:

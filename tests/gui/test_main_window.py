@@ -64,14 +64,18 @@ def test_slice_scrubber_shows_halftoned_labels(window, qtbot):
     assert labels.shape == (ny, nx) and labels.max() <= EMPTY_LABEL
     assert p.slice_image is not None and p.legend.rows
     assert abs(sum(share for _, share in p.legend.rows) - 100) < 0.5
-    # full resolution: one image pixel per printer voxel, in the slice PNGs' colour codes
+    # full resolution: one image pixel per printer voxel, in the printer file's display
+    # colours: the slice codes, except Clear (the legend's 227, 233, 253 in the files) shown
+    # light steel blue 150, 190, 225
     img = p.slice_image
     assert (img.width(), img.height()) == (nx, ny)
     rows = np.frombuffer(img.constBits(), np.uint8).reshape(ny, img.bytesPerLine())
     shown = rows[:, : 3 * nx].reshape(ny, nx, 3)
-    np.testing.assert_array_equal(shown, window.printer.palette()[labels])
+    np.testing.assert_array_equal(shown, window.printer.display_palette()[labels])
     colours, names = label_colours(window.printer)
-    np.testing.assert_array_equal(colours, window.printer.palette())
+    codes = window.printer.palette()
+    assert tuple(codes[5]) == (227, 233, 253) and tuple(colours[5]) == (150, 190, 225)
+    np.testing.assert_array_equal(np.delete(colours, 5, 0), np.delete(codes, 5, 0))
     assert [n for n, _ in p.legend.rows] == [names[i] for i in np.unique(labels)]
     # zoom and pan: the wheel zooms in, Fit shows the whole layer again
     view = p.slice_view
@@ -87,6 +91,13 @@ def test_slice_scrubber_shows_halftoned_labels(window, qtbot):
     assert view.visible_voxels().width() >= nx - 1
     p.slice_slider.setValue(0)  # the bottom layer of a cloud is mostly background
     qtbot.waitUntil(lambda: p.shown_layer == 0, timeout=30000)
+    # the layer's height above the build plate, in mm: layer k spans k t .. (k + 1) t
+    t = window.printer.layer_thickness_mm
+    assert f"layer 0 of {nz}, z 0.000-{t:.3f} mm" in p.slice_label.text()
+    p.slice_slider.setValue(nz - 1)
+    qtbot.waitUntil(lambda: p.shown_layer == nz - 1, timeout=30000)
+    assert f"z {(nz - 1) * t:.3f}-{nz * t:.3f} mm" in p.slice_label.text()
+    assert nz * t == pytest.approx(p.ctx.grid.size_mm[2])  # the top layer ends the grid
 
 
 def test_density_scale_and_background_follow_the_engine(window, qtbot):
@@ -231,6 +242,15 @@ def test_voxel_model_previews_solid_with_its_intent(qtbot, gl_display, table_siz
     assert "auto: solid" in p.content_note.text() and "voxel model" in p.content_note.text()
     assert p.sampling.isEnabled() and p.params()["sampling"] is None  # the reader's: nearest
     assert getattr(p.ctx.source, "sampling", None) == "nearest"
+    # the size the preview states has the digits `dreamprint inspect` gives for the same height
+    from click.testing import CliRunner
+
+    from dreamprint_gui.cli import cli
+
+    res = CliRunner().invoke(cli, ["inspect", str(knight), "--height-mm", "4"])
+    assert res.exit_code == 0, res.output
+    span = res.output.split("the bounds span ")[1].split(" mm")[0]
+    assert f"print {span} mm on " in p.status.text(), (span, p.status.text())
     occupied = p.data.source_sigma > 0
     assert 0.01 < occupied.mean() < 0.5
     assert np.all(p.data.source_sigma[occupied] == SOLID_SIGMA)  # opaque, not a haze
@@ -265,3 +285,45 @@ def test_preflight_warning_shown_once(window, qtbot):
     with qtbot.waitSignal(p.preflightReady, timeout=120000):
         p.set_params(density_scale=1.0)
     assert "mostly-clear" not in [wn.code for wn in p.preflight.warnings]
+
+
+def test_the_first_preview_shows_progress(qtbot, gl_display, table_size, monkeypatch):
+    """Preparing the job (opening the source, the halftone mask, the kernels: minutes on a
+    first start) is said with its seconds counting and a busy bar; then the prediction's
+    percentage; the bar goes once the preview is shown."""
+    import time
+
+    from dreamprint_gui.gui import preview as preview_module
+
+    real = preview_module.job_context
+
+    def slow_context(settings, previous=None):  # stands in for a first start's builds
+        time.sleep(2.5)
+        return real(settings, previous)
+
+    monkeypatch.setattr(preview_module, "job_context", slow_context)
+    w = MainWindow(table_size=table_size)
+    w.interactive = False
+    qtbot.addWidget(w)
+    p = w.preview
+    p.set_params(height_mm=4.0)
+    w.show()
+    from PySide6.QtCore import QTimer
+
+    seen: list[str] = []
+    watch = QTimer(interval=100)
+    watch.timeout.connect(lambda: seen.append(p.view.message.text()))
+    watch.start()
+    w.use_default_profile()
+    w.open_path("demo")
+    qtbot.waitUntil(lambda: "preparing demo" in p.view.message.text(), timeout=120000)
+    assert p.busy.isVisible() and p.busy.maximum() == 0   # busy: no fraction to tell yet
+    assert "first time on this computer" in p.view.message.text()
+    qtbot.waitUntil(lambda: " 2 s" in p.view.message.text(), timeout=10000)  # seconds count
+    with qtbot.waitSignal(w.ready, timeout=180000):
+        pass
+    watch.stop()
+    assert not p.busy.isVisible()
+    assert any("preparing demo" in m and " 1 s" in m for m in seen)
+    assert any("predicting the print" in m and "%" in m for m in seen), seen[-5:]
+    w.close()

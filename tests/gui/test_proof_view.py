@@ -30,6 +30,7 @@ def test_proof_page_renders_and_shows_pixels(qtbot, table_size):
     assert src[mid, mid].mean() < 245 and prn[mid, mid].mean() < 245
     assert not page.image_labels[1].pixmap().isNull()
     assert "dE2000" in page.figures.text()
+    assert "S-CIELAB" in page.figures.text() and "noise floor" in page.figures.text()
     assert page.render_button.isEnabled() and not page.cancel_button.isEnabled()
 
 
@@ -49,3 +50,60 @@ def test_proof_page_without_source(qtbot):
     page.render_button.click()
     assert "Open a source" in page.status.text() and page.task is None
     assert np is not None
+
+
+def _widget_pixels(widget) -> np.ndarray:
+    """The widget's rendering as an (h, w, 3) uint8 RGB array."""
+    img = widget.grab().toImage().convertToFormat(widget.grab().toImage().Format.Format_RGB888)
+    h, w = img.height(), img.width()
+    buf = np.frombuffer(img.constBits(), np.uint8, img.bytesPerLine() * h)
+    return buf.reshape(h, img.bytesPerLine())[:, :3 * w].reshape(h, w, 3)
+
+
+def test_proof_images_scale_with_the_page_and_the_de_map_has_a_colour_bar(qtbot):
+    """A 32 px result fills the enlarged page (each rendered pixel a block, no smoothing);
+    the colour bar runs from the heat map's colour of 0 to that of 20 dE2000."""
+    from dreamprint_gui.proof.compare import DE_MAP_MAX, de_heatmap
+
+    page = ProofPage(job_settings=lambda: None)
+    qtbot.addWidget(page)
+    page.resize(1280, 760)
+    page.show()
+    qtbot.waitExposed(page)
+    src = np.zeros((32, 32, 3))
+    src[:, 16:] = 1.0               # left half black, right half white
+    de = np.full((32, 32), np.nan)
+    de[8:24, 8:24] = 10.0
+    report = {"overall": {"mean_de2000": 10.0, "p95_de2000": 10.0, "psnr_db": 20.0,
+                          "ssim": 0.5, "source_coverage": 0.25, "print_coverage": 0.25},
+              "renderer": {"variant": "scalar_rgb"}, "timings_s": {"total": 1.0}}
+    page._on_result({"report": report, "images": [{"source": src, "print": src, "de2000": de}]})
+    qtbot.wait(50)
+    lab = page.image_labels[0]
+    r = lab.image_rect()
+    assert r.width() == r.height() and r.width() >= 4 * 32      # scaled up, square kept
+    px = _widget_pixels(lab)
+    y = r.center().y()
+    # the boundary between the halves stays sharp: one rendered pixel is a block
+    left, right = px[y, r.left() + 2], px[y, r.right() - 2]
+    assert left.max() < 10 and right.min() > 245
+    col = r.left() + r.width() // 2
+    edge = px[y, col - r.width() // 32: col + r.width() // 32]
+    assert ((edge.mean(axis=1) > 10) & (edge.mean(axis=1) < 245)).sum() <= 2
+    # the dE map: its middle is the heat map's colour of 10
+    dmap = page.image_labels[2]
+    dpx = _widget_pixels(dmap)
+    c = dmap.image_rect().center()
+    np.testing.assert_allclose(dpx[c.y(), c.x()], de_heatmap(np.array([10.0]))[0], atol=3)
+    # the colour bar: magma from 0 to DE_MAP_MAX, ticks labelled
+    bar = page.colour_bar
+    assert bar.isVisible() and bar.ticks[-1] == DE_MAP_MAX
+    bpx = _widget_pixels(bar)
+    br = bar.bar_rect()
+    ends = de_heatmap(np.array([0.0, DE_MAP_MAX]))
+    np.testing.assert_allclose(bpx[br.center().y(), br.left() + 2], ends[0], atol=12)
+    np.testing.assert_allclose(bpx[br.center().y(), br.right() - 3], ends[1], atol=12)
+    # a smaller page, smaller images
+    page.resize(900, 500)
+    qtbot.wait(50)
+    assert page.image_labels[0].image_rect().width() < r.width()

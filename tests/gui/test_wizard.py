@@ -101,6 +101,7 @@ def test_real_instrument_file_and_inline_errors(qtbot, tmp_path, shared_data):
     page = wiz.measurements_page
     row = page.rows["C"]
     xrite = shared_data / "spectra" / "formats" / "X-Rite_Digital_Colour_Checker.txt"
+    row.thickness.setValue(0.5)
     row.load("R", str(xrite))
     assert row.combos["R"].count() == 10  # every patch of the file is offered
     assert row.channels["R"].values is not None and not row.error.isVisibleTo(page)
@@ -264,3 +265,259 @@ def test_stopping_a_running_chart_fit(qtbot, tmp_path, truth, monkeypatch):
     assert returned.wait(30)
     qtbot.wait(300)  # the late result would arrive by now: it is dropped
     assert page.result is None and fitted == [] and not page.isComplete()
+
+
+# -- issue 27: a wizard to trust ----------------------------------------------------------------
+
+FILTERS = ["600LP", "600LP1", "600LP2", "550LP", "600SP800N", "600SP800N1", "530SP", "GSBS",
+           "550LP2", "530SP2", "530SP_HI"]
+
+
+def _edge(wl, cut, width=6.0):
+    return 1.0 / (1.0 + np.exp(-(wl - cut) / width))
+
+
+def _write_cary_filters(path):
+    """A Cary export of 11 filters laid out like WrightTools' datasets/Cary/filters.csv: 600LP
+    in Abs from 800 to 200 nm on the scan's uneven 5 nm steps, its blocked band saturating
+    (alternating 10 and about 3.7), the others in %T over 750-450 nm with the instrument's noise;
+    600LP1 dips below 0 % and 550LP2 exceeds 100 % beyond the tolerance. Returns 600LP's T."""
+    rng = np.random.default_rng(0)
+    cols = []
+    wl = np.arange(800.0, 199.0, -5.0) + rng.uniform(-0.08, 0.08, 121)
+    t_600lp = 0.94 * _edge(wl, 600.0)
+    blocked = wl < 590
+    A = -np.log10(np.maximum(t_600lp, 1e-4)) + rng.normal(0, 0.3, wl.size) * blocked
+    A[blocked & (np.arange(wl.size) % 2 == 0)] = 10.0
+    cols.append(("600LP", "Abs", wl, A))
+    for name in FILTERS[1:]:
+        w = np.arange(750.0, 449.0, -1.0)
+        cut = float(name[:3]) if name[:3].isdigit() else 500.0
+        T = 100 * (0.9 * _edge(w, cut) if "LP" in name else 0.9 * (1 - _edge(w, cut)))
+        T = T + rng.normal(0, 0.03, w.size)
+        if name == "600LP1":
+            T[(w > 510) & (w < 514)] = -0.12
+        if name == "550LP2":
+            T[w < 500] = 100.14
+        cols.append((name, "%T", w, T))
+    n = max(c[2].size for c in cols)
+    lines = [",".join(f"{c[0]}," for c in cols),
+             ",".join(f"Wavelength (nm),{c[1]}" for c in cols) + ","]
+    for i in range(n):
+        cells = []
+        for _, _, w, v in cols:
+            cells += [f"{w[i]:.7f}", f"{v[i]:.10g}"] if i < w.size else ["", ""]
+        lines.append(",".join(cells) + ",")
+    lines += ["", "600LP,", "600LP", "Collection Time: 5/10/2018 5:14:12 PM", "Y Mode   Abs"]
+    path.write_text("\n".join(lines) + "\n")
+    return wl, np.power(10.0, -A)
+
+
+def test_the_picked_sample_of_a_multi_sample_cary_file_is_used(qtbot, tmp_path):
+    """600LP picked for C's T is used (it was dropped, and 600LP1 and 550LP2 blamed, because a
+    problem of any sample in the file discarded the picked one); a sample with a problem is
+    refused naming that sample only."""
+    path = tmp_path / "filters.csv"
+    wl_600, t_600 = _write_cary_filters(path)
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    page = wiz.measurements_page
+    row = page.rows["C"]
+    row.thickness.setValue(0.5)
+    row.load("T", str(path))
+    combo = row.combos["T"]
+    assert [combo.itemText(i) for i in range(combo.count())] == FILTERS
+    combo.setCurrentIndex(FILTERS.index("GSBS"))   # the operator looks around, then picks 600LP
+    combo.setCurrentIndex(FILTERS.index("600LP"))
+    ch = row.channels["T"]
+    assert ch.sample == "600LP" and not row.error.isVisibleTo(page), row.error.text()
+    grid = page.wavelengths()
+    # the picked curve, T = 10^-A on the profile grid, against linear interpolation of the file
+    order = np.argsort(wl_600)
+    expected = np.interp(grid, wl_600[order], t_600[order])
+    np.testing.assert_allclose(ch.values, expected, atol=0.03)
+    assert ch.values.min() >= 0 and ch.values.max() <= 1
+    assert len(page.figure.axes[1].lines) == 1 and page.isComplete()
+
+    combo.setCurrentIndex(FILTERS.index("550LP2"))
+    text = row.error.text()
+    assert row.channels["T"].values is None and "550LP2" in text and "above 100 %" in text
+    assert "600LP1" not in text and not page.isComplete()
+    combo.setCurrentIndex(FILTERS.index("600LP1"))
+    text = row.error.text()
+    assert "600LP1" in text and "negative transmittance" in text and "550LP2" not in text
+    combo.setCurrentIndex(FILTERS.index("530SP"))     # clean, but covers 450-750 nm only
+    text = row.error.text()
+    assert "530SP" in text and "450" in text and "550LP2" not in text
+
+    # the fit uses the picked sample: provenance names it, and the fitted T reproduces it
+    combo.setCurrentIndex(FILTERS.index("600LP"))
+    wl = page.wavelengths()
+    R = 0.05 + 0.02 * np.sin(wl / 40)
+    r_path = tmp_path / "c_R.csv"
+    write_spectra(r_path, [Sample("C", wl, R)], quantity="reflectance")
+    row.load("R", str(r_path))
+    wiz.next()
+    wiz.next()
+    with qtbot.waitSignal(wiz.fit_page.fitted, timeout=60000):
+        pass
+    profile, fits, _ = wiz.fit_page.result
+    assert "[600LP]" in profile.provenance["measurements"]["C"][0]
+    _, T_fit = reflectance_transmittance(profile.K[0], profile.S[0], 0.5)
+    np.testing.assert_allclose(T_fit, row.channels["T"].values, atol=1e-6)
+
+
+def test_file_quantity_override_reads_a_resin_absorbance_file(qtbot, shared_data):
+    """The resin file does not say it holds absorbance: read as T it is refused (above 100 %);
+    stated as absorbance it is read as T = 10^-A, like the CLI's --file-quantity absorbance."""
+    resin = shared_data / "spectra" / "formats" / "resin_PR48_absorbance_2015-07-27.csv"
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    page = wiz.measurements_page
+    row = page.rows["Cl"]
+    row.thickness.setValue(1.0)
+    row.load("T", str(resin))
+    assert row.channels["T"].values is None and "above 100 %" in row.error.text()
+    row.set_file_quantity("T", "absorbance")
+    assert not row.error.isVisibleTo(page), row.error.text()
+    data = np.loadtxt(resin, delimiter=",", comments="#")
+    grid = page.wavelengths()
+    expected = np.interp(grid, data[:, 0], np.power(10.0, -data[:, 1]))
+    np.testing.assert_allclose(row.channels["T"].values, expected, atol=0.01)
+    assert page.isComplete()
+    # absorbance is no reflectance: said on the row, naming what the file was said to hold
+    row.set_file_quantity("R", "absorbance")
+    row.load("R", str(resin))
+    assert row.channels["R"].values is None and "absorbance" in row.error.text()
+    # the statement is per file: the T file keeps it when the sample list is reloaded
+    assert row.holds["T"].currentText() == "absorbance"
+
+
+def test_thickness_is_required_and_the_page_names_the_ink(qtbot, measurement_files):
+    r_path, t_path = measurement_files
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    page = wiz.measurements_page
+    assert page.rows["M"].thickness.text() == "thickness?"   # no silent 1.000 mm
+    for ink in ("C", "M"):
+        page.rows[ink].load("R", str(r_path))
+        page.rows[ink].load("T", str(t_path))
+    assert not page.isComplete()
+    assert not wiz.button(QWizard.WizardButton.NextButton).isEnabled()
+    assert page.missing.isVisibleTo(wiz) and "C, M" in page.missing.text()
+    assert page.measurements() == []
+    assert len(page.figure.axes[0].lines) == 2   # still plotted, labelled as lacking it
+    page.rows["C"].thickness.setValue(0.4)
+    assert "of M:" in page.missing.text() and not page.isComplete()
+    page.rows["M"].thickness.setValue(0.4)
+    assert page.isComplete() and not page.missing.isVisibleTo(wiz)
+    assert [m.thickness_mm for m in page.measurements()] == [0.4, 0.4]
+
+
+def _has_colour(widget, hex_colour: str, tol: int = 40) -> int:
+    """How many pixels of the widget's rendering are near ``hex_colour``."""
+    img = widget.grab().toImage()
+    from PySide6.QtGui import QColor
+
+    want = QColor(hex_colour)
+    w, h = img.width(), img.height()
+    buf = np.frombuffer(img.constBits(), np.uint8, img.bytesPerLine() * h)
+    px = buf.reshape(h, img.bytesPerLine())[:, :4 * w].reshape(h, w, 4).astype(int)
+    b, g, r = px[..., 0], px[..., 1], px[..., 2]
+    return int(((abs(r - want.red()) < tol) & (abs(g - want.green()) < tol)
+                & (abs(b - want.blue()) < tol)).sum())
+
+
+def test_fit_page_one_layer_says_exact_by_construction(qtbot, measurement_files):
+    r_path, t_path = measurement_files
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    _load_rows(wiz, r_path, t_path, inks=("C", "Y"))
+    wiz.next()
+    wiz.next()
+    with qtbot.waitSignal(wiz.fit_page.fitted, timeout=60000):
+        pass
+    page = wiz.fit_page
+    text = page.status.text()
+    assert text.count("exact by construction") == 2 and "0.0000" not in text
+    assert page.held_out == {}
+    # K and S per fitted ink, plotted (two curves each), and drawn in the ink's colour
+    assert [ax.get_title() for ax in page.ks_fig.axes] == ["C", "Y"]
+    assert all(len(ax.lines) == 2 for ax in page.ks_fig.axes)
+    page.tabs.setCurrentIndex(1)
+    page.ks_canvas.resize(800, 400)
+    page.ks_canvas.draw()
+    from dreamprint_gui.gui.wizard import INK_COLOURS
+
+    assert _has_colour(page.ks_canvas, INK_COLOURS["C"]) > 200
+    assert _has_colour(page.ks_canvas, INK_COLOURS["Y"]) > 200
+
+
+def test_fit_page_several_thicknesses_shows_held_out_error(qtbot):
+    """The example set has C and M at 0.1 and 0.3 mm (noise-free, from the default profile):
+    each thickness is predicted from the other to within rounding, and shown as held out."""
+    from pathlib import Path
+
+    set_path = Path(__file__).resolve().parents[1] / "data" / "calibration_set" / "set.toml"
+    wiz = CalibrationWizard(None, base_profile=default_profile(), calibration_set=str(set_path))
+    qtbot.addWidget(wiz)
+    wiz.show()
+    wiz.next()
+    wiz.next()
+    with qtbot.waitSignal(wiz.fit_page.fitted, timeout=120000):
+        pass
+    page = wiz.fit_page
+    text = page.status.text()
+    assert set(page.held_out) >= {"C", "M"}
+    for ink in ("C", "M"):
+        held, _ = page.held_out[ink]
+        assert [h.thickness_mm for h in held] == [0.1, 0.3]
+        assert all(h.overall_R < 2e-3 and h.overall_T < 2e-3 for h in held)
+    assert "held-out rms R" in text and "0.1 mm: R &lt; 0.0001" in text
+    # held-out curves (solid) in the error tab
+    labels = [ln.get_label() for ax in page.res_fig.axes for ln in ax.lines]
+    assert "C held out" in labels and "M held out" in labels
+
+
+def test_a_second_thickness_row_gives_a_held_out_error(qtbot, tmp_path, truth, measurement_files):
+    """C at 0.4 mm (exact) and, on a row added with +, at 0.8 mm with R offset by +0.01:
+    fitted from 0.4 mm alone (the closed form gives the true K and S), 0.8 mm is predicted
+    with an R error of exactly that offset and no T error."""
+    r_path, t_path = measurement_files
+    wl = truth.wavelengths_nm
+    R8, T8 = reflectance_transmittance(truth.K, truth.S, 0.8)
+    r8, t8 = tmp_path / "c_R_08.csv", tmp_path / "c_T_08.csv"
+    write_spectra(r8, [Sample("C", wl, R8[0] + 0.01)], quantity="reflectance")
+    write_spectra(t8, [Sample("C", wl, T8[0])], quantity="transmittance")
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.show()
+    page = wiz.measurements_page
+    _load_rows(wiz, r_path, t_path, inks=("C",))
+    page.rows["C"].more.click()                       # + : another thickness of C
+    assert [r.ink for r in page.layer_rows] == ["C", "C", "M", "Y", "K", "W", "Cl"]
+    second = page.layer_rows[1]
+    assert second.extra and second.more.text() == "-"
+    second.load("R", str(r8))
+    second.load("T", str(t8))
+    assert not page.isComplete() and "of C:" in page.missing.text()  # its thickness first
+    second.thickness.setValue(0.8)
+    assert page.isComplete()
+    assert [m.thickness_mm for m in page.measurements()] == [0.4, 0.8]
+    wiz.next()
+    wiz.next()
+    with qtbot.waitSignal(wiz.fit_page.fitted, timeout=60000):
+        pass
+    held, _ = wiz.fit_page.held_out["C"]
+    h08 = next(h for h in held if h.thickness_mm == 0.8)
+    np.testing.assert_allclose(h08.rms_R, 0.01, rtol=1e-4)
+    assert h08.overall_T < 1e-6
+    assert "0.8 mm: R 0.0100, T &lt; 0.0001" in wiz.fit_page.status.text()
+    # removing the row takes its measurement away
+    wiz.back()
+    wiz.back()
+    second.more.click()
+    assert len(page.layer_rows) == len(INKS) and len(page.measurements()) == 1

@@ -81,3 +81,50 @@ def test_chart_calibration_recovers_known_inks():
     np.testing.assert_allclose(fit.profile.K[:5, visible], K_true[:5, visible], rtol=1e-2)
     np.testing.assert_allclose(fit.profile.S[:5, visible], S_true[:5, visible], rtol=1e-2)
     assert fit.cv_dE2000.mean() < 0.05 < fit.base_dE2000.mean()
+
+
+def test_leave_one_thickness_out_predicts_each_thickness_from_the_others():
+    """Noise-free layers: every held-out prediction is the measurement (round trip). A layer
+    offset by +0.01 in R is predicted from the exact others, so its held-out R error is that
+    offset and its T error zero; the others' fits include the offset layer and are off."""
+    from dreamprint_gui.physics.calibration import exact_by_construction, leave_one_thickness_out
+
+    ts = (0.05, 0.2, 0.8)
+    layers = [LayerMeasurement("C", t, *reflectance_transmittance(K_TRUE, S_TRUE, t), "synthetic")
+              for t in ts]
+    held, notes = leave_one_thickness_out(layers, 36)
+    assert [h.thickness_mm for h in held] == list(ts) and notes == []
+    assert held[0].fitted_on == [0.2, 0.8]
+    for h in held:
+        assert h.overall_R < 1e-7 and h.overall_T < 1e-7
+
+    R08, T08 = reflectance_transmittance(K_TRUE, S_TRUE, 0.8)
+    layers[2] = LayerMeasurement("C", 0.8, R08 + 0.01, T08, "offset")
+    held, _ = leave_one_thickness_out(layers, 36)
+    np.testing.assert_allclose(held[2].rms_R, 0.01, rtol=1e-5)
+    assert held[2].overall_T < 1e-7
+    assert held[2].overall_R == pytest.approx(0.01, rel=1e-5)
+
+    one = layers[:1]
+    assert leave_one_thickness_out(one, 36)[0] == [] and exact_by_construction(one)
+    assert not exact_by_construction([LayerMeasurement("C", 0.2, None, T08, "T only")])
+    # a thickness whose remaining layers have no T cannot be held out, and is named
+    r_only = [LayerMeasurement("Y", 0.2, *reflectance_transmittance(K_TRUE, S_TRUE, 0.2)),
+              LayerMeasurement("Y", 0.5, reflectance_transmittance(K_TRUE, S_TRUE, 0.5)[0], None)]
+    held, notes = leave_one_thickness_out(r_only, 36)
+    assert [h.thickness_mm for h in held] == [0.5] and "0.2 mm not held out" in notes[0]
+
+
+def test_inconsistent_opaque_layers_keep_k_and_s_finite():
+    """Two thicknesses both opaque at long wavelengths (T ~ 1e-13) with R disagreeing by 0.01:
+    the data fix K/S there and nothing else; the fit stays at the closed-form scale instead of
+    running off to K, S ~ 1e9 along the flat valley (the profile refused those)."""
+    K = np.linspace(1.0, 120.0, 36)
+    S = np.full(36, 1.5)
+    R4, T4 = reflectance_transmittance(K, S, 0.4)
+    R8, T8 = reflectance_transmittance(K, S, 0.8)
+    fit = fit_ink([LayerMeasurement("C", 0.4, R4, T4), LayerMeasurement("C", 0.8, R8 + 0.01, T8)],
+                  36)
+    assert np.all(np.isfinite(fit.K)) and np.all(np.isfinite(fit.S))
+    assert np.all(fit.K < 3 * K) and np.all(fit.K > K / 3)
+    assert np.all(fit.S < 10 * S)

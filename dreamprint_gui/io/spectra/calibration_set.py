@@ -37,9 +37,9 @@ from dreamprint_gui.core.calibration_types import LayerMeasurement
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.io.spectra.detect import read_spectra
-from dreamprint_gui.io.spectra.model import SpectraFile, check_sample
+from dreamprint_gui.io.spectra.model import Sample, SpectraFile, check_sample
 
-__all__ = ["load_calibration_set", "SET_FORMAT"]
+__all__ = ["load_calibration_set", "SET_FORMAT", "measured_values"]
 
 SET_FORMAT = "dreamprint-calibration-set"
 _TOP_KEYS = {"format", "version", "name", "description", "defaults", "layer"}
@@ -159,11 +159,8 @@ def load_calibration_set(path: str | os.PathLike,
                                              value_scale=opts.get("scale", "auto"))
                 sf = cache[ck]
                 sample = _pick(sf, m.get("sample"), w, p)
-                bad = check_sample(sample, sf.quantity)
-                if bad:
-                    raise DreamPrintError(f"{bad[0]}: fix or remeasure it", sf.path)
-                values = sample.resample(grid, extrapolate_nm=float(opts.get(
-                    "extrapolate_nm", 0.0)), source=sf.path)
+                values = measured_values(sf, sample, grid, extrapolate_nm=float(opts.get(
+                    "extrapolate_nm", 0.0)))
             except DreamPrintError as exc:
                 if exc.path == p:
                     raise
@@ -174,6 +171,22 @@ def load_calibration_set(path: str | os.PathLike,
         out.append(LayerMeasurement(ink=ink, thickness_mm=float(t), R=spectra.get("R"),
                                     T=spectra.get("T"), source="; ".join(sources)))
     return out
+
+
+def measured_values(sf: SpectraFile, sample: Sample, grid: ArrayLike, *,
+                    extrapolate_nm: float = 0.0) -> np.ndarray:
+    """The R or T of ``sample`` (one of ``sf``'s) on ``grid``, for calibration.
+
+    Only this sample's own values are checked (another sample's problem in the same file is
+    not its problem): impossible values are refused naming it and the wavelength. The
+    resampled curve is clipped to [0, 1]: its values passed the range check, so an excursion
+    is the interpolator's overshoot between points (a filter's edge, a noisy blocked band).
+    """
+    bad = check_sample(sample, sample.quantity or sf.quantity)
+    if bad:
+        raise DreamPrintError(f"{bad[0]}: fix or remeasure it", sf.path)
+    values = sample.resample(grid, extrapolate_nm=extrapolate_nm, source=sf.path)
+    return np.clip(values, 0.0, 1.0)
 
 
 def _pick(sf: SpectraFile, sample: Any, where: str, path: str):
