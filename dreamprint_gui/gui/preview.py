@@ -461,8 +461,8 @@ class PreviewPage(QWidget):
         gx, gy, gz = g.size_mm
         return (f"{Path(str(self.source_path)).name}: print "
                 + " x ".join(f"{v:.2f}" for v in obj)
-                + f" mm on {printer_name(self.printer)} (a grid of {nx} x {ny} x {nz} voxels, "
-                f"{gx:.2f} x {gy:.2f} x {gz:.2f} mm)")
+                + f" mm on {printer_name(self.printer)}; its grid {nx} x {ny} x {nz} voxels, "
+                f"{gx:.2f} x {gy:.2f} x {gz:.2f} mm")
 
     # pre-flight -------------------------------------------------------------------------------
     def _start_preflight(self) -> None:
