@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # DreamPrint quick start: `./quickstart.sh app` or `./quickstart.sh test`.
-# Installs what a fresh Debian machine lacks (apt packages for Qt/VTK, Xvfb, the OpenVDB
-# helper interpreter), creates .venv, installs the package, then runs the app or the tests.
+# Installs what a fresh Debian machine lacks (apt packages for Qt/VTK, Xvfb, OpenVDB's own
+# library, which only the tests use to cross-check DreamPrint's .vdb reader), creates .venv,
+# installs the package, then runs the app or the tests.
 set -euo pipefail
 cd "$(dirname "$0")"
 what="${1:-app}"; shift || true
@@ -12,7 +13,7 @@ APT_PACKAGES=(
   libxcb-image0 libxcb-randr0 libxcb-render0 libxcb-render-util0 libxcb-shape0 libxcb-shm0
   libxcb-sync1 libxcb-xfixes0 libxcb-xkb1 libxcb-glx0 libxcb-util1 libdbus-1-3 libfontconfig1
   libfreetype6 libglib2.0-0 xvfb xauth python3-openvdb libnanovdb-tools python3-venv python3-pip
-  appstream desktop-file-utils libllvm19
+  appstream desktop-file-utils
 )
 
 missing=()

@@ -2,7 +2,7 @@
 
 Run from the checkout root:
     PYTHONPATH=. .venv/bin/python benchmarks/bench_gamut.py [--size 100]
-        [--objective srgb|cielab|de2000|all] [--intent colorimetric|perceptual|all]
+        [--objective srgb|cielab|de2000|all] [--intent colorimetric|relative|perceptual|all]
 Builds every objective x intent in a fresh temporary cache (so each build is really timed
 cold), then prints per table: wall and CPU seconds of the build, the cached reload time,
 LUT-vs-direct dE2000 at random in-gamut colours (mean, p95), the in-gamut fraction of sRGB, the

@@ -1,15 +1,19 @@
 """Print proof speed and noise, and the error of the block-averaged medium.
 
-Default: the demo volume at 40 mm, one 256 x 256 view at the default spp: prints the seconds of
-each stage (labels, source render, print render per view with and without Mitsuba's JIT
-warm-up) and the noise level: the standard deviation of a pixel of the print image (linear
-sRGB, environment = 1) between two seeds, / sqrt(2). Target: <= 60 s per view on CPU.
+Default: the demo volume at 40 mm (the default object proof), one 256 x 256 view at the default
+spp and sampler: prints the seconds of each stage (labels, source render, print render per view
+after Mitsuba's JIT warm-up) and the proof's noise floor: the print rendered at two seeds, mean
+and p95 per-pixel dE2000 and S-CIELAB dE2000 (at the proof's viewing distance) between them
+over the object. Targets: floor <= 0.5 mean S-CIELAB dE2000, <= 60 s per view on CPU.
+``--spp 16,64 --samplers independent,ldsampler`` sweeps (the measurement behind the defaults).
 
 ``--block-error``: a small job (demo, 3 mm) whose print is rendered from the full-resolution
 labels (one cell per printer voxel) and from blocks of the default 40 mm job's size (4 x 11 x 22
 voxels): prints dE2000 between the two print images (mean, 95th percentile over the object).
 
-    python benchmarks/bench_proof.py [--height-mm 40] [--resolution 256] [--spp 16]
+    python benchmarks/bench_proof.py [--height-mm 40] [--resolution 256] [--spp 16[,64]]
+                                     [--samplers independent[,ldsampler,...]]
+    python benchmarks/bench_proof.py --variant scalar   # Mitsuba's scalar_rgb (no libLLVM)
     python benchmarks/bench_proof.py --block-error
 """
 
@@ -28,16 +32,17 @@ def _medium(lab, block, layers_per_block):
     return block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block, layers_per_block)
 
 
-def _print_xyz(medium, bands, view, res, spp, seed):
+def _print_xyz(medium, bands, view, res, spp, seed, sampler=None, rr_depth=None):
     from dreamprint_gui.proof.medium import medium_coefficients
-    from dreamprint_gui.proof.print_render import render_print
+    from dreamprint_gui.proof.print_render import DEFAULT_SAMPLER, render_print
     from dreamprint_gui.proof.runner import print_xyz
     from dreamprint_gui.proof.source_render import optical_depth
 
     st, al = medium_coefficients(medium.fractions, bands.K, bands.S)
     lo, hi = medium.box_mm
     t0 = time.perf_counter()
-    img, info = render_print(st, al, lo, hi, [view], res, spp, seed)
+    img, info = render_print(st, al, lo, hi, [view], res, spp, seed,
+                             sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth)
     t = time.perf_counter() - t0
     T = optical_depth(st, lo, medium.cell_mm, view, res, sub=3)
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
@@ -46,16 +51,25 @@ def _print_xyz(medium, bands, view, res, spp, seed):
 
 def speed(args) -> None:
     from dreamprint_gui.proof.cameras import orbit_views
+    from dreamprint_gui.proof.compare import noise_floor
     from dreamprint_gui.proof.medium import block_for_cell
     from dreamprint_gui.proof.methods import method_labels
-    from dreamprint_gui.proof.runner import ProofSettings
+    from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
+    from dreamprint_gui.proof.print_render import DEFAULT_SAMPLER
+    from dreamprint_gui.proof.runner import DEFAULT_SPP, ProofSettings
+    from dreamprint_gui.proof.scielab import samples_per_degree
     from dreamprint_gui.proof.source_render import render_source, sample_source
     from dreamprint_gui.proof.spectral import spectral_bands
 
-    s = ProofSettings(source="demo", height_mm=args.height_mm, spp=args.spp,
-                      resolution=args.resolution)
-    print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {args.spp},"
-          f" {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (shared machine)")
+    _, _, note = load_mitsuba(args.variant)
+    print(note)
+    spps = [int(x) for x in (args.spp or str(DEFAULT_SPP)).split(",")]
+    samplers = (args.samplers or DEFAULT_SAMPLER).split(",")
+    rrs = [None] if args.rr_depths is None else [int(x) for x in args.rr_depths.split(",")]
+    s = ProofSettings(source="demo", height_mm=args.height_mm, resolution=args.resolution)
+    print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {spps}, "
+          f"samplers {samplers}, {os.cpu_count()} cores, load average "
+          f"{os.getloadavg()[0]:.1f} (shared machine)")
     t0 = time.perf_counter()
     lab = method_labels(s)
     t1 = time.perf_counter()
@@ -73,18 +87,24 @@ def speed(args) -> None:
                           med.box_mm[0])
     render_source(field, view, args.resolution)
     print(f"source render (per view)      {time.perf_counter() - t3:7.1f} s")
-    a, alpha, ta, info = _print_xyz(med, bands, view, args.resolution, args.spp, 1)
-    b, _, tb, _ = _print_xyz(med, bands, view, args.resolution, args.spp, 2)
-    print(f"print render, first (JIT)     {ta:7.1f} s  ({info['passes']} Mitsuba passes, "
-          f"{info['variant']})")
-    print(f"print render per view         {tb:7.1f} s  (target <= 60 s)")
-    obs = bands.observer
-    la, lb = obs.XYZ_to_linear_sRGB(a), obs.XYZ_to_linear_sRGB(b)
-    obj = alpha > 0.05
-    noise = float(np.std(la - lb) / np.sqrt(2))
-    noise_obj = float(np.std((la - lb)[obj]) / np.sqrt(2))
-    print(f"noise (pixel std between seeds, linear sRGB, environment 1): {noise:.4f} over the "
-          f"frame, {noise_obj:.4f} over the object's pixels")
+    spd = samples_per_degree(2 * view.half_mm / args.resolution, s.viewing_distance_mm)
+    print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
+    print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'s/view':>7s} {'floor dE00 mean':>16s} "
+          f"{'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}")
+    for sampler, rr in [(a, b) for a in samplers for b in rrs]:
+        _print_xyz(med, bands, view, args.resolution, 1, 0, sampler, rr)  # JIT warm-up
+        for spp in spps:
+            a, alpha, ta, info = _print_xyz(med, bands, view, args.resolution, spp, 1, sampler,
+                                            rr)
+            b, _, tb, _ = _print_xyz(med, bands, view, args.resolution, spp, 2, sampler, rr)
+            f = noise_floor(a, b, alpha, bands.observer, spd)
+            print(f"{sampler:12s} {info['rr_depth']:4d} {spp:5d} {(ta + tb) / 2:7.1f} "
+                  f"{f['mean_de2000']:16.2f} "
+                  f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
+                  f"{f['p95_scielab_de2000']:6.2f}", flush=True)
+    print(f"({info['variant']}, {info['passes']} Mitsuba passes per render; s/view is one "
+          f"render of one view; the proof with its noise floor renders each view twice; "
+          f"load average now {os.getloadavg()[0]:.1f})")
 
 
 def block_error(args) -> None:
@@ -100,7 +120,7 @@ def block_error(args) -> None:
     full = _medium(lab, (1, 1, 1), 0)
     view = orbit_views(full.print_size_mm, 1)[0]
     res = 96
-    spp = args.spp * 4
+    spp = int(args.spp or 16) * 4
     a, alpha, _, _ = _print_xyz(full, bands, view, res, spp, 1)
     obs = bands.observer
     obj = alpha > 0.05
@@ -127,8 +147,16 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--height-mm", type=float, default=40.0)
     ap.add_argument("--resolution", type=int, default=256)
-    ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--spp", default=None, help="spp, or a comma-separated list (default: "
+                    "the proof's default)")
+    ap.add_argument("--rr-depths", default=None, help="Mitsuba's rr_depth (Russian roulette "
+                    "from this bounce on), comma-separated (default: the proof's)")
+    ap.add_argument("--samplers", default=None, help="Mitsuba samplers, comma-separated "
+                    "(default: the proof's)")
     ap.add_argument("--block-error", action="store_true")
+    ap.add_argument("--variant", choices=("llvm", "scalar"), default="llvm",
+                    help="Mitsuba's LLVM variant (default, when a libLLVM is found) or the "
+                         "scalar fallback")
     args = ap.parse_args()
     if args.block_error:
         block_error(args)

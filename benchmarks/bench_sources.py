@@ -10,7 +10,9 @@ same with a scene-linear ``Cd`` colour grid) and ``openvdb-manta``
 ``nrrd`` (ironProt written as NRRD); ``radiance`` (a generated 160^3 RGBA .npz, sRGB) and
 ``radiance-linear`` (the same grid marked scene-linear); ``inria`` (a generated 1e6-Gaussian
 INRIA PLY, SH degree 0, 68 MB) and ``inria-sample`` (the 9k-Gaussian SH3 sample);
-``compressed-ply`` and ``spz`` (the 1e6 scene through gsply); ``vox`` (the knight).
+``compressed-ply`` and ``spz`` (the 1e6 scene through gsply); ``vox`` (the knight);
+``ingp`` (an InstantNGP snapshot shaped like instant-ngp's NeRF defaults, seeded random weights,
+an occupancy ball of ~18 % of the cells: ``bench_ingp.write_realistic``).
 
     python benchmarks/bench_sources.py            # make the generated files, list every kind
 """
@@ -80,17 +82,22 @@ _WRITE_VDB = textwrap.dedent("""
 """)
 
 
+def _openvdb_python() -> str:
+    """An interpreter with pyopenvdb to write the benchmark's .vdb files (Debian's
+    python3-openvdb; DREAMPRINT_TEST_OPENVDB_PYTHON to choose another). The product reads
+    them without it."""
+    return os.environ.get("DREAMPRINT_TEST_OPENVDB_PYTHON", "/usr/bin/python3")
+
+
 def _make_vdb() -> tuple[Path, Path, Path]:
     half, full = DATA / "cloud_320x256x288_half.vdb", DATA / "cloud_320x256x288.vdb"
     colour = DATA / "cloud_320x256x288_cd.vdb"
     if not (half.exists() and full.exists() and colour.exists()):
-        from dreamprint_gui.io.volumes.openvdb import helper_command
-
         npy = DATA / "cloud.npy"
         np.save(npy, _cloud_field())
         script = DATA / "write_vdb.py"
         script.write_text(_WRITE_VDB)
-        subprocess.run([helper_command()[0], "-I", str(script), str(npy), str(half), str(full),
+        subprocess.run([_openvdb_python(), "-I", str(script), str(npy), str(half), str(full),
                         str(colour)], check=True)
         npy.unlink()
     return half, full, colour
@@ -184,6 +191,18 @@ def _make_nrrd() -> Path:
     return out
 
 
+def _make_ingp() -> Path:
+    out = DATA / "ingp_nerf_defaults.ingp"
+    if not out.exists():
+        sys.path.insert(0, str(HERE))
+        from bench_ingp import write_realistic
+
+        tmp = out.with_suffix(".tmp")
+        write_realistic(tmp)
+        tmp.replace(out)
+    return out
+
+
 def source_path(kind: str) -> str:
     """The source (a path, or ``demo``) the benchmark converts for ``kind``."""
     DATA.mkdir(exist_ok=True)
@@ -202,7 +221,7 @@ def source_path(kind: str) -> str:
             "radiance": lambda: _make_radiance(False),
             "radiance-linear": lambda: _make_radiance(True), "inria": _make_inria,
             "compressed-ply": lambda: _make_gsply("compressed-ply"),
-            "spz": lambda: _make_gsply("spz"), "nrrd": _make_nrrd}
+            "spz": lambda: _make_gsply("spz"), "nrrd": _make_nrrd, "ingp": _make_ingp}
     if kind not in made:
         raise SystemExit(f"unknown source kind {kind!r} (one of {', '.join(KINDS)})")
     return str(made[kind]())
@@ -210,7 +229,8 @@ def source_path(kind: str) -> str:
 
 KINDS = ("demo", "openvdb", "openvdb-colour", "openvdb-manta", "nanovdb", "vtk", "vtk-legacy",
          "metaimage", "nrrd",
-         "radiance", "radiance-linear", "inria", "inria-sample", "compressed-ply", "spz", "vox")
+         "radiance", "radiance-linear", "inria", "inria-sample", "compressed-ply", "spz", "vox",
+         "ingp")
 
 
 if __name__ == "__main__":

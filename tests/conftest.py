@@ -1,6 +1,8 @@
 """Shared test fixtures."""
 
+import functools
 import os
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -20,3 +22,27 @@ def shared_data() -> Path:
                     "files from ../shared/data beside the checkout, or from the folder "
                     "DREAMPRINT_SAMPLE_DATA names)")
     return SHARED_DATA
+
+
+@functools.cache
+def _find_openvdb_python() -> str | None:
+    py = os.environ.get("DREAMPRINT_TEST_OPENVDB_PYTHON", "/usr/bin/python3")
+    try:
+        ok = subprocess.run([py, "-I", "-c", "import pyopenvdb"], capture_output=True,
+                            check=False).returncode == 0
+    except OSError:
+        ok = False
+    return py if ok else None
+
+
+@pytest.fixture(scope="session")
+def openvdb_python() -> str:
+    """An interpreter with OpenVDB's own Python module (Debian's python3-openvdb under
+    /usr/bin/python3, or DREAMPRINT_TEST_OPENVDB_PYTHON): the tests write .vdb files with it
+    and cross-check the product's reader against it. Skips the test when there is none (the
+    product itself needs no OpenVDB)."""
+    py = _find_openvdb_python()
+    if py is None:
+        pytest.skip("no Python with pyopenvdb here (apt-get install python3-openvdb): the "
+                    "OpenVDB cross-check and the files it writes are unavailable")
+    return py

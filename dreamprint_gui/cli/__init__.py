@@ -10,6 +10,7 @@ mistyped option answer at once, without loading numba, colour-science and the co
 
 from __future__ import annotations
 
+import os
 import sys
 
 import click
@@ -17,11 +18,64 @@ import click
 from dreamprint_gui.core.errors import DreamPrintError
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    """The top-level group: a reader that closes the pipe early (``dreamprint ... | head -1``)
+    ends the command quietly with status 0, as for any Unix filter."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError:
+            _stdout_to_devnull()
+            raise click.exceptions.Exit(0) from None
+
+
+def _stdout_to_devnull() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush of what is still buffered
+    does not fail on the closed pipe (Python's documented recipe, library/signal.html)."""
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    except (OSError, ValueError, AttributeError):  # no real file descriptor (tests)
+        pass
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--debug", is_flag=True, help="Show a traceback on error.")
 @click.version_option(package_name="dreamprint", prog_name="dreamprint")
 def cli(debug: bool) -> None:
     """DreamPrint: radiance volumes to PolyJet print jobs."""
+
+
+def placement_options(f):
+    """``--up``, ``--rotate`` and ``--fit``: how a source stands and what its size measures
+    (:mod:`..io.volumes.orient`)."""
+    opts = [
+        click.option("--up", type=click.Choice(["auto", "x", "-x", "y", "-y", "z", "-z"]),
+                     default="auto", show_default=True,
+                     help="The source axis that becomes the print's up (+z). auto: the "
+                          "source's known convention (Gaussian splats PLY/.splat/SOG -y, SPZ "
+                          "y, InstantNGP z), else z."),
+        click.option("--rotate", default="0", show_default=True,
+                     help="Turn the print about its z: 0, 90, 180 or 270 degrees "
+                          "(counter-clockwise seen from above)."),
+        click.option("--fit", type=click.Choice(["occupied", "box"]), default="occupied",
+                     show_default=True,
+                     help="What --height-mm / --size-mm measure: occupied (the object's "
+                          "non-empty bounds, empty margins cropped) or box (the file's "
+                          "declared box)."),
+    ]
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def placement_values(up: str, rotate: str) -> tuple[str | None, int]:
+    """(up or None for auto, rotate in degrees) from the CLI's values."""
+    from dreamprint_gui.io.volumes.orient import parse_rotate
+
+    return (None if up == "auto" else up), parse_rotate(rotate)
 
 
 @cli.group()

@@ -12,14 +12,14 @@ import click
 from dreamprint_gui.cli import cli
 from dreamprint_gui.core.errors import DreamPrintError
 
-# rgb, lab: former names of srgb, cielab (still accepted)
-_OBJECTIVES = click.Choice(["srgb", "cielab", "de2000", "rgb", "lab"])
-_INTENTS = click.Choice(["colorimetric", "perceptual"])
+_OBJECTIVES = click.Choice(["srgb", "cielab", "de2000"])
+_INTENTS = click.Choice(["colorimetric", "relative", "perceptual"])
 _OBJECTIVE_HELP = ("Table objective: srgb (paper eq. 10), cielab (dE76) or de2000 (CIEDE2000). "
                    "Default: the profile's, else de2000 (see docs/physics.md).")
 _INTENT_HELP = ("Rendering intent for colours outside the printable gamut: colorimetric "
-                "(nearest printable colour) or perceptual (SGCK compression in CAM16-UCS). "
-                "Default: the profile's, else colorimetric.")
+                "(nearest printable colour), relative (ICC relative colorimetric: the source "
+                "white maps to the printable white, then colorimetric) or perceptual (SGCK "
+                "compression in CAM16-UCS). Default: the profile's, else colorimetric.")
 
 
 def _parse_rgb(text: str) -> list[float]:
@@ -67,16 +67,17 @@ def _read_rgb_file(path: str) -> list[list[float]]:
     return out
 
 
-def _progress_bar(enabled: bool):
-    if not enabled:
-        return None
+def _progress_bar(what: str = ""):
+    """A table build's progress on stderr (also with --json: stdout carries the JSON), every
+    10 %. Called only while building: a table loaded from the cache prints nothing."""
     state = {"last": -1}
+    label = f"building colour tables{f' ({what})' if what else ''}"
 
     def report(fraction: float) -> None:
         pct = int(100 * fraction)
         if pct // 10 != state["last"]:
             state["last"] = pct // 10
-            click.echo(f"building colour tables: {pct:3d} %", err=True)
+            click.echo(f"{label}: {pct:3d} %", err=True)
 
     return report
 
@@ -111,8 +112,7 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, size,
         raise DreamPrintError("--density must be a finite number >= 0 (1/mm)")
     colours = [_parse_rgb(rgb_text)] if rgb_text else _read_rgb_file(rgb_file)
     profile = load_profile(profile_path)
-    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json),
-                        intent=intent)
+    tables = get_tables(profile, objective, size, progress=_progress_bar(), intent=intent)
     rgb = np.asarray(colours, dtype=np.float64)
     conc5 = table_lookup(tables, rgb)
     pred = predict(profile, conc5)  # exactly what `dreamprint predict --mix` computes
@@ -172,16 +172,16 @@ def gamut(profile_path, objective, intent, compare, size, samples, chart, plot,
 
     profile = load_profile(profile_path)
     objective, intent = resolve_choice(profile, objective, intent)
-    tables = get_tables(profile, objective, size, progress=_progress_bar(not as_json),
+    tables = get_tables(profile, objective, size, progress=_progress_bar(f"{objective}, {intent}"),
                         intent=intent)
     others = []
     if compare:
         for other in OBJECTIVES:
             if other != objective:
-                if not as_json:
-                    click.echo(f"objective {other}:", err=True)
                 others.append(get_tables(profile, other, size, intent=intent,
-                                         progress=_progress_bar(not as_json)))
+                                         progress=_progress_bar(f"{other}, {intent}")))
+    click.echo(f"evaluating: {samples} colours solved directly vs the table"
+               + (f", for {1 + len(others)} objectives" if others else ""), err=True)
     report = evaluate(tables, profile, samples, others)
     for target, draw in ((chart, lambda p: hexagon_chart(tables, profile, p)),
                          (plot, lambda p: gamut_plot(profile, p))):

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
 from dreamprint_gui.core.errors import DreamPrintError
 
 
@@ -42,8 +42,9 @@ def _fmt_time(s: float | None) -> str:
               help="Job folder to create (JOB/slices/NNNNN.png + JOB/manifest.json).")
 @click.option("--profile", default=None, help="Ink profile JSON (default: built-in).")
 @click.option("--printer", default=None,
-              help="Built-in printer name (j850-paper, voxelprint-14um, voxelprint-27um) or a "
-                   "printer .toml file. Default j850-paper.")
+              help="Built-in printer name (voxelprint-27um, voxelprint-14um, j850-paper) or a "
+                   "printer .toml file. Default voxelprint-27um (GrabCAD Voxel Print, 600 x "
+                   "300 dpi, 27 um layers).")
 @click.option("--height-mm", type=float, default=None, help="Height (z) of the print in mm.")
 @click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm (aspect kept).")
 @click.option("--density-scale", type=float, default=1.0, show_default=True,
@@ -71,9 +72,12 @@ def _fmt_time(s: float | None) -> str:
               help="Voxel models (.vox): nearest (default, sharp edges) or linear (smooth).")
 @click.option("--objective", type=click.Choice(["srgb", "cielab", "de2000"]), default=None,
               help="Colour table objective (default: the profile's, else de2000).")
-@click.option("--intent", type=click.Choice(["colorimetric", "perceptual"]), default=None,
-              help="Rendering intent for colours outside the printable gamut (default: the "
-                   "profile's, else colorimetric).")
+@click.option("--intent", type=click.Choice(["colorimetric", "relative", "perceptual"]),
+              default=None,
+              help="Rendering intent: colorimetric (nearest printable colour), relative (the "
+                   "source white maps to the printable white, then colorimetric) or perceptual "
+                   "(sRGB compressed into the gamut). Default: the profile's, else "
+                   "colorimetric.")
 @click.option("--table-size", type=int, default=100, hidden=True,
               help="Colour table nodes per axis (tests use small tables).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")
@@ -81,9 +85,11 @@ def _fmt_time(s: float | None) -> str:
               help="Print the manifest (with the pre-flight estimate and warnings) as JSON.")
 @click.option("-q", "--quiet", is_flag=True,
               help="No pre-flight summary, warnings or progress on stderr.")
+@placement_options
 def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
             workers, scheduler, background, density_threshold, slab_layers, source_options,
-            content, sampling, objective, intent, table_size, overwrite, as_json, quiet) -> None:
+            content, sampling, objective, intent, table_size, overwrite, as_json, quiet,
+            up, rotate, fit) -> None:
     """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack.
 
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
@@ -92,6 +98,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     from dreamprint_gui.job.plan import ConvertSettings, JobCancelled
     from dreamprint_gui.job.run import run_conversion
 
+    up_axis, turn = placement_values(up, rotate)
     opts = {}
     for kv in source_options:
         if "=" not in kv:
@@ -104,7 +111,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         workers=workers, scheduler=scheduler, background=background,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
         objective=objective, intent=intent, table_size=table_size, source_options=opts,
-        content=content, sampling=sampling)
+        content=content, sampling=sampling, up=up_axis, rotate=turn, fit=fit)
 
     def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
         raise KeyboardInterrupt()
@@ -229,21 +236,48 @@ def _option_value(v: str):
 
 @evaluate.command("job")
 @click.argument("job", type=click.Path())
+@click.option("--printer", default=None,
+              help="Check against this printer (built-in name or .toml file) instead of the "
+                   "one the manifest records, e.g. the one you will print on.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-def evaluate_job(job, as_json) -> None:
-    """Read a finished JOB back: material fractions vs intended concentrations, consistency."""
-    from dreamprint_gui.job.check import check_job
+def evaluate_job(job, printer, as_json) -> None:
+    """Read a finished JOB back and check it against its printer (voxel size, image size,
+    dpi, material codes, layer count, tray) and its manifest (counts; fractions vs intended
+    concentrations); report each material's volume (ml) and mass (g)."""
+    from dreamprint_gui.job.check import Z_LIMIT, check_job
 
-    report = check_job(Path(job))
+    report = check_job(Path(job), printer)
     if as_json:
         click.echo(json.dumps(report, indent=2))
-        return
-    click.echo(f"{job}: {report['slices_found']} slices, grid {report['grid_dimensions']}, "
-               f"consistent: {report['consistent']}")
-    for m, r in report["materials"].items():
-        click.echo(f"  {m:5s} fraction {r['fraction']:.5f}  intended {r['intended']:.5f}  "
-                   f"z {r['z_score']:+.2f}")
-    for p in report["problems"]:
-        click.echo(f"  problem: {p}")
+    else:
+        click.echo(_job_report_text(job, report, Z_LIMIT))
     if not report["consistent"]:
-        raise DreamPrintError("the job is not consistent with its manifest", job)
+        raise DreamPrintError("the job is not consistent with its manifest and printer", job)
+
+
+def _job_report_text(job: str, report: dict, z_limit: float) -> str:
+    nx, ny, nz = report["grid_dimensions"]
+    sx, sy, sz = report["size_mm"]
+    lines = [f"{job}: {report['slices_found']} slices of {nx} x {ny} voxels, "
+             f"{sx:.2f} x {sy:.2f} x {sz:.2f} mm (x, y, z); printer {report['printer']}"]
+    for c in report["checks"]:
+        lines.append(f"  {'ok ' if c['ok'] else 'BAD'}  {c['check']}: {c['text']}")
+    lines.append(f"  {'material':8s} {'voxels':>13s} {'fraction':>9s} {'intended':>9s} "
+                 f"{'z':>7s} {'volume ml':>10s} {'mass g':>8s}")
+    for m, r in report["materials"].items():
+        z = r["z_score"]
+        lines.append(f"  {m:8s} {r['voxels']:13,d} {r['fraction']:9.5f} {r['intended']:9.5f} "
+                     f"{z:+7.2f} {r['volume_ml']:10.4f} {r['mass_g']:8.4f}")
+    lines.append(f"  {'resin':8s} {'':13s} {'':9s} {'':9s} {'':7s} "
+                 f"{report['total_volume_ml']:10.4f} {report['total_mass_g']:8.4f}")
+    lines += [
+        "  columns: voxels = voxels of the material in the slices; fraction = voxels / all "
+        f"{report['total_voxels']:,} voxels;",
+        "    intended = the mean concentration the colour tables asked for (manifest); z = "
+        "(fraction - intended) / sqrt(intended (1 - intended) / N),",
+        f"    a halftone's count is within +-{z_limit:g} of it; volume ml = voxels x voxel "
+        f"volume ({' x '.join(f'{v:.5g}' for v in report['voxel_mm'])} mm) / 1000;",
+        "    mass g = volume x cured resin density: " + report["density_source"] + "."]
+    for p in report["problems"]:
+        lines.append(f"  problem: {p}")
+    return "\n".join(lines)

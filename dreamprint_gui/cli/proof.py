@@ -10,9 +10,15 @@ import time
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
 from dreamprint_gui.cli.jobs import _fmt_time, _option_value, _size
 from dreamprint_gui.core.errors import DreamPrintError
+
+# Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
+# engine modules are not imported here to keep the command line quick to start).
+METHOD_CHOICES = ("paper", "no-alignment", "brute-force")
+HALFTONE_CHOICES = ("blue-noise", "random")
+BACKGROUND_CHOICES = ("clear", "empty")
 
 _STAGES = {"preparing": "preparing", "labels": "labels", "source": "source render",
            "print": "print render (Mitsuba)", "compare": "comparing", "writing": "writing"}
@@ -69,24 +75,31 @@ def _drive(gen, prefix: str = ""):
         signal.signal(signal.SIGTERM, old)
 
 
-def _common(f):
+def _common(f, halftones: bool = False):
+    """The options ``proof`` and ``evaluate methods`` share; ``halftones``: ``--halftone`` is
+    repeatable (one row per choice) instead of one choice."""
+    halftone = (click.option("--halftone", "halftone", type=click.Choice(HALFTONE_CHOICES),
+                             multiple=True, default=("blue-noise",), show_default=True,
+                             help="Halftoning; repeat for one row per choice.") if halftones else
+                click.option("--halftone", type=click.Choice(HALFTONE_CHOICES),
+                             default="blue-noise", show_default=True))
     opts = [
         click.option("--height-mm", type=float, default=None, help="Height (z) of the print."),
         click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm."),
         click.option("--printer", default=None, help="Printer name or .toml (default "
-                     "j850-paper)."),
+                     "voxelprint-27um)."),
         click.option("--profile", default=None, help="Ink profile JSON (default: built-in)."),
         click.option("--views", type=int, default=4, show_default=True),
         click.option("--resolution", type=int, default=256, show_default=True,
                      help="Image width and height in pixels."),
         click.option("--spp", type=int, default=16, show_default=True,
                      help="Samples per pixel of the print render."),
-        click.option("--halftone", default="blue-noise", show_default=True,
-                     help="blue-noise or random."),
+        halftone,
         click.option("--seed", type=int, default=0, show_default=True),
         click.option("--density-scale", type=float, default=1.0, show_default=True),
-        click.option("--background", default="clear", show_default=True,
-                     help="What voxels below the density threshold become: clear or empty."),
+        click.option("--background", type=click.Choice(BACKGROUND_CHOICES), default="clear",
+                     show_default=True,
+                     help="What voxels below the density threshold become."),
         click.option("--cells", "max_cells", type=int, default=128, show_default=True,
                      help="Medium cells along the print's longest axis."),
         click.option("--layers-per-block", type=int, default=2, show_default=True,
@@ -98,6 +111,21 @@ def _common(f):
                      help="Irradiance of a directional key light (the environment's "
                           "radiance is 1)."),
         click.option("--floor", is_flag=True, help="Stand the print on a neutral grey floor."),
+        click.option("--viewing-distance-mm", type=float, default=500.0, show_default=True,
+                     help="S-CIELAB: the print seen at its real size from this distance."),
+        click.option("--noise-floor/--no-noise-floor", default=True, show_default=True,
+                     help="Render the print again at seed + 1 and report the difference "
+                          "(the figures' own noise; twice the print render time)."),
+        click.option("--surface", default=None,
+                     help="The print's surface: none, glossy or matte (a dielectric boundary, "
+                          "n 1.5 unless the profile says). Default: the profile's, else none "
+                          "(the built-in K and S were fitted without one)."),
+        click.option("--phase", default=None,
+                     help="Phase function: isotropic or hg:G (Henyey-Greenstein, reduced "
+                          "scattering kept). Default: the profile's, else isotropic."),
+        click.option("--sampler", default="independent", show_default=True,
+                     help="Mitsuba sampler: independent, stratified, multijitter, orthogonal "
+                          "or ldsampler."),
         click.option("--option", "source_options", multiple=True,
                      help="Source reader option KEY=VALUE; repeatable."),
         click.option("--table-size", type=int, default=100, hidden=True),
@@ -105,7 +133,7 @@ def _common(f):
     ]
     for o in reversed(opts):
         f = o(f)
-    return f
+    return placement_options(f)
 
 
 def _settings(source, output, method, kw, overwrite=False):
@@ -118,8 +146,11 @@ def _settings(source, output, method, kw, overwrite=False):
         seed=kw["seed"], density_scale=kw["density_scale"], background=kw["background"],
         max_cells=kw["max_cells"], layers_per_block=kw["layers_per_block"], bands=kw["bands"],
         max_depth=kw["max_depth"], key_light=kw["key_light"], floor=kw["floor"],
-        overwrite=overwrite, table_size=kw["table_size"],
-        source_options=_options(kw["source_options"]))
+        viewing_distance_mm=kw["viewing_distance_mm"], noise_floor=kw["noise_floor"],
+        sampler=kw["sampler"], surface=kw["surface"], phase=kw["phase"], overwrite=overwrite,
+        table_size=kw["table_size"], source_options=_options(kw["source_options"]),
+        up=placement_values(kw["up"], kw["rotate"])[0],
+        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"])
 
 
 def _check_source(source: str) -> None:
@@ -130,18 +161,37 @@ def _check_source(source: str) -> None:
 
 
 @cli.command()
-@click.argument("source")
+@click.argument("source", required=False)
 @click.option("-o", "--output", required=True, type=click.Path(),
               help="Folder to create (images, contact_sheet.png, proof.json).")
-@click.option("--method", default="paper", show_default=True,
-              help="paper, no-alignment or brute-force (a source, not a job folder).")
+@click.option("--method", type=click.Choice(METHOD_CHOICES), default="paper", show_default=True,
+              help="Labelling method (a source, not a job folder).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output folder.")
+@click.option("--chart", "chart", default=None, type=click.Path(dir_okay=False),
+              help="Chart proof: a recipes CSV (as calibrate --chart reads); each recipe is "
+                   "rendered as a flat patch instead of a SOURCE.")
+@click.option("--reflectance", default=None, type=click.Path(dir_okay=False),
+              help="Chart proof: the measured reflectance of the chart's patches (any format "
+                   "`dreamprint spectra` reads), one spectrum per recipe.")
+@click.option("--geometry", default="d:8", show_default=True,
+              help="Chart proof: instrument geometry, d:8 (specular included) or 45:0.")
+@click.option("--thickness-mm", type=float, default=None,
+              help="Chart proof: patch thickness over a black backing (default: optically "
+                   "thick).")
 @_common
-def proof(source, output, method, overwrite, **kw) -> None:
+def proof(source, output, method, overwrite, chart, reflectance, geometry, thickness_mm,
+          **kw) -> None:
     """Render SOURCE (a volume, 'demo', or an exported JOB folder) as printed, beside the
-    source, and measure how alike they look."""
+    source, and measure how alike they look; or, with --chart, a printed chart's recipes as
+    an instrument would measure them."""
     from dreamprint_gui.proof.runner import run_proof
 
+    if chart is not None or reflectance is not None:
+        _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickness_mm, kw)
+        return
+    if source is None:
+        raise DreamPrintError("give a SOURCE (a volume, 'demo' or a job folder), or --chart "
+                              "RECIPES.csv")
     _check_source(source)
     report = _drive(run_proof(_settings(source, output, method, kw, overwrite)))
     if report["renderer"]["variant"].startswith("scalar"):
@@ -151,36 +201,66 @@ def proof(source, output, method, overwrite, **kw) -> None:
         return
     o = report["overall"]
     click.echo(f"wrote {output}: {len(report['views'])} views; dE2000 mean "
-               f"{o['mean_de2000']:.2f} p95 {o['p95_de2000']:.2f}, PSNR {o['psnr_db']:.1f} dB, "
-               f"SSIM {o['ssim']:.3f}, coverage {o['source_coverage']:.3f} -> "
-               f"{o['print_coverage']:.3f} ({report['timings_s']['total']:.0f} s, "
-               f"{report['renderer']['variant']})")
+               f"{o['mean_de2000']:.2f} p95 {o['p95_de2000']:.2f}, S-CIELAB dE2000 mean "
+               f"{o['mean_scielab_de2000']:.2f} at {kw['viewing_distance_mm']:g} mm, PSNR "
+               f"{o['psnr_db']:.1f} dB, SSIM {o['ssim']:.3f}, coverage "
+               f"{o['source_coverage']:.3f} -> {o['print_coverage']:.3f} "
+               f"({report['timings_s']['total']:.0f} s, {report['renderer']['variant']})")
+    f = report["noise_floor"]
+    if f is not None:
+        click.echo(f"noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 mean "
+                   f"{f['mean_de2000']:.2f}, S-CIELAB dE2000 mean "
+                   f"{f['mean_scielab_de2000']:.2f}")
+
+
+def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickness_mm,
+                 kw) -> None:
+    from dreamprint_gui.proof.chart import DEFAULT_CHART_SPP, ChartSettings, run_chart_proof
+
+    if source is not None:
+        raise DreamPrintError("--chart proofs a chart's recipes: give no SOURCE with it")
+    if chart is None:
+        raise DreamPrintError("--reflectance needs --chart RECIPES.csv (the recipes measured)")
+    ctx = click.get_current_context()
+    spp_given = ctx.get_parameter_source("spp") is not click.core.ParameterSource.DEFAULT
+    s = ChartSettings(recipes=chart, reflectance=reflectance, output=output,
+                      profile=kw["profile"], surface=kw["surface"], phase=kw["phase"],
+                      geometry=geometry, thickness_mm=thickness_mm,
+                      spp=kw["spp"] if spp_given else DEFAULT_CHART_SPP, bands=kw["bands"],
+                      seed=kw["seed"], max_depth=kw["max_depth"], overwrite=overwrite)
+    rep = run_chart_proof(s)
+    if kw["as_json"]:
+        click.echo(json.dumps(rep, indent=2))
+        return
+    msg = (f"wrote {output}: {rep['patches_count']} patches, {rep['geometry']}, surface "
+           f"{rep['optics']['surface']}, phase {rep['optics']['phase']}")
+    if "de2000" in rep:
+        d = rep["de2000"]
+        worst = ", ".join(f"{w['patch']} ({w['de2000']:.1f})" for w in d["worst_patches"][:3])
+        msg += (f"; dE2000 against the measurements mean {d['mean']:.2f}, p95 {d['p95']:.2f}, "
+                f"max {d['max']:.2f}; worst patches {worst}")
+    click.echo(msg)
+
+
+def _common_halftones(f):
+    return _common(f, halftones=True)
 
 
 @evaluate.command("methods")
 @click.argument("source")
-@click.option("--methods", "methods", default="paper,no-alignment,brute-force",
-              show_default=True, help="Comma-separated methods.")
-@click.option("--halftones", default="blue-noise", show_default=True,
-              help="Comma-separated halftoning choices (blue-noise, random).")
-@_common
-def evaluate_methods(source, methods, halftones, **kw) -> None:
-    """Proof SOURCE with each method (same cameras, seed, size) and tabulate the figures."""
-    from dreamprint_gui.proof.methods import METHODS
+@click.option("--method", "methods", type=click.Choice(METHOD_CHOICES), multiple=True,
+              default=METHOD_CHOICES, show_default=True,
+              help="Labelling method; repeat for several (default: all three).")
+@_common_halftones
+def evaluate_methods(source, methods, **kw) -> None:
+    """Proof SOURCE with each method and halftoning (same cameras, seed, size) and tabulate the
+    figures: one row per --method x --halftone."""
+    from dreamprint_gui.proof.compare import SIGNIFICANCE_FACTOR, mark_significance
     from dreamprint_gui.proof.runner import render_proof
 
     _check_source(source)
-    ctx = click.get_current_context()
-    if ctx.get_parameter_source("halftone") is not click.core.ParameterSource.DEFAULT:
-        # --halftone (of the shared options) would otherwise be silently replaced per row
-        if ctx.get_parameter_source("halftones") is not click.core.ParameterSource.DEFAULT:
-            raise DreamPrintError("give --halftones (a list) or --halftone, not both")
-        halftones = kw["halftone"]
-    ms = [m.strip() for m in methods.split(",") if m.strip()]
-    hs = [h.strip() for h in halftones.split(",") if h.strip()]
-    bad = [m for m in ms if m not in METHODS]
-    if bad or not ms:
-        raise DreamPrintError(f"unknown method(s) {bad or methods!r} (use {', '.join(METHODS)})")
+    ms = list(dict.fromkeys(methods))
+    hs = list(dict.fromkeys(kw["halftone"]))
     rows = []
     combos = [(m, h) for m in ms for h in hs]
     for k, (m, h) in enumerate(combos):
@@ -188,17 +268,34 @@ def evaluate_methods(source, methods, halftones, **kw) -> None:
         res = _drive(render_proof(_settings(source, None, m, kw2)),
                      prefix=f"[{k + 1}/{len(combos)} {m}/{h}] ")
         r = res["report"]
-        rows.append({"method": m, "halftone": h, **r["overall"],
+        rows.append({"method": m, "halftone": h, **r["overall"], "noise_floor": r["noise_floor"],
                      "seconds": r["timings_s"]["total"]})
+    mark_significance(rows)
     table = {"source": source, "height_mm": kw["height_mm"], "size_mm": kw["size_mm"],
              "views": kw["views"], "resolution": kw["resolution"], "spp": kw["spp"],
-             "seed": kw["seed"], "background": kw["background"], "methods": rows}
+             "seed": kw["seed"], "background": kw["background"],
+             "viewing_distance_mm": kw["viewing_distance_mm"],
+             "significance": f"a row's difference from the best row is significant when it "
+                             f"exceeds {SIGNIFICANCE_FACTOR:g} x the larger noise floor of the "
+                             "two (vs_best)", "methods": rows}
     if kw["as_json"]:
         click.echo(json.dumps(table, indent=2))
         return
-    click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>8s} {'dE p95':>8s} {'PSNR':>6s} "
-               f"{'SSIM':>6s} {'coverage':>9s}")
+    click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'dE p95':>8s} "
+               f"{'S-CIELAB':>9s} {'floor':>11s} {'PSNR':>6s} {'SSIM':>6s} {'coverage':>9s}")
+
+    def mark(r, key):
+        sig = r["vs_best"][key]["significant"]
+        return " " if sig is None or sig or r["vs_best"][key]["difference"] == 0 else "~"
+
     for r in rows:
-        click.echo(f"{r['method']:14s} {r['halftone']:10s} {r['mean_de2000']:8.2f} "
-                   f"{r['p95_de2000']:8.2f} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
+        f = r["noise_floor"]
+        floor = f"{f['mean_de2000']:.2f}/{f['mean_scielab_de2000']:.2f}" if f else "-"
+        click.echo(f"{r['method']:14s} {r['halftone']:10s} {r['mean_de2000']:8.2f}"
+                   f"{mark(r, 'mean_de2000')} {r['p95_de2000']:8.2f} "
+                   f"{r['mean_scielab_de2000']:8.2f}{mark(r, 'mean_scielab_de2000')} "
+                   f"{floor:>11s} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
                    f"{r['coverage_error']:+9.3f}")
+    if any(r["noise_floor"] for r in rows):
+        click.echo(f"~: within {SIGNIFICANCE_FACTOR:g} x the noise floor of the best row (not "
+                   "significant); floor: mean dE2000 / S-CIELAB between two seeds")

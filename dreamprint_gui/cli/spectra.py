@@ -9,6 +9,8 @@ import click
 from dreamprint_gui.cli import cli
 
 _QUANTITIES = ["reflectance", "transmittance", "absorbance", "spd"]
+SUMMARY_SAMPLES = 12  # more samples than this: the text lists the first SUMMARY_HEAD only
+SUMMARY_HEAD = 8
 
 
 @cli.command()
@@ -20,8 +22,11 @@ _QUANTITIES = ["reflectance", "transmittance", "absorbance", "spd"]
               help="What the file holds, when the file does not say.")
 @click.option("--scale", type=click.Choice(["auto", "fraction", "percent"]), default="auto",
               show_default=True, help="Scale of reflectance/transmittance values.")
+@click.option("--all", "show_all", is_flag=True,
+              help=f"List every sample (a file of more than {SUMMARY_SAMPLES} samples is "
+                   "summarised: the first ones and the range of the rest; --json has all).")
 def spectra(file: str, as_json: bool, quantity: str | None, file_quantity: str | None,
-            scale: str) -> None:
+            scale: str, show_all: bool) -> None:
     """Show the format, quantity, unit conversion and samples of a spectral FILE.
 
     Reads CGATS.17 (i1Profiler, ArgyllCMS, X-Rite), Agilent Cary CSV, JCAMP-DX, IES TM-27-14
@@ -40,14 +45,24 @@ def spectra(file: str, as_json: bool, quantity: str | None, file_quantity: str |
     click.echo(f"quantity: {sf.quantity}" + (f" ({basis})" if basis else ""))
     click.echo(f"conversion: {sf.conversion}")
     click.echo(f"samples: {len(sf.samples)}")
-    width = min(max(len(s["name"]) for s in summary["samples"]), 32)
-    for s in summary["samples"]:
+    samples = summary["samples"]
+    shown = samples if show_all or len(samples) <= SUMMARY_SAMPLES else samples[:SUMMARY_HEAD]
+    width = min(max(len(s["name"]) for s in shown), 32)
+    for s in shown:
         lo, hi = s["wavelengths_nm"]
         step = f"step {s['step_nm']:g} nm" + ("" if s["uniform"] else " (median, uneven)")
         rng = ("" if s["min"] is None else f"  values {s['min']:.4g} to {s['max']:.4g}")
         own = f"  [{s['quantity']}]" if sf.quantity == "mixed" else ""
         click.echo(f"  {s['name'][:32]:<{width}}  {lo:g}-{hi:g} nm  {step}  "
                    f"{s['points']} points{rng}{own}")
+    rest = samples[len(shown):]
+    if rest:
+        lo = min(s["wavelengths_nm"][0] for s in rest)
+        hi = max(s["wavelengths_nm"][1] for s in rest)
+        vals = [v for s in rest for v in (s["min"], s["max"]) if v is not None]
+        rng = f", values {min(vals):.4g} to {max(vals):.4g}" if vals else ""
+        click.echo(f"  ... and {len(rest)} more samples ({rest[0]['name'][:24]} to "
+                   f"{rest[-1]['name'][:24]}: {lo:g}-{hi:g} nm{rng}); --all lists every one")
     if sf.problems:
         click.echo(f"problems: {len(sf.problems)}")
         for p in sf.problems:

@@ -7,7 +7,7 @@ import json
 
 import click
 
-from dreamprint_gui.cli import cli
+from dreamprint_gui.cli import cli, placement_options, placement_values
 from dreamprint_gui.core.errors import DreamPrintError
 
 
@@ -43,23 +43,34 @@ def _range(g: dict) -> str:
     return f"values {_fmt_num(lo)} .. {_fmt_num(hi)}"
 
 
-def _size_line(bounds, height_mm, size_mm) -> str | None:
-    """``at ...: 1 source unit = k mm; the bounds span X x Y x Z mm`` (the rule of
-    ``grid_for_source``) or None without a size."""
+def _mpu(bounds, height_mm, size_mm) -> tuple[float, str] | None:
+    """(mm per source unit, the option that set it) for ``bounds`` at a size (the rule of
+    ``grid_for_source``), or None."""
     if not bounds or (height_mm is None and size_mm is None):
         return None
     ext = [hi - lo for lo, hi in zip(bounds[0], bounds[1], strict=True)]
     if height_mm is not None:
         if ext[2] <= 0:
             return None
-        mpu, what = height_mm / ext[2], f"--height-mm {height_mm:g}"
-    else:
-        ok = [(b / e) for b, e in zip(size_mm, ext, strict=True) if e > 0]
-        if not ok:
-            return None
-        mpu, what = min(ok), "--size-mm " + ",".join(f"{v:g}" for v in size_mm)
-    return (f"  at {what}: 1 source unit = {mpu:.4g} mm; the bounds span "
-            + " x ".join(f"{e * mpu:.2f}" for e in ext) + " mm")
+        return height_mm / ext[2], f"--height-mm {height_mm:g}"
+    ok = [(b / e) for b, e in zip(size_mm, ext, strict=True) if e > 0]
+    if not ok:
+        return None
+    return min(ok), "--size-mm " + ",".join(f"{v:g}" for v in size_mm)
+
+
+def _span(bounds, mpu: float) -> str:
+    return " x ".join(f"{(hi - lo) * mpu:.2f}" for lo, hi in zip(bounds[0], bounds[1],
+                                                                  strict=True)) + " mm"
+
+
+def _size_line(bounds, height_mm, size_mm) -> str | None:
+    """``at ...: 1 source unit = k mm; the bounds span X x Y x Z mm`` (the rule of
+    ``grid_for_source``) or None without a size."""
+    m = _mpu(bounds, height_mm, size_mm)
+    if m is None:
+        return None
+    return f"  at {m[1]}: 1 source unit = {m[0]:.4g} mm; the bounds span {_span(bounds, m[0])}"
 
 
 def _union(bounds_list):
@@ -83,9 +94,10 @@ def format_info(path: str, info: dict, height_mm: float | None = None,
                      + (f" ({info['skipped']:,} skipped: zero opacity or scale, or non-finite)"
                         if info.get("skipped") else ""))
         lines.append(f"    bounds {_fmt_bounds(info['bounds'])}")
-        s = _size_line(info["bounds"], height_mm, size_mm)
-        if s:
-            lines.append(s)
+        if not info.get("placement"):
+            s = _size_line(info["bounds"], height_mm, size_mm)
+            if s:
+                lines.append(s)
     for g in info.get("grids", []):
         shape = g.get("shape") or g.get("shape_zyx", [])[::-1]
         head = f"  {g['name']!s}: {g.get('class', 'grid')}"
@@ -108,7 +120,8 @@ def format_info(path: str, info: dict, height_mm: float | None = None,
         elif g.get("baked_from"):
             lines.append(f"    baked from {g['baked_from']}; bounds x 0 .. 1, y 0 .. 1, "
                          "z 0 .. 1 source units")
-    if info.get("grids"):
+    place = info.get("placement")
+    if info.get("grids") and not place:
         bounds = _union([g.get("bounds") for g in info["grids"]])
         if bounds is None and info["grids"][0].get("baked_from"):
             bounds = ([0, 0, 0], [1, 1, 1])
@@ -119,17 +132,61 @@ def format_info(path: str, info: dict, height_mm: float | None = None,
         lines.extend(_ingp_lines(info))
     elif not info.get("grids") and "gaussians" not in info:
         lines.append("  (no grids)")
+    if place:
+        lines.extend(_placement_lines(place, height_mm, size_mm))
     return "\n".join(lines)
 
 
-def describe(file: str) -> dict:
-    """The ``inspect`` description of ``file`` plus ``content``: what ``--content auto`` picks."""
+def _placement_lines(place: dict, height_mm, size_mm) -> list[str]:
+    """The print's orientation and the object's size (``placement`` of :func:`describe`)."""
+    lines = [f"  print orientation: {place['orientation_text']}"]
+    occ, box = place.get("occupied_bounds"), place["declared_bounds"]
+    lines.append(f"    declared box (print axes) {_fmt_bounds(box)}")
+    lines.append("    occupied (non-empty) " + (_fmt_bounds(occ) if occ else
+                                                 "nothing: every sampled density is 0"))
+    fit_b = place["fit_bounds"]
+    m = _mpu(fit_b, height_mm, size_mm)
+    if m is not None:
+        lines.append(f"  at {m[1]} (--fit {place['fit']}): 1 source unit = {m[0]:.4g} mm; "
+                     f"the print is {_span(fit_b, m[0])} (x, y, z)")
+        if occ:
+            lines.append(f"    the object itself (occupied) {_span(occ, m[0])}")
+    return lines
+
+
+def describe(file: str, up: str | None = None, rotate: int = 0, fit: str = "occupied",
+             place: bool = True) -> dict:
+    """The ``inspect`` description of ``file`` plus ``content`` (what ``--content auto``
+    picks) and ``placement``: the orientation (``up`` None: auto), the declared and the
+    occupied bounds in print coordinates (source units) and the bounds ``fit`` sizes."""
     from dreamprint_gui.io.volumes.registry import inspect_source
     from dreamprint_gui.job.content import choose_content, content_of_info
 
     info, src = inspect_source(file)
     mode, reason = choose_content(src) if src is not None else content_of_info(info)
-    return {**info, "content": {"mode": mode, "reason": reason}}
+    out = {**info, "content": {"mode": mode, "reason": reason}}
+    if place:
+        out["placement"] = _placement(file, src, up, rotate, fit)
+    return out
+
+
+def _placement(file: str, src, up: str | None, rotate: int, fit: str) -> dict | None:
+    from dreamprint_gui.io.volumes.orient import choose_orientation, occupied_bounds, orient_source
+    from dreamprint_gui.io.volumes.registry import open_source
+
+    if src is None:
+        try:
+            src = open_source(file)
+        except DreamPrintError:
+            return None  # described, not printable as opened by default (inspect says why)
+    o = choose_orientation(src, up, rotate)
+    turned = orient_source(src, o)
+    occ = occupied_bounds(turned)
+    box = [list(turned.bounds[0]), list(turned.bounds[1])]
+    occ_l = None if occ is None else [list(occ[0]), list(occ[1])]
+    return {"orientation": o.to_json(), "orientation_text": o.describe(),
+            "declared_bounds": box, "occupied_bounds": occ_l, "fit": fit,
+            "fit_bounds": occ_l if fit == "occupied" and occ_l is not None else box}
 
 
 def _ingp_lines(info: dict) -> list[str]:
@@ -162,9 +219,12 @@ def _ingp_lines(info: dict) -> list[str]:
 @click.option("--height-mm", type=float, default=None,
               help="Also give the size in mm at this print height.")
 @click.option("--size-mm", default=None, help="Also give the size in mm fitted into X,Y,Z mm.")
-def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | None) -> None:
+@placement_options
+def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | None,
+            up: str, rotate: str, fit: str) -> None:
     """Describe a volume file: format, the material intent --content auto picks, and per grid
-    its class, voxels, value range and bounds (source units; index; mm with a size).
+    its class, voxels, value range and bounds (source units; index; mm with a size); then how
+    the print stands (--up, --rotate) and the printed object's size (--fit: occupied or box).
 
     FILE is an OpenVDB, NanoVDB, VTK/MetaImage/NRRD image, radiance .npz or EXR stack (file or
     folder), Gaussian splats (PLY, SPZ, .splat, .ksplat, SOG .sog / folder / meta.json),
@@ -177,7 +237,8 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
         raise DreamPrintError("give at most one of --height-mm and --size-mm")
     if height_mm is not None and not height_mm > 0:
         raise DreamPrintError(f"--height-mm must be positive, got {height_mm}")
-    info = describe(file)
+    up_axis, turn = placement_values(up, rotate)
+    info = describe(file, up_axis, turn, fit)
     if as_json:
         click.echo(json.dumps(info, indent=2))
     else:

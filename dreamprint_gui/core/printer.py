@@ -40,11 +40,11 @@ __all__ = ["PrinterProfile", "load_printer", "builtin_printers", "check_tray", "
 FORMAT = "dreamprint-printer"
 FORMAT_VERSION = 1
 EMPTY_LABEL = len(INKS)  # 6: after the six inks
-DEFAULT_PRINTER = "j850-paper"
+DEFAULT_PRINTER = "voxelprint-27um"
 # Human names of the built-in printers (the ids stay in files and on the command line).
 PRINTER_NAMES = {"j850-paper": "Stratasys J850, DreamPrinting paper voxel (84 x 28 x 14 um)",
                  "voxelprint-14um": "Stratasys J750/J850 Voxel Print, 14 um layers",
-                 "voxelprint-27um": "Stratasys J750/J850 Voxel Print, 27 um layers"}
+                 "voxelprint-27um": "Stratasys J750/J850 Voxel Print, 27 um layers (default)"}
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,9 @@ class PrinterProfile:
     source: str = ""
     path: str | None = None
     title: str = ""  # a printer file's human name (optional ``title``); ``name`` is the id
+    # per material (INKS order) the colour the screen shows it in (``display_rgb``, default
+    # its code): legibility only, never written into a slice
+    material_display_rgb: tuple[tuple[int, int, int], ...] | None = None
 
     @property
     def display_name(self) -> str:
@@ -79,11 +82,32 @@ class PrinterProfile:
         """(7, 3) uint8: the RGB code of labels 0..5 (INKS) and 6 (empty)."""
         return np.array([*self.material_rgb, self.empty_rgb], dtype=np.uint8)
 
+    def display_palette(self) -> np.ndarray:
+        """(7, 3) uint8: the colour the screen shows labels 0..5 and 6 (empty) in: each
+        material's ``display_rgb`` (default its code). For display only: slices carry
+        :meth:`palette`."""
+        shown = self.material_display_rgb or self.material_rgb
+        return np.array([*shown, self.empty_rgb], dtype=np.uint8)
+
+    def pixels_per_metre(self) -> tuple[int, int]:
+        """Pixels per metre along a slice image's x (columns) and y (rows), rounded (the
+        PNG pHYs chunk's unit): 600 dpi -> 23622 (599.999 dpi)."""
+        col = 0 if self.image_columns == "x" else 1
+        return (round(1000.0 / self.voxel_mm[col]), round(1000.0 / self.voxel_mm[1 - col]))
+
+    @property
+    def volume_per_voxel_mm3(self) -> float:
+        return float(self.voxel_mm[0] * self.voxel_mm[1] * self.voxel_mm[2])
+
     def to_json_dict(self) -> dict[str, Any]:
         d = asdict(self)
+        shown = self.material_display_rgb or self.material_rgb
         d["materials"] = {ink: {"name": n, "rgb": list(rgb)} for ink, n, rgb in
                           zip(INKS, self.material_names, self.material_rgb, strict=True)}
-        for k in ("material_names", "material_rgb", "path"):
+        for ink, code, disp in zip(INKS, self.material_rgb, shown, strict=True):
+            if disp != code:
+                d["materials"][ink]["display_rgb"] = list(disp)
+        for k in ("material_names", "material_rgb", "path", "material_display_rgb"):
             d.pop(k)
         d["voxel_mm"] = list(self.voxel_mm)
         d["tray_mm"] = list(self.tray_mm)
@@ -142,13 +166,15 @@ def printer_from_dict(d: dict[str, Any], src: str = "<printer>") -> PrinterProfi
     unknown = sorted(set(mats) - set(INKS))
     if unknown:
         raise DreamPrintError(f"[materials] has unknown inks {unknown} (known: {list(INKS)})", src)
-    names, codes = [], []
+    names, codes, shown = [], [], []
     for ink in INKS:
         m = mats[ink]
         if not isinstance(m, dict):
             raise DreamPrintError(f"[materials.{ink}] must be a table with name and rgb", src)
         names.append(str(m.get("name", ink)))
         codes.append(_rgb(m.get("rgb"), f"materials.{ink}.rgb", src))
+        shown.append(_rgb(m["display_rgb"], f"materials.{ink}.display_rgb", src)
+                     if "display_rgb" in m else codes[-1])
     empty = _rgb(d.get("empty_rgb", [255, 255, 255]), "empty_rgb", src)
     allc = [*codes, empty]
     if len(set(allc)) != len(allc):
@@ -168,11 +194,13 @@ def printer_from_dict(d: dict[str, Any], src: str = "<printer>") -> PrinterProfi
                           flip_rows=flip, png_mode=mode,
                           description=str(d.get("description", "")),
                           source=str(d.get("source", "")), path=None if src.startswith("<")
-                          else src, title=str(d.get("title", "")))
+                          else src, title=str(d.get("title", "")),
+                          material_display_rgb=None if shown == codes else tuple(shown))
 
 
 def load_printer(name_or_path: str | os.PathLike | None = None) -> PrinterProfile:
-    """A built-in printer by name (default ``j850-paper``) or a user ``.toml`` file."""
+    """A built-in printer by name (default :data:`DEFAULT_PRINTER`) or a user ``.toml``
+    file."""
     if name_or_path is None:
         name_or_path = DEFAULT_PRINTER
     text = os.fspath(name_or_path)
@@ -198,13 +226,14 @@ def load_printer(name_or_path: str | os.PathLike | None = None) -> PrinterProfil
     return printer_from_dict(d, str(p))
 
 
-def material_legend(printer: PrinterProfile | None = None
+def material_legend(printer: PrinterProfile | None = None, display: bool = False
                     ) -> list[tuple[str, str, tuple[int, int, int]]]:
     """(label, material name, RGB code) of labels 0..6 (INKS, then ``empty``) exactly as the
     slices of ``printer`` (default: the default printer) encode them: ``palette()`` is the one
-    definition the PNG writer and the GUI's legend both read."""
+    definition the PNG writer and the GUI's legend both read. ``display``: the colours the
+    screen shows them in instead (``display_palette()``)."""
     p = printer if printer is not None else load_printer()
-    pal = p.palette()
+    pal = p.display_palette() if display else p.palette()
     names = [*p.material_names, "empty (no material)"]
     return [(lab, name, tuple(int(v) for v in pal[i]))
             for i, (lab, name) in enumerate(zip((*INKS, "empty"), names, strict=True))]

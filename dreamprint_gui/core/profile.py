@@ -66,6 +66,7 @@ class InkProfile:
     provenance: dict[str, Any] = field(default_factory=dict)
     residuals: dict[str, Any] = field(default_factory=dict)
     table_settings: dict[str, str] = field(default_factory=dict)
+    proof_optics: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         validate_arrays(self.wavelengths_nm, self.K, self.S)
@@ -100,6 +101,7 @@ class InkProfile:
             "provenance": self.provenance,
             "residuals": self.residuals,
             **({"table": dict(self.table_settings)} if self.table_settings else {}),
+            **({"proof": dict(self.proof_optics)} if self.proof_optics else {}),
         }
 
     def fingerprint(self) -> str:
@@ -111,6 +113,7 @@ class InkProfile:
         d.pop("residuals")
         d.pop("name")
         d.pop("table", None)
+        d.pop("proof", None)
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
 
@@ -196,13 +199,14 @@ def profile_from_dict(d: Any, source: str = "<profile>") -> InkProfile:
         density_samples=ns, provenance=dict(d.get("provenance", {}) or {}),
         residuals=dict(d.get("residuals", {}) or {}),
         table_settings=_table_settings(d.get("table"), source),
+        proof_optics=_proof_optics(d.get("proof"), source),
     )
 
 
 # The names the ``table`` settings accept (gamut/optimise.py and mapping.py own them;
 # listed here so that loading a profile does not import the solver).
 TABLE_OBJECTIVES = ("srgb", "cielab", "de2000", "rgb", "lab")
-TABLE_INTENTS = ("colorimetric", "perceptual")
+TABLE_INTENTS = ("colorimetric", "relative", "perceptual")
 
 
 def _table_settings(t: Any, source: str) -> dict[str, str]:
@@ -220,6 +224,44 @@ def _table_settings(t: Any, source: str) -> dict[str, str]:
             raise DreamPrintError(f"'table' {key} {t[key]!r} is not one of "
                                   f"{', '.join(allowed)}", source)
     return {k: str(v) for k, v in t.items()}
+
+
+PROOF_SURFACES = ("none", "glossy", "matte")
+
+
+def _proof_optics(t: Any, source: str) -> dict[str, Any]:
+    """The optional ``proof`` section: the optics the K and S were fitted through (the print
+    proof renders with them, proof/optics.py)."""
+    if t is None:
+        return {}
+    if not isinstance(t, dict):
+        raise DreamPrintError("'proof' must be an object (surface, refractive_index, roughness, "
+                              "phase)", source)
+    unknown = sorted(set(t) - {"surface", "refractive_index", "roughness", "phase"})
+    if unknown:
+        raise DreamPrintError(f"'proof' has unknown keys {unknown}; expected surface, "
+                              "refractive_index, roughness, phase", source)
+    if "surface" in t and t["surface"] not in PROOF_SURFACES:
+        raise DreamPrintError(f"'proof' surface {t['surface']!r} is not one of "
+                              f"{', '.join(PROOF_SURFACES)}", source)
+    for key, lo, hi in (("refractive_index", 1.0, 3.0), ("roughness", 0.001, 1.0)):
+        if key in t:
+            v = t[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
+                raise DreamPrintError(f"'proof' {key} must be a number in [{lo:g}, {hi:g}], "
+                                      f"got {v!r}", source)
+    if "phase" in t:
+        ph = t["phase"]
+        ok = isinstance(ph, str) and (ph == "isotropic" or ph.startswith("hg:"))
+        if ok and ph.startswith("hg:"):
+            try:
+                ok = abs(float(ph[3:])) <= 0.95
+            except ValueError:
+                ok = False
+        if not ok:
+            raise DreamPrintError(f"'proof' phase {ph!r} must be 'isotropic' or 'hg:G' with "
+                                  "|G| <= 0.95", source)
+    return dict(t)
 
 
 def load_profile(path: str | os.PathLike | None = None) -> InkProfile:

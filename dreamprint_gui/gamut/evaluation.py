@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from dreamprint_gui.core.profile import InkProfile
 from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_lab
-from dreamprint_gui.gamut.mapping import PerceptualMap, simplex_lattice, srgb_cube_faces
+from dreamprint_gui.gamut.mapping import intent_map, simplex_lattice, srgb_cube_faces
 from dreamprint_gui.gamut.optimise import (
     de2000_residual,
     solve,
@@ -62,7 +62,8 @@ def lut_vs_direct(tables: ColourTables, profile: InkProfile, samples: int = 2000
     """(dE2000 LUT vs direct at the in-gamut samples, dE2000 of direct to target at all).
 
     "Direct" solves the table's objective for the colour the table's intent reproduces (the
-    sample itself for ``colorimetric``, its SGCK-mapped colour for ``perceptual``); a sample is
+    sample itself for ``colorimetric``, its white-mapped colour for ``relative``, its
+    SGCK-mapped colour for ``perceptual``); a sample is
     in gamut when the colorimetric direct solution reproduces it within ``IN_GAMUT_DE2000``.
     """
     model = forward_model(profile)
@@ -70,8 +71,9 @@ def lut_vs_direct(tables: ColourTables, profile: InkProfile, samples: int = 2000
     start = np.full(N_COLOUR_INKS, 0.2)
     direct, _, _ = solve(model, tables.objective, rgb, start, max_iter=300)
     de_target = delta_E2000(mixtures_lab(model, direct), targets_for(model, "cielab", rgb))
-    if getattr(tables, "intent", "colorimetric") == "perceptual":
-        mapped = PerceptualMap.for_model(model).map_xyz(srgb_to_xyz(model, rgb))
+    imap = intent_map(model, getattr(tables, "intent", "colorimetric"))
+    if imap is not None:
+        mapped = imap.map_xyz(srgb_to_xyz(model, rgb))
         direct, _, _ = solve_xyz(model, tables.objective, mapped, start, max_iter=300)
     lab_direct = mixtures_lab(model, direct)
     lab_lut = mixtures_lab(model, lookup(tables, rgb))
@@ -235,6 +237,9 @@ def evaluate(tables: ColourTables, profile: InkProfile, samples: int = 2000,
         "out_of_gamut_dE2000": _stats(out),
         "out_of_gamut_policy": (
             f"nearest printable colour ({_METRIC[tables.objective]})" if intent == "colorimetric"
+            else "the source white mapped onto the printable white (ICC relative colorimetric, "
+                 f"Bradford), then nearest printable colour ({_METRIC[tables.objective]})"
+            if intent == "relative"
             else "SGCK compression of sRGB into the printable gamut in CAM16-UCS (CIE 156), "
                  f"then nearest printable colour ({_METRIC[tables.objective]})"),
         "objectives": per,

@@ -40,6 +40,13 @@ Defines
   The table is interpolated bilinearly; the printable distance is shrunk by
   :data:`BOUNDARY_MARGIN` so that mapped colours are printable (the hull overestimates a
   concave slice).
+- :class:`RelativeMap`: the ``"relative"`` intent, ICC media-relative colorimetric (ICC.1:2022
+  section 6.3.2): the source white (sRGB (1, 1, 1)) is mapped onto the printable white (the
+  printable mixture of highest luminance Y, a simplex lattice of step 1/24) by a von Kries
+  adaptation in the Bradford cone space, ``XYZ' = M^-1 diag(LMS_p / LMS_s) M XYZ``
+  (colour-science's ``chromatic_adaptation_VonKries``), which scales luminance with it; the
+  mapped colour is then reproduced like colorimetric. White smoke prints as the printable
+  white instead of "out of gamut", and every colour keeps its relation to the white.
 - :func:`canonical_intent`: validates an intent name.
 """
 
@@ -55,10 +62,11 @@ from numpy.typing import ArrayLike, NDArray
 from dreamprint_gui.gamut.forward import N_COLOUR_INKS, ForwardModel, mixtures_xyz
 from dreamprint_gui.gamut.optimise import srgb_to_xyz
 
-__all__ = ["INTENTS", "DEFAULT_INTENT", "canonical_intent", "PerceptualMap", "cam16_ucs",
+__all__ = ["INTENTS", "DEFAULT_INTENT", "canonical_intent", "PerceptualMap", "RelativeMap",
+           "intent_map", "cam16_ucs",
            "cam16_ucs_to_xyz", "BOUNDARY_MARGIN", "KNEE"]
 
-INTENTS: tuple[str, ...] = ("colorimetric", "perceptual")
+INTENTS: tuple[str, ...] = ("colorimetric", "relative", "perceptual")
 DEFAULT_INTENT = "colorimetric"
 KNEE = 0.9
 BOUNDARY_MARGIN = 0.98
@@ -286,6 +294,39 @@ class PerceptualMap:
         x = np.asarray(xyz, dtype=np.float64)
         return cam16_ucs_to_xyz(self.map_ucs(cam16_ucs(x, self.white), _lab(x, self.white)),
                                 self.white)
+
+
+@dataclass(frozen=True)
+class RelativeMap:
+    """The relative colorimetric intent's map (module doc): source white -> printable white."""
+
+    source_white: NDArray[np.float64]  # XYZ of sRGB (1, 1, 1), Y = 1
+    print_white: NDArray[np.float64]   # XYZ of the printable mixture of highest Y
+
+    @classmethod
+    def for_model(cls, model: ForwardModel) -> RelativeMap:
+        xyz = mixtures_xyz(model, _simplex_lattice(_LATTICE_STEPS))
+        src = np.linalg.solve(np.asarray(model.xyz_to_rgb, dtype=np.float64), np.ones(3))
+        return cls(src, xyz[int(np.argmax(xyz[:, 1]))])
+
+    def map_xyz(self, xyz: ArrayLike) -> NDArray[np.float64]:
+        """The XYZ (white Y = 1) the relative intent reproduces for source XYZ colours."""
+        import colour
+
+        return colour.adaptation.chromatic_adaptation_VonKries(
+            np.asarray(xyz, dtype=np.float64), self.source_white, self.print_white,
+            transform="Bradford")
+
+
+def intent_map(model: ForwardModel, intent: str):
+    """The source XYZ -> target XYZ map of an intent (an object with ``map_xyz``), or None for
+    ``colorimetric`` (the target is the source colour)."""
+    intent = canonical_intent(intent)
+    if intent == "perceptual":
+        return PerceptualMap.for_model(model)
+    if intent == "relative":
+        return RelativeMap.for_model(model)
+    return None
 
 
 def _lab(xyz: NDArray, white: NDArray) -> NDArray[np.float64]:

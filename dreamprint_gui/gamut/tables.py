@@ -18,9 +18,10 @@ Defines
 Objectives (:mod:`.optimise`): ``srgb`` (paper eq. 10), ``cielab``, ``de2000``. Default:
 :data:`DEFAULT_OBJECTIVE`, the one with the smallest lookup-minus-lattice-best dE2000 (see
 docs/physics.md and ``dreamprint gamut --json``). Rendering intents (:mod:`.mapping`):
-``colorimetric`` (the printable colour of minimum objective) and ``perceptual`` (SGCK
-compression into the gamut first). Each node's dE2000 to its *source* colour is kept in
-``dE2000``.
+``colorimetric`` (the printable colour of minimum objective), ``relative`` (ICC media-relative:
+the source white mapped onto the printable white first) and ``perceptual`` (SGCK compression
+into the gamut first). Each node's dE2000 to its *source* colour is kept in ``dE2000`` (the
+pre-flight measures against the intent's target itself).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 from dreamprint_gui.core.profile import INKS, InkProfile
 from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_lab
 from dreamprint_gui.gamut.grey import brightness_table, grey_concentrations, rho_k_for
-from dreamprint_gui.gamut.mapping import DEFAULT_INTENT, PerceptualMap, canonical_intent
+from dreamprint_gui.gamut.mapping import DEFAULT_INTENT, canonical_intent, intent_map
 from dreamprint_gui.gamut.optimise import (
     canonical_objective,
     resample,
@@ -182,12 +183,10 @@ def build_tables(profile: InkProfile, objective: str | None = None, size: int = 
     t0 = time.perf_counter()
     model = forward_model(profile)
     target_xyz = None
-    if intent == "perceptual":
-
-        pmap = PerceptualMap.for_model(model)
-
+    imap = intent_map(model, intent)
+    if imap is not None:
         def target_xyz(rgb):
-            return pmap.map_xyz(srgb_to_xyz(model, rgb))
+            return imap.map_xyz(srgb_to_xyz(model, rgb))
 
     conc, _ = solve_grid(model, objective, size, progress, target_xyz)
     a = np.linspace(0.0, 1.0, size)
@@ -276,6 +275,32 @@ def _load(path: Path, key_profile: str, objective: str, size: int,
                         build_seconds=float(meta["build_seconds"]), cached=True)
 
 
+# Wall seconds of a 100^3 build on the 2-core development machine (benchmarks/bench_gamut.py,
+# docs/physics.md: de2000 35 CPU s, srgb 19; cielab solves like srgb), for the announcement of
+# a first-use build; scaled by the node count.
+BUILD_SECONDS_100 = {"de2000": 30.0, "cielab": 17.0, "srgb": 17.0}
+
+
+def tables_path(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
+                intent: str | None = None, cache: str | os.PathLike | None = None) -> Path:
+    """Where :func:`get_tables` keeps (or would keep) these tables."""
+    objective, intent = resolve_choice(profile, objective, intent)
+    folder = Path(cache) if cache is not None else cache_dir()
+    return folder / f"tables_{_cache_key(profile, objective, size, intent)}.npz"
+
+
+def build_estimate(profile: InkProfile, objective: str | None = None,
+                   size: int = DEFAULT_SIZE, intent: str | None = None,
+                   cache: str | os.PathLike | None = None) -> float | None:
+    """Estimated seconds :func:`get_tables` will spend building, or None when the cache holds
+    the tables (checked by the file's presence: a stale file is rebuilt, rarely)."""
+    objective, intent = resolve_choice(profile, objective, intent)
+    if tables_path(profile, objective, size, intent, cache).is_file():
+        return None
+    extra = 1.15 if intent != "colorimetric" else 1.0  # the intent's mapping of every target
+    return BUILD_SECONDS_100.get(objective, 30.0) * extra * (size / 100) ** 3
+
+
 def get_tables(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
                progress: Callable[[float], None] | None = None,
                cache: str | os.PathLike | None = None,
@@ -284,18 +309,16 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
 
     ``objective``/``intent`` default to the profile's ``table`` settings, else to
     :data:`DEFAULT_OBJECTIVE` / ``colorimetric``. ``cache`` overrides the folder (default:
-    :func:`cache_dir`). ``progress(fraction)`` is called during a build.
+    :func:`cache_dir`). ``progress(fraction)`` is called during a build only (a table loaded
+    from the cache reports nothing: the caller would otherwise say "building").
     """
     objective, intent = resolve_choice(profile, objective, intent)
-    folder = Path(cache) if cache is not None else cache_dir()
-    path = folder / f"tables_{_cache_key(profile, objective, size, intent)}.npz"
+    path = tables_path(profile, objective, size, intent, cache)
     fp = profile.fingerprint()
     t0 = time.perf_counter()
     found = _load(path, fp, objective, size, intent)
     if found is not None:
         found.load_seconds = time.perf_counter() - t0
-        if progress is not None:
-            progress(1.0)
         return found
     tables = build_tables(profile, objective, size, progress, intent)
     try:

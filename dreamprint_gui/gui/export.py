@@ -90,10 +90,13 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      output: str | os.PathLike | None = None, overwrite: bool = False,
                      workers: int | None = None, scheduler: str | None = None,
                      table_size: int | None = None, content: str = "auto",
-                     sampling: str | None = None, intent: str | None = None):
+                     sampling: str | None = None, intent: str | None = None,
+                     up: str | None = None, rotate: int = 0, fit: str = "occupied"):
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
     ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear";
-    ``intent`` the rendering intent, None for the profile's)."""
+    ``intent`` the rendering intent, None for the profile's; ``up`` the source axis that
+    becomes +z, None or "auto" for the source's convention; ``rotate`` quarter turns about z
+    in degrees; ``fit`` "occupied" or "box")."""
     from dreamprint_gui.job.plan import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
@@ -107,7 +110,30 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            density_scale=float(density_scale), halftone=halftone,
                            seed=int(seed), workers=workers, scheduler=scheduler,
                            background=background, content=content, sampling=sampling,
-                           overwrite=overwrite, **extra)
+                           overwrite=overwrite, up=None if up in (None, "auto") else up,
+                           rotate=int(rotate), fit=fit, **extra)
+
+
+def placement_combos(params: dict | None = None) -> tuple[QComboBox, QComboBox, QComboBox]:
+    """The Up, Turn and Size-of combo boxes (``--up``, ``--rotate``, ``--fit``), set from
+    ``params`` (the preview's ``params()``: up, rotate, fit)."""
+    from dreamprint_gui.gui.names import FITS, TURNS, UPS
+
+    p = params or {}
+    up, turn, fit = QComboBox(), QComboBox(), QComboBox()
+    for combo, items in ((up, UPS), (fit, FITS)):
+        for key, name, tip in items:
+            combo.addItem(name, key)
+            combo.setItemData(combo.count() - 1, tip, Qt.ItemDataRole.ToolTipRole)
+    for deg, name in TURNS:
+        turn.addItem(name, deg)
+    up.setToolTip("The source axis that becomes the print's up (build direction)")
+    turn.setToolTip("Turn the print about its vertical axis (counter-clockwise from above)")
+    fit.setToolTip("What the height (or box) measures: the object itself or the file's box")
+    for combo, key, default in ((up, "up", "auto"), (turn, "rotate", 0), (fit, "fit",
+                                                                           "occupied")):
+        combo.setCurrentIndex(max(0, combo.findData(p.get(key, default))))
+    return up, turn, fit
 
 
 def export_job(settings, preflight=True):
@@ -358,6 +384,7 @@ class ExportDialog(QDialog):
             self.content.setItemData(self.content.count() - 1, tip,
                                      Qt.ItemDataRole.ToolTipRole)
         self.content.setCurrentIndex(max(0, self.content.findData(pp.get("content", "auto"))))
+        self.up, self.turn, self.fit = placement_combos(pp)
         self.halftone = QComboBox()
         self.halftone.addItem("blue noise (low noise, default)", "blue-noise")
         self.halftone.addItem("random (paper's stochastic)", "random")
@@ -366,6 +393,7 @@ class ExportDialog(QDialog):
         self.intent = QComboBox()  # rendering intent (ConvertSettings.intent; "" = profile's)
         self.intent.addItem("the profile's (colorimetric unless it says otherwise)", "")
         self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
+        self.intent.addItem("relative (source white to printable white)", "relative")
         self.intent.addItem("perceptual (compress sRGB into the gamut)", "perceptual")
         self.intent.setCurrentIndex(max(0, self.intent.findData(
             self.settings.get("export/intent", "", str))))
@@ -410,6 +438,9 @@ class ExportDialog(QDialog):
         form.addRow("Density scale", self.density_scale)
         form.addRow("Background", self.background)
         form.addRow("Content", self.content)
+        form.addRow("Up", self.up)
+        form.addRow("Turn", self.turn)
+        form.addRow("Size of", self.fit)
         form.addRow("Halftoning", self.halftone)
         form.addRow("Rendering intent", self.intent)
         form.addRow("Seed", self.seed)
@@ -597,7 +628,8 @@ class ExportDialog(QDialog):
             output=self.target_path(), overwrite=self.overwrite.isChecked(),
             workers=workers, scheduler=scheduler, table_size=self.table_size,
             content=str(self.content.currentData()), sampling=self.sampling_choice,
-            intent=str(self.intent.currentData()) or None)
+            intent=str(self.intent.currentData()) or None, up=str(self.up.currentData()),
+            rotate=int(self.turn.currentData()), fit=str(self.fit.currentData()))
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:

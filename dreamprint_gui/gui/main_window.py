@@ -125,7 +125,8 @@ class MainWindow(QMainWindow):
         self.preview.set_params(
             height_mm=self.settings.get("preview/height_mm", 40.0, float),
             density_scale=self.settings.get("preview/density_scale", 1.0, float),
-            background=self.settings.get("preview/background", "clear", str))
+            background=self.settings.get("preview/background", "clear", str),
+            fit=self.settings.get("preview/fit", "occupied", str))
 
         self.profile_label = QLabel()
         self.source_label = QLabel()
@@ -494,7 +495,7 @@ class MainWindow(QMainWindow):
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
         self.settings.save_window_state(self.saveGeometry(), self.saveState())
         for k, v in self.preview.params().items():
-            if k not in ("content", "sampling"):  # chosen per source: each file starts on auto
+            if k not in ("content", "sampling", "up", "rotate"):  # per source: each starts on auto
                 self.settings.set(f"preview/{k}", v)
         self.settings.sync()
         from dreamprint_gui.gui.workers import wait_all

@@ -14,7 +14,8 @@ __all__ = ["BACKGROUNDS", "CONTENTS", "SAMPLINGS", "background_name", "printer_n
 
 # The command line's options as the GUI's controls are labelled (engine messages name options)
 _OPTIONS = {"--content": "Content", "--density-scale": "Density scale",
-            "--background": "Background", "--sampling": "Voxel edges"}
+            "--background": "Background", "--sampling": "Voxel edges", "--up": "Up",
+            "--rotate": "Turn", "--fit": "Size of"}
 
 # (id, name, what it means) in the order the combo boxes offer them
 BACKGROUNDS = (
@@ -34,6 +35,28 @@ CONTENTS = (
 SAMPLINGS = (
     (None, "Sharp", "Each voxel keeps its colour and its edges (nearest neighbour)"),
     ("linear", "Smooth", "Colours and edges blended between voxels (trilinear)"),
+)
+
+
+# ``--up`` ids: the source axis that becomes the print's up (+z)
+UPS = (
+    ("auto", "Auto", "The source's known convention: Gaussian splats (PLY, .splat, SOG) -y, "
+     "SPZ +y, InstantNGP +z; otherwise the file's z"),
+    ("z", "+z (file's z)", "The file's z axis points up"),
+    ("-z", "-z", "The file's -z axis points up (turned upside down)"),
+    ("y", "+y", "The file's y axis points up (y-up scenes)"),
+    ("-y", "-y", "The file's -y axis points up (y-down scenes: COLMAP, 3DGS)"),
+    ("x", "+x", "The file's x axis points up"),
+    ("-x", "-x", "The file's -x axis points up"),
+)
+# ``--rotate``: quarter turns about the print's z, counter-clockwise seen from above
+TURNS = ((0, "0 degrees"), (90, "90 degrees"), (180, "180 degrees"), (270, "270 degrees"))
+# ``--fit``: what the height (or box) measures
+FITS = (
+    ("occupied", "The object", "The size asked is the object's: its non-empty bounds, empty "
+     "margins cropped"),
+    ("box", "The file's box", "The size asked is the file's declared box, empty margins "
+     "included"),
 )
 
 

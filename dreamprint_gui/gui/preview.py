@@ -117,6 +117,12 @@ class PreviewPage(QWidget):
         self.sampling.setToolTip("Voxel models: sharp voxel edges (nearest) or smooth "
                                  "(trilinear); other sources are always smooth")
         self.sampling.setEnabled(False)
+        from dreamprint_gui.gui.export import placement_combos
+
+        self.up, self.turn, self.fit = placement_combos()
+        self.placement_note = QLabel("")  # how the print stands and what it measures
+        self.placement_note.setWordWrap(True)
+        self.placement_note.setObjectName("contentNote")
         self.status = QLabel("no source")
         self.status.setWordWrap(True)
         # the preview's computation: busy while preparing, the fraction while predicting
@@ -142,6 +148,10 @@ class PreviewPage(QWidget):
         form.addRow("", self.content_note)
         form.addRow("Voxel edges", self.sampling)
         form.setRowVisible(self.sampling, False)  # shown for sources that offer the choice
+        form.addRow("Up", self.up)
+        form.addRow("Turn", self.turn)
+        form.addRow("Size of", self.fit)
+        form.addRow("", self.placement_note)
         self.form = form
         box = QGroupBox("Print")
         box.setLayout(form)
@@ -163,8 +173,8 @@ class PreviewPage(QWidget):
         body = QHBoxLayout()
         body.addWidget(self.slice_view, 1)
         legend_col = QVBoxLayout()
-        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(colours as in the "
-                                    "slice files)"))
+        legend_col.addWidget(QLabel("<b>Materials of this layer</b><br>(slice file codes; "
+                                    "Clear shown<br>light blue for legibility)"))
         legend_col.addWidget(self.legend)
         legend_col.addStretch(1)
         body.addLayout(legend_col)
@@ -216,7 +226,7 @@ class PreviewPage(QWidget):
         self._slice_debounce.timeout.connect(self._compute_slice)
         for w in (self.height_mm, self.density_scale):
             w.valueChanged.connect(self._params_changed)
-        for w in (self.background, self.content, self.sampling):
+        for w in (self.background, self.content, self.sampling, self.up, self.turn, self.fit):
             w.currentIndexChanged.connect(self._params_changed)
         self.slice_slider.valueChanged.connect(lambda _v: self._slice_moved())
 
@@ -240,13 +250,21 @@ class PreviewPage(QWidget):
                 "density_scale": float(self.density_scale.value()),
                 "background": str(self.background.currentData()),
                 "content": str(self.content.currentData()),
-                "sampling": self.sampling.currentData() if self.sampling.isEnabled() else None}
+                "sampling": self.sampling.currentData() if self.sampling.isEnabled() else None,
+                "up": str(self.up.currentData()), "rotate": int(self.turn.currentData()),
+                "fit": str(self.fit.currentData())}
 
     _KEEP = object()
 
     def set_params(self, height_mm: float | None = None, density_scale: float | None = None,
                    background: str | None = None, content: str | None = None,
-                   sampling=_KEEP) -> None:
+                   sampling=_KEEP, up: str | None = None, rotate: int | None = None,
+                   fit: str | None = None) -> None:
+        for combo, value in ((self.up, up), (self.turn, rotate), (self.fit, fit)):
+            if value is not None:
+                i = combo.findData(value)
+                if i >= 0:
+                    combo.setCurrentIndex(i)
         if height_mm is not None:
             self.height_mm.setValue(height_mm)
         if density_scale is not None:
@@ -270,13 +288,14 @@ class PreviewPage(QWidget):
             takes = reader_options(path)
         except Exception:  # noqa: BLE001 - an unreadable file is reported when opened
             takes = set()
-        for combo in (self.content, self.sampling):
+        for combo in (self.content, self.sampling, self.up, self.turn):
             combo.blockSignals(True)
-            combo.setCurrentIndex(0)
+            combo.setCurrentIndex(0)  # each file starts on auto content, auto up, no turn
             combo.blockSignals(False)
         self.sampling.setEnabled("sampling" in takes)
         self.form.setRowVisible(self.sampling, "sampling" in takes)
         self.content_note.setText("")
+        self.placement_note.setText("")
 
     _UNSET = object()
 
@@ -323,7 +342,8 @@ class PreviewPage(QWidget):
                                 height_mm=p["height_mm"], density_scale=p["density_scale"],
                                 background=p["background"], output=output,
                                 table_size=self.table_size, content=p["content"],
-                                sampling=p["sampling"])
+                                sampling=p["sampling"], up=p["up"], rotate=p["rotate"],
+                                fit=p["fit"])
 
     def recompute(self) -> None:
         if not self.ready_to_compute():
@@ -447,6 +467,11 @@ class PreviewPage(QWidget):
             self.content_note.setText(f"auto: {choice.mode}, {choice.reason}")
         else:
             self.content_note.setText(choice.reason)
+        place = self.ctx.placement_json()
+        fit = place["fit"].get("mode", "box")
+        self.placement_note.setText(
+            f"{place['orientation_text']}; height of "
+            + ("the object" if fit == "occupied" else "the file's box"))
         self._start_preflight()
         if not self.slice_slider.isEnabled():
             self._emit_rendered()

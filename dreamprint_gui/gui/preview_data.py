@@ -91,13 +91,14 @@ def job_context(settings, previous=None):
     from dreamprint_gui.job.plan import prepare_job
 
     same = ("source", "profile", "printer", "halftone", "seed", "table_size", "objective",
-            "source_options", "density_threshold", "content", "sampling")
+            "source_options", "density_threshold", "content", "sampling", "up", "rotate", "fit")
     if previous is None or any(getattr(previous.settings, k) != getattr(settings, k)
                                for k in same):
         return prepare_job(settings)
     p = previous.printer
     grid = grid_for_source(previous.source, p.voxel_mm, height_mm=settings.height_mm,
-                           size_mm=None if settings.size_mm is None else tuple(settings.size_mm))
+                           size_mm=None if settings.size_mm is None else tuple(settings.size_mm),
+                           bounds=previous.fit_bounds)
     bg = INKS.index("Cl") if settings.background == "clear" else EMPTY_LABEL
     ht = Halftoner.create(settings.halftone, settings.seed, p.voxel_mm,
                           threshold=previous.halftoner.threshold, bg_label=bg)
@@ -132,7 +133,7 @@ def compute_preview(ctx, profile, *, n: int = PREVIEW_VOXELS,
     vx, vy, vz = ctx.printer.voxel_mm
     size = (print_shape[0] * vx, print_shape[1] * vy, print_shape[2] * vz)
     v = max(size) / n
-    grid = grid_for_source(source, (v, v, v), height_mm=size[2])
+    grid = grid_for_source(source, (v, v, v), height_mm=size[2], bounds=ctx.fit_bounds)
     nx, ny, nz = grid.shape_xyz
     rgb, sigma = source.sample_slab(grid, 0, nz, density_scale=s.density_scale)
     rgb = np.asarray(rgb, dtype=np.float32)

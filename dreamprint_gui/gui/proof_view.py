@@ -172,6 +172,7 @@ class ProofPage(QWidget):
         self.view_pick.valueChanged.connect(self._show_view)
         self.image_labels = [ScaledImage() for _ in range(3)]
         self.figures = QLabel()
+        self.figures.setWordWrap(True)
         self.figures.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
 
         form = QFormLayout()
@@ -273,9 +274,14 @@ class ProofPage(QWidget):
         self.view_pick.setMaximum(len(self.images) - 1)
         self._show_view(self.view_pick.value())
         o = self.result["overall"]
+        f = self.result.get("noise_floor")
+        floor = (f"; noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 "
+                 f"{f['mean_de2000']:.2f}, S-CIELAB {f['mean_scielab_de2000']:.2f}" if f else "")
         self.figures.setText(
             f"overall: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "
-            f"PSNR {o['psnr_db']:.1f} dB; SSIM {o['ssim']:.3f}; coverage "
+            f"S-CIELAB dE2000 mean {o['mean_scielab_de2000']:.2f} at "
+            f"{self.result['viewing']['distance_mm']:g} mm{floor}; PSNR {o['psnr_db']:.1f} dB; "
+            f"SSIM {o['ssim']:.3f}; coverage "
             f"{o['source_coverage']:.3f} (source) -> {o['print_coverage']:.3f} (print); "
             f"{self.result['renderer']['variant']}, {self.result['timings_s']['total']:.0f} s")
         self._end("succeeded", "done")

@@ -13,7 +13,7 @@ Defines
   :meth:`Halftoner.layer_into` labels one layer with a numba kernel that releases the GIL.
 - :func:`pick_label`: the rule for one voxel (the reference); :func:`label_rows`: the same rule
   for a run of voxels, branch-free so LLVM vectorises it; :func:`fg_threshold`,
-  :func:`mask_columns`, :func:`scatter_labels`: the other per-row parts. All compiled (numba) and
+  :func:`tile_layout`, :func:`scatter_labels`: the other per-row parts. All compiled (numba) and
   shared with the print job's fused per-layer kernel.
 - :func:`fraction_variance_ratio`: the quality metric (variance of local fractions in boxes
   relative to the binomial i.i.d. variance, and the mean bias).
@@ -22,10 +22,16 @@ Label of a voxel with concentrations c (6 inks, INKS order, summing to s) and th
 t in [0, 1): the first ink i with t * s < c_0 + ... + c_i. With t uniform on [0, 1) every ink is
 drawn with probability c_i / s exactly (the paper's section 4.3 "3D stochastic halftoning" for
 ``random``). ``blue-noise`` uses as t the mask's rank threshold (rank + 0.5) / N at the voxel's
-position (mask tiled over the job with a seed-dependent toroidal offset): over a tile each
-threshold occurs once, so every ink's fraction equals its concentration to within 1/N (unbiased),
-while neighbouring voxels get thresholds far apart (low local variance). Voxels whose density is
-below the background threshold get the background label (Clear or empty) without drawing.
+position: the mask tiles the job (tile grid shifted by a seed-dependent offset), and each tile
+reads it toroidally shifted by its own offset, a hash of (seed, tile index) (:func:`tile_layout`).
+Over a tile each threshold occurs once, so every ink's fraction equals its concentration to
+within 1/N (unbiased), while neighbouring voxels get thresholds far apart (low local variance).
+The per-tile shift is what keeps a rarely used ink (the lowest thresholds) from landing on the
+same cell of every tile: with one shift for the whole job its voxels formed a regular lattice
+at the tile period (~1 mm); with a shift per tile they fall at independent places in each tile,
+and the mask being toroidal, inside a tile the pattern stays seamless blue noise
+(``benchmarks/bench_halftone.py`` measures the peak at the tile period). Voxels whose density
+is below the background threshold get the background label (Clear or empty) without drawing.
 """
 
 from __future__ import annotations
@@ -43,11 +49,12 @@ from dreamprint_gui.core.profile import INKS
 
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
            "pick_label", "label_rows", "fg_threshold", "scatter_labels", "scatter_counts",
-           "mask_columns",
+           "tile_layout", "TILING", "mask_build_estimate", "MASK_BUILD_SECONDS",
            "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS", "MASK_VERSION"]
 
 HALFTONE_METHODS = ("blue-noise", "random")
 MASK_VERSION = 1
+TILING = "per-tile toroidal shift: splitmix64(seed, tile)"
 _NO_MASK = np.zeros((1, 1, 1), np.float32)
 # Order of the inks along the threshold axis. The first band [0, c) of a void-and-cluster mask
 # is its best blue-noise set; the last band is the complement of one (also blue); middle bands
@@ -215,13 +222,30 @@ def _generate_mask(shape_zyx: tuple[int, int, int],
     return ((rank.reshape(nz, ny, nx) + 0.5) / n).astype(np.float32)
 
 
+# Wall seconds of a mask build (void and cluster, O(N^2), the same N for every voxel) on the
+# 2-core development machine (benchmarks/bench_preflight.py prints it against the actual).
+MASK_BUILD_SECONDS = 15.0
+
+
+def _mask_path(voxel_mm: tuple[float, float, float], shape: tuple[int, int, int]) -> Path:
+    key = hashlib.sha256(repr((MASK_VERSION, tuple(shape), tuple(round(v, 9) for v in voxel_mm),
+                               _SIGMA_VOXELS)).encode()).hexdigest()[:16]
+    return _cache_dir() / f"void-and-cluster-{key}.npy"
+
+
+def mask_build_estimate(voxel_mm: tuple[float, float, float]) -> float | None:
+    """Estimated seconds :func:`blue_noise_mask` will spend building this voxel's mask, or None
+    when the cache holds it."""
+    if _mask_path(voxel_mm, mask_shape_for_voxel(voxel_mm)).is_file():
+        return None
+    return MASK_BUILD_SECONDS
+
+
 def blue_noise_mask(voxel_mm: tuple[float, float, float],
                     shape_zyx: tuple[int, int, int] | None = None) -> np.ndarray:
     """Threshold mask (nz, ny, nx) float32 with values (rank + 0.5) / N, cached on disk."""
     shape = shape_zyx or mask_shape_for_voxel(voxel_mm)
-    key = hashlib.sha256(repr((MASK_VERSION, tuple(shape), tuple(round(v, 9) for v in voxel_mm),
-                               _SIGMA_VOXELS)).encode()).hexdigest()[:16]
-    path = _cache_dir() / f"void-and-cluster-{key}.npy"
+    path = _mask_path(voxel_mm, tuple(shape))
     try:
         m = np.load(path)
         if m.shape == tuple(shape) and m.dtype == np.float32:
@@ -270,13 +294,66 @@ def pick_label(c, t, order, bg_label):
     return bg_label  # all-zero concentrations cannot come from the tables; be safe
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _tile_shift(seed, tx, ty, tz):
+    # 63 bits of the tile's hash, independent of _uniform's (other salt).
+    key = (np.uint64(tx) & np.uint64(0x1FFFFF)) | ((np.uint64(ty) & np.uint64(0x1FFFFF))
+                                                   << np.uint64(21)) \
+        | ((np.uint64(tz) & np.uint64(0x1FFFFF)) << np.uint64(42))
+    return _mix64(key + _mix64(seed + np.uint64(0xD1B54A32D192ED03)))
+
+
 @njit(cache=True, nogil=True)
-def mask_columns(x0, nx, ox, mx):
-    """Mask x index of each of ``nx`` voxels from ``x0`` (one modulo per column, not voxel)."""
-    xs = np.empty(nx, np.int64)
+def tile_layout(x0, nx, y0, ny, z, ox, oy, oz, mz, my, mx, seed):
+    """Where each voxel of layer ``z`` (columns ``x0 ..``, rows ``y0 ..``) reads the mask.
+
+    The mask tiles the job with its seed offset (``ox, oy, oz``); tile (Tx, Ty, Tz) reads it
+    toroidally shifted by (sx, sy, sz), a hash of (seed, Tx, Ty, Tz). Returns ``cols`` (2, nx):
+    per column its x inside its tile and its tile's index from the first; ``rows`` (2, ny) the
+    same for rows; ``tiles`` (nty, ntx, 3): per tile of the layer the mask plane it reads
+    (``(z + oz + sz) mod mz``), sy and sx. :func:`fg_threshold` combines them.
+    """
+    cols = np.empty((2, nx), np.int64)
+    rows = np.empty((2, ny), np.int64)
+    tx0 = (x0 + ox) // mx
+    ty0 = (y0 + oy) // my
     for i in range(nx):
-        xs[i] = (x0 + i + ox) % mx
-    return xs
+        a = x0 + i + ox
+        cols[0, i] = a % mx
+        cols[1, i] = a // mx - tx0
+    for j in range(ny):
+        a = y0 + j + oy
+        rows[0, j] = a % my
+        rows[1, j] = a // my - ty0
+    ntx = (x0 + nx - 1 + ox) // mx - tx0 + 1 if nx > 0 else 0
+    nty = (y0 + ny - 1 + oy) // my - ty0 + 1 if ny > 0 else 0
+    zz = z + oz
+    tz = zz // mz
+    tiles = np.empty((max(nty, 1), max(ntx, 1), 3), np.int64)
+    for b in range(nty):
+        for a in range(ntx):
+            h = _tile_shift(seed, tx0 + a, ty0 + b, tz)
+            tiles[b, a, 0] = (zz % mz + np.int64(h % np.uint64(mz))) % mz
+            tiles[b, a, 1] = np.int64((h >> np.uint64(21)) % np.uint64(my))
+            tiles[b, a, 2] = np.int64((h >> np.uint64(42)) % np.uint64(mx))
+    return cols, rows, tiles
+
+
+@njit(cache=True, nogil=True, inline="always")
+def fg_threshold(method, mask, tiles, cols, rows, seed, i, j, x, y, z):
+    """Threshold of the voxel in column ``i``, row ``j`` at position (x, y, z): the blue-noise
+    mask's (method 0; read through :func:`tile_layout`'s ``tiles, cols, rows``: the tile's
+    shifted mask) or the position hash's (1)."""
+    if method == 0:
+        my = mask.shape[1]
+        mx = mask.shape[2]
+        t = tiles[rows[1, j], cols[1, i]]
+        yy = rows[0, j] + t[1]
+        yy -= my if yy >= my else 0
+        xx = cols[0, i] + t[2]
+        xx -= mx if xx >= mx else 0
+        return np.float64(mask[t[0], yy, xx])
+    return _uniform(seed, x, y, z)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -348,29 +425,17 @@ def label_rows(C, tt, m, order, bg_label, lab):
         lab[k] = r
 
 
-@njit(cache=True, nogil=True, inline="always")
-def fg_threshold(method, mrow, xs, seed, i, x, y, z):
-    """Threshold of the voxel in column ``i`` at position (x, y, z): the blue-noise mask's
-    (method 0; ``mrow`` the mask row of the voxel's row, ``xs[i]`` its column there) or the
-    position hash's (1)."""
-    if method == 0:
-        return np.float64(mrow[xs[i]])
-    return _uniform(seed, x, y, z)
-
-
 @njit(cache=True, nogil=True, error_model="numpy")
 def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy, oz, seed,
                     order, x0, y0, out, counts, conc_sums):
     ny, nx = out.shape
     mz, my, mx = mask.shape
-    mzz = (z + oz) % mz
-    xs = mask_columns(x0, nx, ox, mx)
+    cols, rows, tiles = tile_layout(x0, nx, y0, ny, z, ox, oy, oz, mz, my, mx, seed)
     idx = np.empty(nx, np.int64)
     C = np.empty((6, nx), np.float32)
     tt = np.empty(nx)
     lab = np.empty(nx, np.uint8)
     for j in range(ny):
-        mrow = mask[mzz, (y0 + j + oy) % my]
         m = 0
         for i in range(nx):
             idx[m] = i
@@ -379,7 +444,7 @@ def _halftone_layer(conc, density, threshold, bg_label, z, method, mask, ox, oy,
             i = idx[k]
             for q in range(6):
                 C[q, k] = conc[j * nx + i, q]
-            tt[k] = fg_threshold(method, mrow, xs, seed, i, x0 + i, y0 + j, z)
+            tt[k] = fg_threshold(method, mask, tiles, cols, rows, seed, i, j, x0 + i, y0 + j, z)
         label_rows(C, tt, m, order, bg_label, lab)
         row = out[j]
         for i in range(nx):
@@ -471,7 +536,7 @@ class Halftoner:
             d.update(mask="void-and-cluster", mask_shape_zyx=list(self.mask.shape),
                      mask_version=MASK_VERSION,
                      mask_sha256=hashlib.sha256(self.mask.tobytes()).hexdigest()[:16],
-                     mask_sigma_voxels=_SIGMA_VOXELS)
+                     mask_sigma_voxels=_SIGMA_VOXELS, tiling=TILING)
         else:
             d.update(generator="splitmix64(seed, x, y, z)")
         d["ink_order"] = [INKS[i] for i in self.order]

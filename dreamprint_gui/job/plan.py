@@ -4,9 +4,11 @@ Defines
 -------
 - :class:`ConvertSettings`: everything ``dreamprint convert`` takes.
 - :class:`ConvertProgress`: what the conversion yields (layers done/total, voxels, elapsed, ETA).
-- :class:`JobContext` and :func:`prepare_job`: resolve settings into the source, the printer
-  grid, the colour tables (paper section 4.1-4.2), the halftoner and the printer; refuse a job
-  larger than the tray before any work.
+- :class:`JobContext` and :func:`prepare_job`: resolve settings into the source (turned by
+  ``--up`` / ``--rotate`` or its known convention, :mod:`..io.volumes.orient`), the printer
+  grid (over the occupied or the declared bounds, ``--fit``; :func:`fitted_bounds`), the colour
+  tables (paper section 4.1-4.2), the halftoner and the printer; refuse a job larger than the
+  tray before any work.
 - :func:`_slabs`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan), and
   :func:`_scheduler_kind`: which Dask scheduler runs them (:mod:`.run`).
 """
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -27,14 +30,22 @@ from dreamprint_gui.gamut import get_tables
 from dreamprint_gui.gamut.alignment import kernel_table
 from dreamprint_gui.gamut.mapping import canonical_intent
 from dreamprint_gui.gamut.optimise import canonical_objective
+from dreamprint_gui.gamut.tables import build_estimate, resolve_choice
 from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.io.volumes.orient import (
+    FIT_MODES,
+    choose_orientation,
+    occupied_bounds,
+    orient_source,
+)
 from dreamprint_gui.io.volumes.registry import reader_options
 from dreamprint_gui.job.content import CONTENT_MODES, apply_content
-from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner
+from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
 from dreamprint_gui.physics.density import scalar_sigma
 
-__all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "JobCancelled",
-           "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings"]
+__all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
+           "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
+           "fitted_bounds"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 
@@ -66,6 +77,9 @@ class ConvertSettings:
     source_options: dict[str, Any] = field(default_factory=dict)
     content: str = "auto"                 # "fog" | "solid" | "auto" (job.content)
     sampling: str | None = None           # None: the reader's default; "nearest" | "linear"
+    up: str | None = None                 # source axis that becomes +z; None: auto (orient)
+    rotate: int = 0                       # degrees about the print's z (quarter turns)
+    fit: str = "occupied"                 # "occupied" (non-empty bounds) | "box" (declared)
 
 
 @dataclass(frozen=True)
@@ -116,10 +130,31 @@ def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
     return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
-def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None):
+def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None,
+                notify: Callable[[str], None] | None = None):
+    """The profile at the printer's layer and its tables; a first-use build is announced with
+    its estimated time and its progress through ``notify``."""
 
     profile = load_profile(profile_spec).with_settings(layer_thickness_mm=layer_mm)
-    return profile, get_tables(profile, objective=objective, size=size, intent=intent)
+    progress = None
+    est = build_estimate(profile, objective, size, intent) if notify is not None else None
+    if est is not None:
+        obj, how = resolve_choice(profile, objective, intent)
+        notify(f"building colour tables ({obj}, {how}, {size}^3) for this profile and "
+               f"{layer_mm * 1000:g} um layers: first use, about {_seconds(est)}; cached after")
+        last = [-1]
+
+        def progress(f: float) -> None:
+            if int(10 * f) != last[0]:
+                last[0] = int(10 * f)
+                notify(f"building colour tables: {int(100 * f):3d} %")
+
+    return profile, get_tables(profile, objective=objective, size=size, intent=intent,
+                               progress=progress)
+
+
+def _seconds(s: float) -> str:
+    return f"{s:.0f} s" if s < 90 else f"{s / 60:.1f} min"
 
 
 @dataclass
@@ -140,6 +175,21 @@ class JobContext:
     # the source file's size and mtime when the job was planned (:func:`_stamp`): part of a
     # worker's cache key, so a long-lived worker reopens a source edited since its last job
     source_stamp: tuple = ()
+    orientation: Any = None  # io.volumes.orient.Orientation (resolved: never "auto")
+    fit: dict = field(default_factory=dict)  # placement_json()'s "fit"
+
+    @property
+    def fit_bounds(self):
+        """The bounds the grid covers: the occupied ones (``--fit occupied``), or None for the
+        source's declared box."""
+        return self.fit.get("bounds") if self.fit.get("mode") == "occupied" else None
+
+    def placement_json(self) -> dict[str, Any]:
+        """The orientation and fit of the job (manifest ``placement``, pre-flight)."""
+        o = self.orientation
+        return {"orientation": o.to_json() if o is not None else None,
+                "orientation_text": o.describe() if o is not None else "up = source z",
+                "fit": dict(self.fit), "object_size_mm": list(self.grid.size_mm)}
 
     @property
     def shape_xyz(self) -> tuple[int, int, int]:
@@ -169,14 +219,17 @@ class JobContext:
         if self.source is not None and self.tables is not None:
             return self.source, self.tables
         s = self.settings
+        o = self.orientation
         key = (s.source, self.source_stamp, repr(sorted(s.source_options.items())),
                str(s.profile), self.printer.layer_thickness_mm, s.objective, s.table_size,
-               s.content, s.sampling, s.intent)
+               s.content, s.sampling, s.intent, None if o is None else (o.up, o.rotate))
         with _WORKER_LOCK:
             if key not in _WORKER_CACHE:
 
                 mode = self.content.mode if self.content is not None else "fog"
                 src = _open_source(s.source, s.source_options, s.content, s.sampling)
+                if self.orientation is not None:
+                    src = orient_source(src, self.orientation)
                 src, _ = apply_content(src, mode, self.halftoner.threshold)
                 _, tables = _tables_for(s.profile, self.printer.layer_thickness_mm,
                                         s.objective, s.table_size, s.intent)
@@ -205,15 +258,32 @@ def _clear_sigma(profile) -> float:
                               profile.density_samples))
 
 
-def prepare_job(settings: ConvertSettings) -> JobContext:
-    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables."""
+def fitted_bounds(source, fit: str) -> tuple[Any, dict[str, Any]]:
+    """The bounds a job's grid covers for ``--fit`` (``occupied``: the source's non-empty
+    bounds, :func:`..io.volumes.orient.occupied_bounds`; ``box``: its declared bounds) and
+    the manifest's ``fit`` record (mode, both boxes in print-frame source units, and what
+    happened when nothing is occupied)."""
+    declared = [list(source.bounds[0]), list(source.bounds[1])]
+    if fit == "box":
+        return None, {"mode": "box", "bounds": declared, "declared_bounds": declared}
+    occ = occupied_bounds(source)
+    if occ is None:
+        return None, {"mode": "box", "requested": "occupied", "bounds": declared,
+                      "declared_bounds": declared,
+                      "note": "nothing occupied: the file's declared box is used"}
+    return occ, {"mode": "occupied", "bounds": [list(occ[0]), list(occ[1])],
+                 "declared_bounds": declared}
 
+
+def check_settings(settings: ConvertSettings) -> None:
+    """The checks of a job's settings that need no file: a bad or missing choice (a missing
+    --height-mm / --size-mm included) is reported before the source is opened or any message
+    says it is being opened."""
     s = settings
     if s.halftone not in HALFTONE_METHODS:
         raise DreamPrintError(f"unknown halftoning '{s.halftone}' "
                               f"(use {' or '.join(HALFTONE_METHODS)})")
     if s.objective is not None or s.intent is not None:
-
         try:
             canonical_objective(s.objective, "cielab")
             canonical_intent(s.intent)
@@ -229,29 +299,87 @@ def prepare_job(settings: ConvertSettings) -> JobContext:
         raise DreamPrintError(f"--workers must be at least 1, got {s.workers}")
     if s.content not in CONTENT_MODES:
         raise DreamPrintError(f"--content must be fog, solid or auto, not '{s.content}'")
+    if s.fit not in FIT_MODES:
+        raise DreamPrintError(f"--fit must be occupied or box, not '{s.fit}'")
+
+
+# Seconds numba takes to compile, on the 2-core development machine (bench_preflight --samples
+# after a source change: 16-38 s under load 15): the job's kernels, and a reader's own.
+COMPILE_SECONDS = 30.0
+COMPILE_READER_SECONDS = 15.0
+
+
+def _compile_notices(source) -> list[str]:
+    """Announcements of the kernels numba has not compiled yet (its cache folder holds none of
+    the job kernels', or of the source reader module's): the first run after an install or
+    upgrade, or of a source kind. Judged from the cache's index files (``*.nbi``)."""
+    import sys
+    from pathlib import Path
+
+    from numba.core.dispatcher import Dispatcher
+
+    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or "")
+    if not os.environ.get("NUMBA_CACHE_DIR"):
+        return []
+    out = []
+    if not any(folder.glob("*/layer_kernel.*.nbi")):
+        out.append("compiling the conversion kernels: first run after an install or upgrade, "
+                   f"about {_seconds(COMPILE_SECONDS)}; cached after")
+    module = sys.modules.get(type(source).__module__)
+    name = type(source).__module__.rsplit(".", 1)[-1]
+    if module is not None and any(isinstance(v, Dispatcher) for v in vars(module).values()) \
+            and not any(folder.glob(f"*/{name}.*.nbi")):
+        out.append(f"compiling the {name} reader's kernels: first use of this source kind, "
+                   f"about {_seconds(COMPILE_READER_SECONDS)}; cached after")
+    return out
+
+
+def prepare_job(settings: ConvertSettings,
+                notify: Callable[[str], None] | None = None) -> JobContext:
+    """Open the source, lay out the grid, refuse a job larger than the tray, build the tables.
+
+    ``notify(message)`` is told of each first-use build (compiled kernels, colour tables,
+    blue-noise mask) before it starts, with its estimated time, and of the tables' progress."""
+    s = settings
+    check_settings(s)
     printer = load_printer(s.printer)
     source = _open_source(s.source, s.source_options, s.content, s.sampling)
+    if notify is not None:
+        for msg in _compile_notices(source):
+            notify(msg)
+    orientation = choose_orientation(source, s.up, s.rotate)
+    source = orient_source(source, orientation)
+    bounds, fit = fitted_bounds(source, s.fit)
     grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
-                           size_mm=tuple(s.size_mm) if s.size_mm is not None else None)
+                           size_mm=tuple(s.size_mm) if s.size_mm is not None else None,
+                           bounds=bounds)
     shape = tuple(int(v) for v in grid.shape_xyz)
     if min(shape) < 1:
         raise DreamPrintError(f"the job would have no voxels (grid {shape[0]} x {shape[1]} x "
                               f"{shape[2]}); choose a larger size")
     check_tray(shape, printer)  # before any expensive work
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
-                                  s.table_size, s.intent)
+                                  s.table_size, s.intent, notify)
     sigma_clear = getattr(tables, "sigma_clear", None)
     if sigma_clear is None:
         sigma_clear = _clear_sigma(profile)
     thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
     bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
+    if notify is not None and s.halftone == "blue-noise":
+        est = mask_build_estimate(printer.voxel_mm)
+        if est is not None:
+            vx, vy, vz = (1000 * v for v in printer.voxel_mm)
+            notify(f"building the blue-noise mask for {vx:g} x {vy:g} x {vz:g} um voxels: "
+                   f"first use, about {_seconds(est)}; cached after")
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
     source, content = apply_content(source, s.content, thr)
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
                      palette=printer.palette(), profile_name=profile.name,
                      profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
-                     content=content, source_stamp=_stamp(s.source))
+                     content=content, source_stamp=_stamp(s.source), orientation=orientation,
+                     fit=fit)
     return ctx
+
 
 # ----------------------------------------------------------------------------- scheduling
 def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:

@@ -24,12 +24,18 @@ How each figure is estimated
   interpolated in the table like the kernel does).
 - Out of gamut: the tables' per-node dE2000 (reproduction vs target) at the nearest node of
   each sampled printed voxel's colour; out of gamut means dE2000 > ``IN_GAMUT_DE2000``.
-- Disk: up to 16 full layers (evenly spaced, at most ~8e6 voxels) labelled and PNG-encoded
-  exactly as the job does; their mean size times the layer count, plus the manifest.
-- Time of the conversion (after the preparation): voxels / rate. The rate is the median
-  ``voxels_per_second`` of the last jobs this machine ran (:func:`measured_rate`), or, before
-  any, :data:`BENCHMARK_RATE` (docs/print-jobs.md, ``benchmarks/bench_convert.py``); the
-  summary says which.
+- Disk and time: up to 16 full layers (evenly spaced, at most ~8e6 voxels) sampled, labelled
+  and PNG-encoded exactly as the job's slabs are; their mean size times the layer count, plus
+  the manifest; their time per voxel (the first layer's left out: it warms the caches) times
+  the job's voxels, shared by the workers at :data:`PARALLEL_EFFICIENCY`, plus
+  :data:`CONVERT_OVERHEAD_S`. Timing the job's own source and kernels makes the estimate
+  follow the source kind (a splat scene's sampling costs ~10x a dense grid's per voxel), the
+  printer's grid and the machine; first-use builds (colour tables, blue-noise mask) happen in
+  the preparation, before the pre-flight, and are announced there with their own estimate
+  (:func:`...job.plan.prepare_job`).
+- :func:`record_rate` keeps the finished jobs' rates (``rates.json``) for the record; the
+  estimate no longer uses them (they mixed source kinds and sizes: one rate for all misjudged
+  a splat scene 12-fold).
 """
 
 from __future__ import annotations
@@ -44,13 +50,17 @@ from typing import Any
 
 import numpy as np
 
-from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.core.profile import INKS, load_profile
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
-from dreamprint_gui.gamut.tables import F_GREY, F_SIGMA
+from dreamprint_gui.gamut.forward import forward_model, mixtures_lab
+from dreamprint_gui.gamut.mapping import intent_map
+from dreamprint_gui.gamut.optimise import srgb_to_xyz
+from dreamprint_gui.gamut.tables import F_CONC, F_GREY, F_SIGMA
 from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
 from dreamprint_gui.job.plan import ConvertSettings, JobContext, prepare_job
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
 from dreamprint_gui.job.slab import _oriented, _slab_into
+from dreamprint_gui.physics.colorimetry import delta_E2000
 
 __all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measured_rate",
            "BENCHMARK_RATE", "MOSTLY_CLEAR", "OUT_OF_GAMUT_WARN"]
@@ -100,6 +110,14 @@ class Preflight:
     background: str
     warnings: list[PreflightWarning] = field(default_factory=list)
     estimate_seconds: float = 0.0             # what this pre-flight took
+    placement: dict[str, Any] = field(default_factory=dict)  # orientation, fit, object size
+    printed_fraction: float = 0.0             # of the job, at or above the background threshold
+    clamped_printed_fraction: float = 0.0     # of the printed voxels, clamped high
+    # at safe_density_scale, the share of the printed voxels that would fall to the background
+    lost_at_safe_scale: float | None = None
+    # no clamping: the largest --density-scale that still clamps none of the sampled voxels
+    max_unclamped_density_scale: float | None = None
+    intent: str = "colorimetric"              # the rendering intent gamut is measured against
 
     @property
     def ink_fraction(self) -> float:
@@ -122,6 +140,7 @@ class Preflight:
             f"job: {nx} x {ny} x {nz} voxels ({sx:.2f} x {sy:.2f} x {sz:.2f} mm), "
             f"{nz:,} slices, {self.total_voxels:,} voxels",
             f"content: {self.content.get('mode')} ({self.content.get('reason')})",
+            *_placement_lines(self.placement),
             f"materials (estimated from {self.sampled_voxels:,} voxels): {fr}",
             f"disk: about {_human_bytes(self.disk_bytes)}; conversion: "
             f"{_about_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
@@ -145,8 +164,14 @@ class Preflight:
             "seconds_estimate": self.seconds,
             "rate_voxels_per_second": self.rate_voxels_per_s, "rate_source": self.rate_source,
             "content": dict(self.content), "background": self.background,
+            "placement": dict(self.placement),
             "warnings": [w.to_json() for w in self.warnings],
             "estimate_seconds": self.estimate_seconds,
+            "printed_fraction": self.printed_fraction,
+            "clamped_printed_fraction": self.clamped_printed_fraction,
+            "printed_lost_at_safe_scale": self.lost_at_safe_scale,
+            "max_unclamped_density_scale": self.max_unclamped_density_scale,
+            "intent": self.intent,
         }
 
 
@@ -234,9 +259,27 @@ def _sub_grid(grid, strides, offsets, counts):
     return replace(grid, shape_xyz=tuple(counts), voxel_mm=vox, origin=origin)
 
 
-def _node_fields(tables, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _intent_de(ctx, tables, near: np.ndarray) -> np.ndarray:
+    """dE2000 between what each of the nodes ``near`` (N, 3) prints and its target under the
+    tables' rendering intent (the node's colour mapped by the intent: white onto the printable
+    white for ``relative``, SGCK for ``perceptual``); each distinct node is computed once."""
+    import colour
+
+    profile = load_profile(ctx.settings.profile).with_settings(
+        layer_thickness_mm=ctx.printer.layer_thickness_mm)
+    model = forward_model(profile)
+    nodes, inverse = np.unique(near, axis=0, return_inverse=True)
+    n = tables.packed.shape[0]
+    conc = np.asarray(tables.packed[nodes[:, 0], nodes[:, 1], nodes[:, 2], F_CONC], np.float64)
+    target = intent_map(model, tables.intent).map_xyz(srgb_to_xyz(model, nodes / (n - 1)))
+    target_lab = colour.XYZ_to_Lab(target, illuminant=colour.XYZ_to_xy(model.white))
+    return delta_E2000(mixtures_lab(model, conc), target_lab)[inverse.reshape(-1)]
+
+
+def _node_fields(tables, rgb: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndarray]:
     """(reachable density 1/mm with 10 % grey, trilinear as the kernel; dE2000 of the nearest
-    node) of encoded sRGB ``rgb`` (N, 3)."""
+    node to its target under the tables' intent: the source colour for ``colorimetric``) of
+    encoded sRGB ``rgb`` (N, 3)."""
 
     p = tables.packed
     n = p.shape[0]
@@ -256,25 +299,44 @@ def _node_fields(tables, rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # as align_rows: the grey raises the density up to sg, unless it is no denser than s0
     reach = np.maximum(s0, sg)
     near = np.rint(c).astype(np.int64)
+    if ctx is not None and getattr(tables, "intent", "colorimetric") != "colorimetric":
+        return reach, _intent_de(ctx, tables, near)
     de = np.asarray(tables.dE2000)[near[:, 0], near[:, 1], near[:, 2]].astype(np.float64)
     return reach, de
 
 
-def _disk_estimate(ctx, nz: int) -> int:
-    """Mean PNG size of up to 16 evenly spaced full layers (at most ~8e6 voxels in all),
-    labelled and encoded as the job does, times nz."""
+def _layer_estimate(ctx, nz: int) -> tuple[int, float, int]:
+    """(bytes of the job's slices, seconds per voxel on one worker, layers timed): up to 16
+    evenly spaced full layers (at most ~8e6 voxels in all) sampled, labelled and PNG-encoded as
+    the job's slabs do, their mean size times nz, and their time per voxel (without the first
+    layer's when there are several: it warms the source's and the kernels' caches)."""
 
     nx, ny, _ = ctx.shape_xyz
     n_layers = max(1, min(16, nz, 8_000_000 // max(1, nx * ny)))  # ~8e6 voxels at most
     zs = sorted({int(round(v)) for v in np.linspace(0, nz - 1, n_layers + 2)[1:-1]} or {0})
     total = 0
-    for z in zs:
+    timed = 0.0
+    for i, z in enumerate(zs):
+        t0 = time.perf_counter()
         labels = np.empty((1, ny, nx), np.uint8)
         _slab_into(ctx, ctx.grid, z, z + 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
                    np.zeros(4))
         total += len(encode_labels_pngs(_oriented(ctx, labels), ctx.palette,
                                         ctx.printer.png_mode)[0])
-    return int(total / len(zs) * nz) + 16_384  # + the manifest
+        if i > 0 or len(zs) == 1:
+            timed += time.perf_counter() - t0
+    n_timed = max(1, len(zs) - 1)
+    spv = timed / (n_timed * nx * ny)
+    return int(total / len(zs) * nz) + 16_384, spv, n_timed  # + the manifest
+
+
+# Share of the workers' time that is useful work when a job's slabs run on every core (slab
+# scheduling, the writer thread, the source's hash; the cores' shared memory bandwidth):
+# measured by benchmarks/bench_preflight.py on the sample files (2 cores).
+PARALLEL_EFFICIENCY = 0.75
+# Fixed cost of a conversion besides its slabs: the scheduler's start, the manifest (a 4.5e6-voxel
+# job converted in 0.06 s, bench_preflight --samples --cold).
+CONVERT_OVERHEAD_S = 0.05
 
 
 def _context(source, grid, profile, *, density_scale, content, background, printer,
@@ -349,17 +411,30 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
     fg = (dens >= ctx.halftoner.threshold).reshape(-1)
     frgb = rgb.reshape(-1, 3)[fg]
     ftarget = dens.reshape(-1)[fg].astype(np.float64)
-    reach, de = _node_fields(tables, frgb) if fg.any() else (np.zeros(0), np.zeros(0))
+    reach, de = _node_fields(tables, frgb, ctx) if fg.any() else (np.zeros(0), np.zeros(0))
     clamped_frac = float(stats[1]) / n
-    safe = None
+    printed = int(fg.sum())
+    fog = ctx.content is None or ctx.content.mode == "fog"
+    safe = lost = up = None
     if stats[1] > 0 and s.density_scale > 0:
         over = ftarget > reach
         if over.any():
-            safe = float(s.density_scale * np.min(reach[over] / ftarget[over]))
+            f_safe = float(np.min(reach[over] / ftarget[over]))
+            safe = float(s.density_scale * f_safe)
+            # what the safe scale costs: printed voxels it would thin below the background
+            lost = float(np.mean(ftarget * f_safe < ctx.halftoner.threshold))
+    elif fog and printed and s.density_scale > 0:
+        pos = ftarget > 0
+        if pos.any():
+            up = float(s.density_scale * np.min(reach[pos] / ftarget[pos]))
     oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
     worst = float(de.max()) if len(de) else 0.0
-    rate, rate_source = measured_rate()
-    disk = _disk_estimate(ctx, nz)
+    disk, spv, n_timed = _layer_estimate(ctx, nz)
+    workers = max(1, min(int(s.workers or os.cpu_count() or 1), nz))
+    seconds = CONVERT_OVERHEAD_S + spv * total / (workers * PARALLEL_EFFICIENCY)
+    rate = total / seconds
+    rate_source = (f"timed on {n_timed} full layer{'s' if n_timed > 1 else ''} of this job, "
+                   f"{workers} worker{'s' if workers > 1 else ''}")
     content_json = (ctx.content.to_json() if ctx.content is not None
                     else {"mode": "fog", "requested": s.content, "reason": ""})
     vx, vy, vz = ctx.printer.voxel_mm
@@ -368,44 +443,120 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
         total_voxels=total, disk_bytes=disk, fractions=fractions, sampled_voxels=n,
         clamped_fraction=clamped_frac, clamped_voxels=int(round(clamped_frac * total)),
         safe_density_scale=safe, out_of_gamut_fraction=oog, worst_dE2000=worst,
-        seconds=total / rate, rate_voxels_per_s=rate, rate_source=rate_source,
-        content=content_json, density_scale=s.density_scale, background=s.background)
+        seconds=seconds, rate_voxels_per_s=rate, rate_source=rate_source,
+        content=content_json, density_scale=s.density_scale, background=s.background,
+        printed_fraction=printed / n,
+        clamped_printed_fraction=float(stats[1]) / printed if printed else 0.0,
+        lost_at_safe_scale=lost, max_unclamped_density_scale=up,
+        intent=getattr(tables, "intent", "colorimetric"),
+        placement=ctx.placement_json())
     pf.warnings = _warnings(pf)
     pf.estimate_seconds = time.perf_counter() - t0
     return pf
 
 
+def _placement_lines(place: dict) -> list[str]:
+    """``orientation: ...`` and ``size: ...`` of a job's placement (``JobContext.placement_json``)
+    : how it stands and what the printed object measures."""
+    if not place:
+        return []
+    fit = place.get("fit") or {}
+    size = " x ".join(f"{v:.2f}" for v in place.get("object_size_mm", ()))
+    what = ("the object's occupied bounds, empty margins cropped" if fit.get("mode") ==
+            "occupied" else "the file's declared box" + (f" ({fit['note']})"
+                                                         if fit.get("note") else ""))
+    return [f"orientation: {place.get('orientation_text', '')}",
+            f"printed object: {size} mm (x, y, z; --fit {fit.get('mode', 'box')}: {what})"]
+
+
+# A lower --density-scale is suggested against clamping only when it keeps the content's look:
+# at most this share of the printed voxels may fall to the background at the suggested scale,
+# and at most this share of them may be clamped now (more means the object is meant dense).
+KEEP_PRINTED = 0.05
+SUGGEST_BELOW_CLAMPED = 0.10
+
+
 def _warnings(pf: Preflight) -> list[PreflightWarning]:
+    """The warnings of a pre-flight, made together so that they never contradict each other:
+
+    - mostly Clear with clamped cores: only ``--content solid`` is suggested (a lower scale would
+      thin the haze further, a higher one clamp more), and the clamp warning then suggests no
+      scale;
+    - clamping: a scale that avoids it is suggested only if it keeps the content's look (at most
+      :data:`KEEP_PRINTED` of the printed voxels fall to the background, fewer than
+      :data:`SUGGEST_BELOW_CLAMPED` clamped now); otherwise the warning says why the scale is
+      kept (a dense object prints at the inks' densest) and what a lower one would do;
+    - a solid job gets no density-scale advice (its density is not the source's);
+    - a faint fog without clamping is told how far the scale can rise without clamping.
+    """
     out = []
+    fog = pf.content.get("mode", "fog") == "fog"
     clear = pf.fractions.get("Cl", 0.0) + pf.fractions.get("empty", 0.0)
-    if clear > MOSTLY_CLEAR:
-        if pf.content.get("mode") != "fog":
+    mostly_clear = clear > MOSTLY_CLEAR
+    clamped = pf.clamped_voxels > 0
+    if mostly_clear:
+        if not fog:
             hint = "little of the grid is occupied: check the source and its bounds"
-        elif pf.clamped_voxels > 0:  # a larger scale would clamp more: only solid helps
-            hint = "the source prints as a faint haze around clamped cores: try --content solid"
+        elif clamped:  # a lower scale thins the haze, a larger one clamps more: only solid helps
+            hint = ("the source prints as a faint haze around cores denser than the inks: "
+                    "try --content solid")
         else:
-            hint = ("the source prints as a faint haze: try --content solid, or a larger "
-                    "--density-scale")
+            up = pf.max_unclamped_density_scale
+            if up is not None and up > 1.5 * pf.density_scale:
+                hint = (f"the source prints as a faint haze: try --content solid, or a larger "
+                        f"--density-scale (up to {up:.3g} clamps none of the sampled voxels)")
+            else:
+                hint = "the source prints as a faint haze: try --content solid"
+        nums = {"clear_or_empty_fraction": clear, "ink_fraction": pf.ink_fraction}
+        if fog and not clamped and pf.max_unclamped_density_scale is not None:
+            nums["max_unclamped_density_scale"] = pf.max_unclamped_density_scale
         out.append(PreflightWarning(
             "mostly-clear", f"the job would be {100 * clear:.1f} % Clear or empty "
-            f"(ink {100 * pf.ink_fraction:.2f} %): {hint}",
-            {"clear_or_empty_fraction": clear, "ink_fraction": pf.ink_fraction}))
-    if pf.clamped_voxels > 0:
-        msg = (f"about {pf.clamped_voxels:,} voxels ({100 * pf.clamped_fraction:.2f} %) are "
-               "denser than the inks can print and will be clamped")
+            f"(ink {100 * pf.ink_fraction:.2f} %): {hint}", nums))
+    if clamped:
+        msg = (f"about {pf.clamped_voxels:,} voxels ({100 * pf.clamped_fraction:.2f} % of the job, "
+               f"{100 * pf.clamped_printed_fraction:.1f} % of the printed voxels) are denser "
+               "than the inks can print and will print at the inks' densest")
         nums = {"clamped_voxels": pf.clamped_voxels, "clamped_fraction": pf.clamped_fraction,
+                "clamped_printed_fraction": pf.clamped_printed_fraction,
                 "density_scale": pf.density_scale}
-        if pf.safe_density_scale is not None:
-            msg += (f"; --density-scale {pf.safe_density_scale:.3g} or less avoids it in the "
-                    "sampled voxels (the densest voxels may be unsampled: a little less is safer)")
-            nums["density_scale_without_clamping"] = pf.safe_density_scale
+        safe, lost = pf.safe_density_scale, pf.lost_at_safe_scale
+        if safe is not None:
+            nums["density_scale_without_clamping"] = safe
+        if lost is not None:
+            nums["printed_lost_at_that_scale"] = lost
+        if not fog:
+            pass  # a solid's density is not the source's: no scale to suggest
+        elif mostly_clear:
+            msg += " (see the Clear warning: --content solid, not a lower scale)"
+        elif safe is not None and lost is not None and lost <= KEEP_PRINTED \
+                and pf.clamped_printed_fraction < SUGGEST_BELOW_CLAMPED:
+            msg += (f"; --density-scale {safe:.3g} or less avoids it in the sampled voxels (the "
+                    "densest voxels may be unsampled: a little less is safer)")
+        elif safe is not None:
+            msg += ("; the dense parts read as solid, so the scale is kept: "
+                    f"--density-scale {safe:.3g} would avoid clamping but thin the whole object "
+                    f"{pf.density_scale / max(safe, 1e-300):.3g}-fold"
+                    + (f" ({100 * lost:.0f} % of its printed voxels would turn to background)"
+                       if lost else "")
+                    + "; --content solid prints it solid on purpose")
         out.append(PreflightWarning("clamped", msg, nums))
     if pf.out_of_gamut_fraction > OUT_OF_GAMUT_WARN:
+        pct = f"{100 * pf.out_of_gamut_fraction:.1f} % of the printed voxels' colours"
+        if pf.intent == "colorimetric":
+            msg = (f"{pct} are outside the printable gamut (worst dE2000 {pf.worst_dE2000:.1f} "
+                   "from the source colour, the colorimetric target; the printable white itself "
+                   "is sRGB about 0.77, 0.81, 0.82): they print as the nearest printable colour; "
+                   "--intent relative maps the source white to the printable white")
+        else:
+            msg = (f"{pct} print more than dE2000 {_in_gamut_de():g} from the {pf.intent} "
+                   f"intent's target (worst {pf.worst_dE2000:.1f})")
         out.append(PreflightWarning(
-            "out-of-gamut", f"{100 * pf.out_of_gamut_fraction:.1f} % of the printed voxels' "
-            f"colours are out of gamut (worst dE2000 {pf.worst_dE2000:.1f}); they print as the "
-            "nearest printable colour",
+            "out-of-gamut", msg,
             {"out_of_gamut_fraction": pf.out_of_gamut_fraction,
              "worst_dE2000": pf.worst_dE2000}))
     return out
 
+
+def _in_gamut_de() -> float:
+    return float(IN_GAMUT_DE2000)

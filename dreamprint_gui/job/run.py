@@ -36,6 +36,7 @@ from dreamprint_gui.job.plan import (
     JobContext,
     _scheduler_kind,
     _slabs,
+    check_settings,
     prepare_job,
 )
 from dreamprint_gui.job.preflight import preflight as estimate
@@ -178,13 +179,15 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
                     "objective": getattr(ctx.tables, "objective", s.objective),
                     "intent": getattr(ctx.tables, "intent", s.intent),
                     "table_size": s.table_size},
+        "placement": ctx.placement_json(),
         "printer": ctx.printer.to_json_dict(),
         "physical_size_mm": [nx * ctx.printer.voxel_mm[0], ny * ctx.printer.voxel_mm[1],
                              nz * ctx.printer.voxel_mm[2]],
         "voxel_mm": list(ctx.printer.voxel_mm),
         "grid_dimensions": [nx, ny, nz],
         "requested_size": {"height_mm": s.height_mm,
-                           "size_mm": None if s.size_mm is None else list(s.size_mm)},
+                           "size_mm": None if s.size_mm is None else list(s.size_mm),
+                           "up": s.up, "rotate_deg": s.rotate, "fit": s.fit},
         "seed": s.seed,
         "halftoning": ctx.halftoner.describe(),
         "background": {"mode": s.background, "density_threshold_per_mm":
@@ -210,6 +213,31 @@ def _slice(z: int, nz: int) -> str:
     return slice_name(z, nz)
 
 
+def _prepare(settings: ConvertSettings, started: float
+             ) -> Generator[ConvertProgress, None, JobContext]:
+    """:func:`.plan.prepare_job` in a thread, its notices (first-use builds and their progress)
+    yielded as "preparing" progress while it runs; returns the context or raises its error."""
+    notices: queue.Queue = queue.Queue()
+    box: dict[str, Any] = {}
+
+    def work() -> None:
+        try:
+            box["ctx"] = prepare_job(settings, notify=notices.put)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the caller's thread
+            box["error"] = exc
+        finally:
+            notices.put(None)
+
+    th = threading.Thread(target=work, name="dreamprint-prepare", daemon=True)
+    th.start()
+    while (msg := notices.get()) is not None:
+        yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None, msg)
+    th.join()
+    if "error" in box:
+        raise box["error"]
+    return box["ctx"]
+
+
 def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,
                    context: JobContext | None = None, preflight: Any = True
                    ) -> Generator[ConvertProgress, None, dict[str, Any]]:
@@ -227,8 +255,13 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     if settings.output is None:
         raise DreamPrintError("no output folder given (-o JOB)")
     check_target(settings.output, settings.overwrite)  # before any work
+    if context is None:
+        check_settings(settings)  # a missing size is reported before "opening the source"
     yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
-    ctx = context if context is not None else prepare_job(settings)
+    if context is not None:
+        ctx = context
+    else:
+        ctx = yield from _prepare(settings, started)
     load_kernels(ctx)  # now, so that the first slab's speed is the conversion's
     pf = None
     t_pf = 0.0

@@ -153,7 +153,8 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
     stats = np.zeros(4)
     seconds = _slab_into(ctx, ctx.grid, z0, z1, labels, counts, sums, stats)
     t2 = time.perf_counter()
-    pngs = encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+    pngs = encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode,
+                              ctx.printer.pixels_per_metre())
     t3 = time.perf_counter()
     # The cancel marker (other processes, cluster workers) is looked for once per slab here,
     # the in-process event at every layer: a stat per slice cost as much as writing it on
@@ -198,6 +199,7 @@ def load_kernels(ctx: JobContext) -> None:
     labels = np.empty((1, 1, 1), np.uint8)
     _slab_into(ctx, one_voxel, 0, 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
                np.zeros(4))
-    encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode)
+    encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode,
+                       ctx.printer.pixels_per_metre())
     if _scheduler_kind(ctx.settings) != "distributed":
         import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s

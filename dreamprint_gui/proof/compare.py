@@ -1,10 +1,17 @@
-"""Source vs print: dE2000 map, mean / 95th-percentile dE2000, PSNR, SSIM, coverage error.
+"""Source vs print: dE2000 map, mean / 95th-percentile dE2000 and S-CIELAB dE2000, PSNR, SSIM,
+coverage error; the noise floor between two renders of the same print.
 
-Defines :func:`compare_view`, :func:`summarise`, :func:`de_heatmap` and
+Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_heatmap` and
 :data:`COVERAGE_THRESHOLD`.
 
 - Colour: both images are XYZ relative to the white environment (D65 white = the observer's
   white), converted to CIELAB with that white; dE2000 by colour-science (CIE 2000).
+- S-CIELAB dE2000 (:mod:`.scielab`): the same two images filtered as the eye sees them at the
+  proof's viewing distance (the print at its real size), then dE2000 per pixel; mean and 95th
+  percentile over the same object pixels.
+- Noise floor (:func:`noise_floor`): the print rendered again with another Mitsuba seed (same
+  labels, medium and cameras); both figures between the two renders over the print's object
+  pixels. A difference between two proofs smaller than a few times the floor is render noise.
 - Object pixels: where either image's coverage exceeds :data:`COVERAGE_THRESHOLD`; mean and
   95th percentile of dE2000 are over those pixels.
 - Coverage: 1 - the direct (unscattered) transmittance of the pixel's rays through the volume:
@@ -21,9 +28,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.physics.colorimetry import Observer, clip_unit, delta_E2000
+from dreamprint_gui.proof.scielab import scielab_de2000
 
-__all__ = ["compare_view", "summarise", "de_heatmap", "to_display", "COVERAGE_THRESHOLD",
-           "DE_MAP_MAX"]
+__all__ = ["compare_view", "noise_floor", "summarise", "summarise_floor", "FLOOR_KEYS",
+           "mark_significance", "SIGNIFICANCE_FACTOR", "de_heatmap", "to_display",
+           "COVERAGE_THRESHOLD", "DE_MAP_MAX"]
 
 COVERAGE_THRESHOLD = 0.05
 DE_MAP_MAX = 20.0
@@ -37,16 +46,25 @@ def to_display(linear_rgb: NDArray) -> NDArray[np.uint8]:
     return np.round(clip_unit(enc) * 255).astype(np.uint8)
 
 
+def _stats(de: NDArray, mask: NDArray, prefix: str) -> dict:
+    n = int(mask.sum())
+    return {f"mean_{prefix}": float(de[mask].mean()) if n else 0.0,
+            f"p95_{prefix}": float(np.percentile(de[mask], 95)) if n else 0.0}
+
+
 def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alpha: NDArray,
-                 observer: Observer, threshold: float = COVERAGE_THRESHOLD
-                 ) -> tuple[dict, NDArray[np.float64]]:
-    """Figures of one view and its dE2000 map (res, res); NaN outside the object."""
+                 observer: Observer, samples_per_degree: float,
+                 threshold: float = COVERAGE_THRESHOLD) -> tuple[dict, NDArray[np.float64]]:
+    """Figures of one view and its dE2000 map (res, res); NaN outside the object.
+
+    ``samples_per_degree``: the pixels per degree of visual angle of the S-CIELAB figures."""
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 
     lab_s = observer.XYZ_to_Lab(np.maximum(src_xyz, 0.0))
     lab_p = observer.XYZ_to_Lab(np.maximum(prn_xyz, 0.0))
     de = delta_E2000(lab_s, lab_p)
+    sde = scielab_de2000(src_xyz, prn_xyz, observer, samples_per_degree)
     mask = (src_alpha > threshold) | (prn_alpha > threshold)
     a = to_display(observer.XYZ_to_linear_sRGB(src_xyz)).astype(np.float64) / 255
     b = to_display(observer.XYZ_to_linear_sRGB(prn_xyz)).astype(np.float64) / 255
@@ -58,6 +76,7 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
         "object_pixels": n,
         "mean_de2000": float(de[mask].mean()) if n else 0.0,
         "p95_de2000": float(np.percentile(de[mask], 95)) if n else 0.0,
+        **_stats(sde, mask, "scielab_de2000"),
         "psnr_db": psnr if np.isfinite(psnr) else 99.0,
         "ssim": ssim,
         "coverage_error": float(cov.mean()) if n else 0.0,
@@ -68,17 +87,64 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     return figures, np.where(mask, de, np.nan)
 
 
+def noise_floor(prn_xyz: NDArray, prn_xyz2: NDArray, prn_alpha: NDArray, observer: Observer,
+                samples_per_degree: float, threshold: float = COVERAGE_THRESHOLD) -> dict:
+    """Per-pixel and S-CIELAB dE2000 (mean, p95) between two renders of the same print, over
+    the print's object pixels (coverage > ``threshold``)."""
+    de = delta_E2000(observer.XYZ_to_Lab(np.maximum(prn_xyz, 0.0)),
+                     observer.XYZ_to_Lab(np.maximum(prn_xyz2, 0.0)))
+    sde = scielab_de2000(prn_xyz, prn_xyz2, observer, samples_per_degree)
+    mask = prn_alpha > threshold
+    return {"object_pixels": int(mask.sum()), **_stats(de, mask, "de2000"),
+            **_stats(sde, mask, "scielab_de2000")}
+
+
+FLOOR_KEYS = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000")
+
+
+def summarise_floor(views: list[dict]) -> dict:
+    """Object-pixel-weighted means of the views' noise floors."""
+    w = np.array([max(v["object_pixels"], 0) for v in views], float)
+    if w.sum() == 0:
+        w = np.ones(len(views))
+    out = {k: float(np.average([v[k] for v in views], weights=w)) for k in FLOOR_KEYS}
+    out["object_pixels"] = int(sum(v["object_pixels"] for v in views))
+    return out
+
+
 def summarise(views: list[dict]) -> dict:
     """Overall figures: object-pixel-weighted means of the per-view figures (p95 as the
     pixel-weighted mean of the views' p95)."""
     w = np.array([max(v["object_pixels"], 0) for v in views], float)
     if w.sum() == 0:
         w = np.ones(len(views))
-    keys = ("mean_de2000", "p95_de2000", "psnr_db", "ssim", "coverage_error",
-            "coverage_abs_error", "source_coverage", "print_coverage")
+    keys = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000",
+            "psnr_db", "ssim", "coverage_error", "coverage_abs_error", "source_coverage",
+            "print_coverage")
     out = {k: float(np.average([v[k] for v in views], weights=w)) for k in keys}
     out["object_pixels"] = int(sum(v["object_pixels"] for v in views))
     return out
+
+
+SIGNIFICANCE_FACTOR = 3.0
+
+
+def mark_significance(rows: list[dict], factor: float = SIGNIFICANCE_FACTOR,
+                      keys: tuple[str, ...] = ("mean_de2000", "mean_scielab_de2000")) -> None:
+    """Add ``row["vs_best"][key] = {"difference", "threshold", "significant"}`` to each row of a
+    methods table: the row's figure minus the best (lowest) row's, against ``factor`` times the
+    larger of the two rows' noise floors (``row["noise_floor"][key]``). A difference at or
+    below the threshold is render noise, not a ranking; without floors ``significant`` is None.
+    """
+    for key in keys:
+        best = min(rows, key=lambda r: r[key])
+        for r in rows:
+            d = r[key] - best[key]
+            floors = [x["noise_floor"][key] for x in (r, best) if x.get("noise_floor")]
+            thr = factor * max(floors) if len(floors) == 2 else None
+            r.setdefault("vs_best", {})[key] = {
+                "difference": d, "threshold": thr,
+                "significant": None if thr is None else bool(d > thr)}
 
 
 def de_heatmap(de: NDArray, vmax: float = DE_MAP_MAX) -> NDArray[np.uint8]:

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import load_profile
 from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.io.volumes.orient import Orientation, orient_source
 from dreamprint_gui.job.encode.png_slices import read_png_labels
 from dreamprint_gui.job.plan import prepare_job
 from dreamprint_gui.job.slab import halftone_layer
@@ -129,9 +130,19 @@ class JobFolderLabels:
             raise DreamPrintError("the job was made with another ink profile than the one "
                                   "found at its recorded path; give --profile", mpath)
         self.source = open_source(src["path"], **(src.get("options") or {}))
+        # the job's placement: its orientation and the bounds its grid covers (--fit)
+        place = m.get("placement") or {}
+        bounds = None
+        if place.get("orientation"):
+            o = place["orientation"]
+            self.source = orient_source(self.source, Orientation(
+                o["up"], int(o["rotate_deg"]), bool(o.get("auto")), o.get("reason", "")))
+        if (place.get("fit") or {}).get("mode") == "occupied":
+            bounds = place["fit"]["bounds"]
         size = req.get("size_mm")
         self.grid = grid_for_source(self.source, self.voxel_mm, height_mm=req.get("height_mm"),
-                                    size_mm=None if size is None else tuple(size))
+                                    size_mm=None if size is None else tuple(size),
+                                    bounds=bounds)
         if tuple(self.grid.shape_xyz) != (nx, ny, nz):
             raise DreamPrintError(f"the manifest's grid {nx} x {ny} x {nz} does not match its "
                                   f"source at the recorded size ({self.grid.shape_xyz})", mpath)

@@ -145,16 +145,17 @@ def block_fractions(layer_labels: Callable[[int], NDArray[np.uint8]],
                        (nx, ny, nz), total)
 
 
-def medium_coefficients(fractions: NDArray, K_bands: NDArray, S_bands: NDArray
-                        ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+def medium_coefficients(fractions: NDArray, K_bands: NDArray, S_bands: NDArray,
+                        g: float = 0.0) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
     """``(sigma_t, albedo)`` (..., n_bands) float32 of cells with label ``fractions`` (..., 7).
 
     ``K_bands``, ``S_bands``: (6, n_bands) per ink (INKS order) in 1/mm. Empty is vacuum.
+    ``g``: the phase function's asymmetry (:func:`.km_to_rte.rte_coefficients`).
     """
     f = np.asarray(fractions, np.float64)[..., :6]
     K = f @ np.asarray(K_bands, np.float64)
     S = f @ np.asarray(S_bands, np.float64)
-    sa, ss = rte_coefficients(K, S)
+    sa, ss = rte_coefficients(K, S, g)
     st = sa + ss
     albedo = np.divide(ss, st, out=np.zeros_like(st), where=st > 0)
     return st.astype(np.float32), albedo.astype(np.float32)

@@ -50,7 +50,8 @@ def _convert_settings(s: Any):
                            height_mm=s.height_mm, size_mm=s.size_mm,
                            density_scale=s.density_scale, halftone=s.halftone, seed=s.seed,
                            background=s.background,
-                           table_size=s.table_size, source_options=dict(s.source_options))
+                           table_size=s.table_size, source_options=dict(s.source_options),
+                           up=s.up, rotate=s.rotate, fit=s.fit)
 
 
 def method_labels(s: Any):

@@ -31,12 +31,21 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.job.halftone import HALFTONE_METHODS
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.proof.cameras import orbit_views
-from dreamprint_gui.proof.compare import compare_view, de_heatmap, summarise, to_display
+from dreamprint_gui.proof.compare import (
+    compare_view,
+    de_heatmap,
+    noise_floor,
+    summarise,
+    summarise_floor,
+    to_display,
+)
 from dreamprint_gui.proof.contact_sheet import contact_sheet
 from dreamprint_gui.proof.labels import JobFolderLabels, is_job_folder
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
 from dreamprint_gui.proof.methods import METHODS, method_labels
-from dreamprint_gui.proof.print_render import render_print
+from dreamprint_gui.proof.optics import resolve_optics
+from dreamprint_gui.proof.print_render import SAMPLERS, hides_direct, render_print_seeds
+from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import optical_depth, render_source, sample_source
 from dreamprint_gui.proof.spectral import spectral_bands
 
@@ -74,9 +83,17 @@ class ProofSettings:
     max_depth: int = 512
     key_light: float = 0.0
     floor: bool = False
+    viewing_distance_mm: float = 500.0   # S-CIELAB: the print seen at its size from here
+    noise_floor: bool = True             # render the print again at seed + 1 (twice the time)
+    sampler: str = "independent"         # Mitsuba's sampler of the print render
+    surface: str | None = None           # none | glossy | matte (None: the profile's, else none)
+    phase: str | None = None             # isotropic | hg:G (None: the profile's, else isotropic)
     overwrite: bool = False
     table_size: int = 100
     source_options: tuple[tuple[str, Any], ...] = ()
+    up: str | None = None            # source axis that becomes +z (None: auto)
+    rotate: int = 0                  # degrees about the print's z
+    fit: str = "occupied"            # "occupied" or "box"
 
 
 @dataclass(frozen=True)
@@ -113,6 +130,15 @@ def validate(s: ProofSettings) -> None:
         raise DreamPrintError(f"--max-depth must be 1..100000, got {s.max_depth}")
     if not (math.isfinite(s.key_light) and s.key_light >= 0):
         raise DreamPrintError(f"--key-light must be >= 0, got {s.key_light}")
+    if not (math.isfinite(s.viewing_distance_mm) and 10 <= s.viewing_distance_mm <= 1e5):
+        raise DreamPrintError(f"--viewing-distance-mm must be 10..100000, got "
+                              f"{s.viewing_distance_mm}")
+    if s.sampler not in SAMPLERS:
+        raise DreamPrintError(f"unknown sampler '{s.sampler}' (use {', '.join(SAMPLERS)})")
+    optics = resolve_optics(s.surface, s.phase)     # the names, before any work
+    if optics.surface != "none" and s.background == "empty":
+        raise DreamPrintError("--surface needs --background clear: the surface is the print's "
+                              "box of Clear resin, which an empty background does not print")
 
 
 def _labels(s: ProofSettings):
@@ -165,7 +191,11 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     timings["labels"] = el() - sum(timings.values())
     lo, hi = medium.box_mm
     views = orbit_views(medium.print_size_mm, s.views)
-    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S)
+    optics = resolve_optics(s.surface, s.phase, lab.profile.proof_optics)
+    if optics.surface != "none" and s.background == "empty":
+        raise DreamPrintError("--surface needs --background clear (the profile asks for a "
+                              f"{optics.surface} surface; give --surface none)")
+    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics.g)
 
     yield ProofProgress("source", 0, len(views), el(), "rendering the source")
     t1 = time.perf_counter()
@@ -183,21 +213,25 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     timings["source_render"] = time.perf_counter() - t1
 
     t2 = time.perf_counter()
+    seeds = (s.seed, s.seed + 1) if s.noise_floor else (s.seed,)
     box.clear()
     prog["p"] = (0, 1)
 
     def work_print() -> None:
         try:
-            box["m"] = render_print(sigma_t, albedo, lo, hi, views, s.resolution, s.spp,
-                                    s.seed, s.max_depth, s.key_light, s.floor,
-                                    progress=lambda d, t: prog.__setitem__("p", (d, t)),
-                                    cancelled=is_cancelled)
+            box["m"] = render_print_seeds(
+                sigma_t, albedo, lo, hi, views, s.resolution, s.spp, seeds, s.max_depth,
+                s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
+                cancelled=is_cancelled, sampler=s.sampler, optics=optics)
         except BaseException as exc:  # noqa: BLE001
             box["e"] = exc
 
     yield from _in_thread(work_print, "print", prog, el, box, cancel)
-    prn_bands, info = box["m"]
+    prn_seeds, info = box["m"]
+    prn_bands = prn_seeds[0]
     timings["print_render"] = time.perf_counter() - t2
+    # one render of one view (all bands); the noise floor renders each view once more
+    timings["print_render_per_view"] = timings["print_render"] / (len(views) * len(seeds))
 
     t3 = time.perf_counter()
     yield ProofProgress("compare", 0, len(views), el(), "comparing")
@@ -205,12 +239,18 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     obs = bands.observer
     to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
     per_view, images = [], []
+    # the print at its real size on the frame (orthographic), seen from the viewing distance
+    spd = samples_per_degree(2.0 * views[0].half_mm / s.resolution, s.viewing_distance_mm)
     for i, v in enumerate(views):
         T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
         prn_alpha = 1.0 - T @ y_w
         src_xyz = src_lin[i] @ to_xyz.T
-        prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor)
-        fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs)
+        prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor, optics)
+        fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs, spd)
+        if s.noise_floor:
+            fig["noise_floor"] = noise_floor(
+                prn_xyz, print_xyz(bands, prn_seeds[1][i], T, s.floor, optics), prn_alpha,
+                obs, spd)
         per_view.append({"view": i, **v.describe(), **fig})
         images.append({"source": src_lin[i], "print": obs.XYZ_to_linear_sRGB(prn_xyz),
                        "de2000": de})
@@ -227,24 +267,40 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         "grid_dimensions": list(lab.shape_xyz),
         "medium": medium.describe(),
         "spectral": bands.describe(),
-        "km_to_rte": {"sigma_a": "K / 2", "sigma_s": "4 S / 3", "phase": "isotropic",
-                      "reference": "Gate 1974; Thennadil 2008 (diffuse incidence)"},
+        "km_to_rte": {"sigma_a": "K / 2", "sigma_s": "4 S / (3 (1 - g))",
+                      "phase": optics.describe()["phase"], "g": optics.g,
+                      "reference": "Gate 1974; Thennadil 2008 (diffuse incidence); reduced "
+                                   "scattering sigma_s (1 - g) kept (similarity relation)"},
+        "optics": {**optics.describe(),
+                   "from": ("command line" if s.surface is not None or s.phase is not None
+                            else "profile" if lab.profile.proof_optics else "defaults")},
         "renderer": info,
         "source_renderer": "emission-absorption ray march (dreamprint)",
         "lighting": {"environment": "uniform white (D65), radiance 1",
                      "key_light_irradiance": s.key_light, "floor": s.floor},
+        "viewing": {"distance_mm": s.viewing_distance_mm,
+                    "pixel_mm": round(2.0 * views[0].half_mm / s.resolution, 5),
+                    "pixels_per_degree": round(spd, 3),
+                    "metric": "S-CIELAB (Zhang & Wandell 1996) then CIEDE2000"},
         "views": per_view,
         "overall": summarise(per_view),
+        "noise_floor": (
+            {"method": f"the print rendered again at Mitsuba seed {s.seed + 1} (same labels, "
+                       "medium, cameras); figures between the two renders over the print's "
+                       "object pixels",
+             "seeds": list(seeds), **summarise_floor([v["noise_floor"] for v in per_view])}
+            if s.noise_floor else None),
         "timings_s": timings,
     }
     return {"report": report, "images": images}
 
 
-def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool) -> np.ndarray:
-    """XYZ (res, res, 3) of a print view: Mitsuba's band images plus, without a floor, the
-    environment seen straight through (the renderer hides it; ``direct_T`` per band is its
-    exact expectation, :mod:`.print_render`)."""
-    return bands.to_XYZ(rendered + (0.0 if floor else direct_T))
+def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool,
+              optics=None) -> np.ndarray:
+    """XYZ (res, res, 3) of a print view: Mitsuba's band images plus, without a floor or a
+    surface, the environment seen straight through (the renderer hides it; ``direct_T`` per
+    band is its exact expectation, :mod:`.print_render`)."""
+    return bands.to_XYZ(rendered + (direct_T if hides_direct(floor, optics) else 0.0))
 
 
 def _in_thread(fn, stage, prog, el, box, cancel):

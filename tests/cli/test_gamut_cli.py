@@ -92,7 +92,21 @@ def test_gamut_intent_and_objective_choice(capsys):
     assert (rep["objective"], rep["intent"]) == ("cielab", "perceptual")
     assert list(rep["objectives"]) == ["cielab"] and "SGCK" in rep["out_of_gamut_policy"]
     code, out, _ = _run(capsys, "lookup", "--rgb", "0,0,1", "--size", "5", "--json",
-                        "--intent", "perceptual", "--objective", "lab")
+                        "--intent", "perceptual", "--objective", "cielab")
     assert code == 0 and json.loads(out)[0]["dE2000"] > 1.0
     code, _, err = _run(capsys, "gamut", "--intent", "saturation")
     assert code == 2 and "saturation" in err
+    code, _, err = _run(capsys, "gamut", "--objective", "lab")  # no undocumented aliases
+    assert code == 2 and "'lab' is not one of" in err
+
+
+def test_gamut_progress_on_stderr_only_while_building(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    args = ("gamut", "--size", "6", "--samples", "20", "--no-compare", "--json")
+    code, out, err = _run(capsys, *args)
+    assert code == 0 and json.loads(out)["cached"] is False
+    assert "building colour tables (de2000, colorimetric): 100 %" in err  # --json too
+    assert "evaluating" in err
+    code, out, err = _run(capsys, *args)
+    assert code == 0 and json.loads(out)["cached"] is True
+    assert "building" not in err

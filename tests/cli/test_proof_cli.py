@@ -29,7 +29,15 @@ def test_proof_demo_writes_everything_and_is_deterministic(tmp_path, capsys):
     assert rep["renderer"]["renderer"] == "mitsuba" and rep["renderer"]["version"]
     o = rep["overall"]
     assert o["object_pixels"] > 0 and 0 <= o["mean_de2000"] <= o["p95_de2000"] + 1e-9
-    assert set(o) >= {"psnr_db", "ssim", "coverage_error", "coverage_abs_error"}
+    assert set(o) >= {"psnr_db", "ssim", "coverage_error", "coverage_abs_error",
+                      "mean_scielab_de2000", "p95_scielab_de2000"}
+    # the noise floor: the print again at seed + 1; S-CIELAB blurs what the eye does not see
+    f = rep["noise_floor"]
+    assert f["seeds"] == [0, 1] and f["object_pixels"] > 0
+    assert 0 < f["mean_scielab_de2000"] < f["mean_de2000"] <= f["p95_de2000"] + 1e-9
+    assert rep["viewing"]["distance_mm"] == 500.0 and rep["viewing"]["pixels_per_degree"] > 0
+    assert json.loads((tmp_path / "a" / "proof.json").read_text())["noise_floor"] == f
+    assert rep["optics"] == {"surface": "none", "phase": "isotropic", "from": "defaults"}
     code, out2, _ = run(capsys, "proof", "demo", "-o", tmp_path / "b", *TINY, "--json")
     rep2 = json.loads(out2)
     assert rep2["overall"] == rep["overall"]
@@ -73,7 +81,13 @@ def test_proof_of_an_exported_job(tmp_path, capsys):
     (["--spp", "0"], "--spp"),
     (["--spp", "10000000"], "--spp"),
     (["--views", "0"], "--views"),
-    (["--method", "magic"], "unknown method"),
+    (["--method", "magic"], "'magic' is not one of"),
+    (["--sampler", "sobol"], "unknown sampler"),
+    (["--surface", "satin"], "unknown surface"),
+    (["--phase", "hg:1.5"], "hg:G"),
+    (["--phase", "mie"], "unknown phase"),
+    (["--surface", "glossy", "--background", "empty"], "--background clear"),
+    (["--viewing-distance-mm", "0"], "--viewing-distance-mm"),
 ])
 def test_absurd_settings_are_one_line_errors(tmp_path, capsys, extra, words):
     code, _, err = run(capsys, "proof", "demo", "-o", tmp_path / "x", "--height-mm", "3",
@@ -122,23 +136,69 @@ def test_cancel_leaves_nothing(tmp_path):
 
 
 def test_evaluate_methods_table(capsys):
-    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
-                         "--halftones", "blue-noise,random", "--json")
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper",
+                         "--halftone", "blue-noise", "--halftone", "random", "--json")
     assert code == 0, err
     t = json.loads(out)
     assert [(r["method"], r["halftone"]) for r in t["methods"]] == [
         ("paper", "blue-noise"), ("paper", "random")]
     assert all(r["object_pixels"] > 0 for r in t["methods"])
-    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "nope")
-    assert code == 2 and "unknown method" in err
+    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "nope")
+    assert code == 2 and "'nope' is not one of" in err and err.count("\n") == 1
+    for r in t["methods"]:   # each row has its floor, and is judged against the best row's
+        assert r["noise_floor"]["mean_scielab_de2000"] > 0
+        for key in ("mean_de2000", "mean_scielab_de2000"):
+            v = r["vs_best"][key]
+            assert v["difference"] >= 0 and v["significant"] == (v["difference"] > v["threshold"])
+
+
+def test_evaluate_methods_text_marks_noise(capsys):
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper",
+                         "--halftone", "blue-noise", "--halftone", "random")
+    assert code == 0, err
+    rows = [ln for ln in out.splitlines() if ln.startswith("paper")]
+    assert len(rows) == 2
+    # the legend says what a "~" means (a difference within the noise floor is no ranking)
+    assert "within 3 x the noise floor" in out
 
 
 def test_evaluate_methods_honours_halftone(capsys):
-    """``--halftone random`` was silently replaced by the --halftones default (blue-noise)."""
-    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--methods", "paper",
+    """``--halftone random`` alone gives one row, random (it was once silently replaced)."""
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper",
                          "--halftone", "random", "--json")
     assert code == 0, err
     assert [r["halftone"] for r in json.loads(out)["methods"]] == ["random"]
-    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--halftone", "random",
-                       "--halftones", "blue-noise")
-    assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1
+    code, _, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--halftones", "random")
+    assert code == 2 and "--halftones" in err  # the former second option is gone
+
+
+@pytest.mark.parametrize(("cmd", "option", "bad"), [
+    (("proof", "demo", "-o", "X"), "--method", "fast"),
+    (("proof", "demo", "-o", "X"), "--halftone", "bluenoise"),
+    (("proof", "demo", "-o", "X"), "--background", "white"),
+    (("evaluate", "methods", "demo"), "--halftone", "ordered"),
+    (("convert", "demo", "-o", "X"), "--halftone", "ordered"),
+    (("convert", "demo", "-o", "X"), "--background", "none"),
+])
+def test_fixed_choices_are_refused_before_any_work(capsys, cmd, option, bad):
+    code, _, err = run(capsys, *cmd, "--height-mm", "1", option, bad)
+    assert code == 2 and f"'{bad}' is not one of" in err and err.count("\n") == 1, err
+
+
+def test_cli_choices_are_the_engines():
+    from dreamprint_gui.cli.proof import HALFTONE_CHOICES, METHOD_CHOICES
+    from dreamprint_gui.job.halftone import HALFTONE_METHODS
+    from dreamprint_gui.proof.methods import METHODS
+
+    assert METHOD_CHOICES == METHODS and HALFTONE_CHOICES == HALFTONE_METHODS
+
+
+def test_proof_with_a_surface_and_hg_phase(tmp_path, capsys):
+    code, out, err = run(capsys, "proof", "demo", "-o", tmp_path / "s", *TINY, "--surface",
+                         "matte", "--phase", "hg:0.4", "--no-noise-floor", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["optics"]["surface"] == "matte" and rep["optics"]["from"] == "command line"
+    assert rep["optics"]["refractive_index"] == 1.5 and rep["km_to_rte"]["g"] == 0.4
+    assert rep["renderer"]["surface"] == "matte" and rep["noise_floor"] is None
+    assert rep["overall"]["object_pixels"] > 0

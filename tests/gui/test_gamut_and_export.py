@@ -130,6 +130,8 @@ def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
     assert dlg.settings_for_job().intent == "colorimetric"
     dlg.intent.setCurrentIndex(dlg.intent.findData("perceptual"))
     assert dlg.settings_for_job().intent == "perceptual"
+    dlg.intent.setCurrentIndex(dlg.intent.findData("relative"))
+    assert dlg.settings_for_job().intent == "relative"
 
 
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
@@ -164,9 +166,9 @@ def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     assert dlg.summary.horizontalScrollBar().maximum() == 0
     for lab, info in manifest["labels"].items():
         assert info["material"] in text, lab
-    assert PRINTER_NAMES["j850-paper"] in text and "j850-paper" not in text
+    assert PRINTER_NAMES["voxelprint-27um"] in text and "voxelprint-27um" not in text
     assert "Clear resin" in text
-    assert manifest["printer"]["name"] == "j850-paper"  # the id stays in the file
+    assert manifest["printer"]["name"] == "voxelprint-27um"  # the default; the id stays in the file
     # the time is the job's as the operator waited for it: the dialog's clock from Export to
     # the finished job, which holds the manifest's own total (begun later, ended earlier)
     t = manifest["timings_s"]

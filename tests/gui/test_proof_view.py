@@ -30,6 +30,7 @@ def test_proof_page_renders_and_shows_pixels(qtbot, table_size):
     assert src[mid, mid].mean() < 245 and prn[mid, mid].mean() < 245
     assert not page.image_labels[1].pixmap().isNull()
     assert "dE2000" in page.figures.text()
+    assert "S-CIELAB" in page.figures.text() and "noise floor" in page.figures.text()
     assert page.render_button.isEnabled() and not page.cancel_button.isEnabled()
 
 

@@ -71,7 +71,11 @@ def test_knight_cli_auto_job_interior_mostly_ink(knight, tmp_path, capsys):
     n = m["total_voxels"]
     ink = sum(m["voxel_counts"][k] for k in ("C", "M", "Y", "K", "W"))
     src = open_source(knight)
-    grid = grid_for_source(src, load_printer().voxel_mm, height_mm=3.0)
+    from dreamprint_gui.io.volumes.orient import occupied_bounds
+
+    # the job covers the knight's filled voxels (--fit occupied, the default)
+    grid = grid_for_source(src, load_printer().voxel_mm, height_mm=3.0,
+                           bounds=occupied_bounds(src))
     _, d = src.sample_slab(grid, 0, grid.shape_xyz[2])
     occupied = int(np.count_nonzero(d))
     # the job's ink voxels are its occupied voxels: its interior is ink, not Clear
@@ -116,12 +120,10 @@ WRITE_LS = textwrap.dedent('''
 
 
 @pytest.fixture(scope="module")
-def level_set(tmp_path_factory):
-    from dreamprint_gui.io.volumes.openvdb import helper_command
-
+def level_set(tmp_path_factory, openvdb_python):
     out = tmp_path_factory.mktemp("ls")
     (out / "w.py").write_text(WRITE_LS)
-    subprocess.run([helper_command()[0], "-I", str(out / "w.py"), str(out / "sphere.vdb")],
+    subprocess.run([openvdb_python, "-I", str(out / "w.py"), str(out / "sphere.vdb")],
                    check=True)
     return out / "sphere.vdb"
 
@@ -132,7 +134,7 @@ def test_level_set_auto_is_solid(level_set, tmp_path, capsys):
                                     content="fog"))
     out = tmp_path / "S"
     assert main(["convert", str(level_set), "-o", str(out), "--height-mm", "1.5",
-                 "--table-size", str(TABLE), "--json", "--quiet"]) == 0
+                 "--table-size", str(TABLE), "--json", "--quiet", "--fit", "box"]) == 0
     cap = capsys.readouterr()
     assert cap.err == ""  # --quiet: no summary, no warnings, no progress
     m = json.loads(cap.out)
@@ -204,14 +206,17 @@ def test_alignment_reads_solid_as_undiluted_colour():
 
 
 def test_preflight_mostly_clear_and_gamut_warnings(knight):
-    pf = preflight(knight, height_mm=10.0, content="fog", table_size=TABLE)
+    # the knight's whole declared box (--fit box): 95 % of it is empty, a faint fog
+    pf = preflight(ConvertSettings(source=knight, height_mm=10.0, content="fog",
+                                   table_size=TABLE, fit="box"))
     codes = {w.code for w in pf.warnings}
     assert "mostly-clear" in codes
     w = next(w for w in pf.warnings if w.code == "mostly-clear")
     assert w.numbers["clear_or_empty_fraction"] > 0.98
     assert pf.grid_shape[2] == pf.slices and pf.total_voxels == math.prod(pf.grid_shape)
     assert abs(sum(pf.fractions.values()) - 1) < 1e-9
-    solid = preflight(knight, height_mm=10.0, content="auto", table_size=TABLE)
+    solid = preflight(ConvertSettings(source=knight, height_mm=10.0, content="auto",
+                                      table_size=TABLE, fit="box"))
     assert "mostly-clear" not in {w.code for w in solid.warnings}
     assert solid.ink_fraction > 3 * pf.ink_fraction
     j = solid.to_json()
@@ -279,11 +284,20 @@ def test_material_codes_distinct_and_one_definition():
         return colour.XYZ_to_Lab(colour.sRGB_to_XYZ(np.asarray(c, float) / 255))
 
     codes = {k: rgb for k, _, rgb in legend}
+    # slices carry the Voxel Print legend's code for VeroClear; the screen shows a colour that
+    # is told apart from every other at a glance (the code is dE2000 8.7 from White)
+    assert codes["Cl"] == (227, 233, 253)
+    shown = {k: rgb for k, _, rgb in material_legend(p, display=True)}
+    assert shown["Cl"] == (150, 190, 225)
+    assert {k: v for k, v in shown.items() if k != "Cl"} == {k: v for k, v in codes.items()
+                                                             if k != "Cl"}
+    assert len(set(codes.values())) == len(codes)  # a slice can be read back
     for other in ("C", "M", "Y", "K", "W", "empty"):
-        de = float(colour.delta_E(lab(codes["Cl"]), lab(codes[other]), method="CIE 2000"))
-        assert de > 15, (other, de)  # Clear told apart at a glance (the old code: 8.7 to W)
-    for name in ("voxelprint-14um", "voxelprint-27um"):
+        de = float(colour.delta_E(lab(shown["Cl"]), lab(shown[other]), method="CIE 2000"))
+        assert de > 15, (other, de)
+    for name in ("voxelprint-14um", "voxelprint-27um", "j850-paper"):
         assert load_printer(name).palette()[CL].tolist() == list(codes["Cl"])
+        assert load_printer(name).display_palette()[CL].tolist() == list(shown["Cl"])
     assert EMPTY_LABEL == len(INKS)
 
 

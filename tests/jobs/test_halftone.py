@@ -166,3 +166,61 @@ def test_label_rows_gives_pick_labels_answers():
     want = [_first_crossing(conc[i], t[i], INK_ORDER) for i in range(n)]
     assert lab.tolist() == want
     assert len(set(want)) == 7
+
+
+def _rare_ink_layer_residues(lab, ink, mask_shape):
+    """Largest number of ``ink`` voxels of one layer on one residue (x mod mx, y mod my)."""
+    _, my, mx = mask_shape
+    layer = lab[lab.shape[0] // 2] == ink
+    return max(int(layer[j::my, i::mx].sum()) for j in range(my) for i in range(mx)), \
+        int(layer.sum())
+
+
+def test_rare_ink_forms_no_lattice():
+    # Smoke-like colour, magenta (index 1) rare. One mask offset for the whole job put every
+    # magenta voxel of a layer on one residue of the tile period (a 1 mm lattice); with a hashed
+    # shift per tile the residues are as spread as i.i.d. placement's, and the power spectrum of
+    # the placement at the tile's fundamental frequencies is at the i.i.d. level (periodogram 1;
+    # a lattice gives tens).
+    conc = np.array([0.05, 0.007, 0.03, 0.01, 0.10, 0.803], np.float32)
+    h = Halftoner.create("blue-noise", 7, VOX)
+    mz, my, mx = h.mask.shape
+    shape = (mz, 4 * my, 8 * mx)
+    lab = h.block(np.broadcast_to(conc, (*shape, 6)))
+    most, total = _rare_ink_layer_residues(lab, 1, h.mask.shape)
+    assert total > 40 and most <= 4, (most, total)
+    ind = (lab == 1).astype(np.float64)
+    c = float(conc[1])
+    p = np.abs(np.fft.rfftn(ind - ind.mean())) ** 2 / (ind.size * c * (1 - c))
+    fz, fy, fx = shape[0] // mz, shape[1] // my, shape[2] // mx
+    low = p[np.ix_([0, fz, -fz], [0, fy, -fy], [0, fx])].ravel()[1:]
+    assert low.max() < 5, low.max()
+    harm = p[::fz, ::fy, ::fx].ravel()[1:]
+    assert 0.7 < harm.mean() / p.ravel()[1:].mean() < 1.3
+
+
+def test_every_tile_reads_the_whole_mask_once():
+    # Unbiasedness over a tile: whatever its shift, each tile reads every threshold once.
+    from dreamprint_gui.job.halftone import tile_layout
+
+    h = Halftoner.create("blue-noise", 3, VOX)
+    mz, my, mx = h.mask.shape
+    ox, oy, oz = h.offset_xyz
+    x0, y0, z0 = mx - ox, my - oy, mz - oz  # the first whole tile
+    seed = np.uint64(3)
+    thr = np.empty((mz, 2 * my, 2 * mx), np.float32)
+    for k in range(mz):
+        cols, rows, tiles = tile_layout(x0, 2 * mx, y0, 2 * my, z0 + k, ox, oy, oz, mz, my, mx,
+                                        seed)
+        for j in range(2 * my):
+            for i in range(2 * mx):
+                t = tiles[rows[1, j], cols[1, i]]
+                thr[k, j, i] = h.mask[t[0], (rows[0, j] + t[1]) % my, (cols[0, i] + t[2]) % mx]
+    ref = np.sort(h.mask.ravel())
+    shifts = set()
+    for b in range(2):
+        for a in range(2):
+            tile = thr[:, b * my:(b + 1) * my, a * mx:(a + 1) * mx]
+            np.testing.assert_array_equal(np.sort(tile.ravel()), ref)
+            shifts.add(tile.tobytes())
+    assert len(shifts) == 4  # the tiles differ

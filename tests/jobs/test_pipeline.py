@@ -2,6 +2,7 @@
 
 import hashlib
 import json
+import math
 import os
 import signal
 import subprocess
@@ -54,18 +55,19 @@ def reference_job(tmp_path_factory):
 def test_job_layout_and_manifest(reference_job):
     job, manifest, progress = reference_job
     nx, ny, nz = manifest["grid_dimensions"]
-    assert nz == round(0.6 / 0.014)
+    assert nz == math.ceil(0.6 / 0.027)  # the default printer, voxelprint-27um
     assert sorted(os.listdir(job)) == ["manifest.json", "slices"]
     names = sorted(os.listdir(job / "slices"))
     assert names == [f"{z:05d}.png" for z in range(nz)]
     on_disk = json.loads((job / "manifest.json").read_text())
     assert on_disk == json.loads(json.dumps(manifest))
-    for key in ("software", "source", "profile", "printer", "physical_size_mm", "voxel_mm",
+    for key in ("software", "source", "profile", "printer", "placement", "physical_size_mm",
+                "voxel_mm",
                 "grid_dimensions", "seed", "halftoning", "voxel_counts", "clamped_density",
                 "timings_s"):
         assert key in manifest
     assert sum(manifest["voxel_counts"].values()) == nx * ny * nz
-    assert manifest["physical_size_mm"][2] == pytest.approx(nz * 0.014)
+    assert manifest["physical_size_mm"][2] == pytest.approx(nz * 0.027)
     assert progress[-1].stage == "done" and progress[-1].layers_done == nz
     done = [p.layers_done for p in progress if p.stage == "converting"]
     assert done == sorted(done) and done[-1] == nz
@@ -251,3 +253,66 @@ def test_cli_convert_objective_and_intent_reach_the_job(tmp_path, capsys):
     with pytest.raises(DreamPrintError, match="rendering intent"):
         _run(_settings(tmp_path / "J2", intent="saturation"))
     assert not (tmp_path / "J2").exists()
+
+
+def test_slices_carry_the_legend_codes_and_the_printer_dpi(reference_job):
+    """The default printer is Voxel Print's grid (600 x 300 dpi, 27 um) and its slices carry
+    the Voxel Print legend's codes, VeroClear 227, 233, 253 (not the display colour)."""
+    from PIL import Image
+
+    from dreamprint_gui.job.encode.png_slices import read_png_phys
+
+    job, manifest, _ = reference_job
+    assert manifest["printer"]["name"] == "voxelprint-27um"
+    legend = {(0, 90, 158), (166, 33, 98), (200, 189, 3), (26, 26, 29), (240, 240, 240),
+              (227, 233, 253), (255, 255, 255)}
+    seen = set()
+    for f in sorted((job / "slices").iterdir()):
+        rgb = np.asarray(Image.open(f).convert("RGB")).reshape(-1, 3)
+        seen |= {tuple(int(v) for v in c) for c in np.unique(rgb, axis=0)}
+        ppx, ppy, unit = read_png_phys(f)
+        # 600 dpi = 600 / 0.0254 px/m; 300 dpi likewise
+        assert unit == 1 and abs(ppx - 600 / 0.0254) < 1 and abs(ppy - 300 / 0.0254) < 1
+    assert seen <= legend and (227, 233, 253) in seen and (150, 190, 225) not in seen
+    assert manifest["labels"]["Cl"]["rgb"] == [227, 233, 253]
+
+
+def test_evaluate_job_reports_volumes_and_checks_the_printer(reference_job, capsys):
+    job, manifest, _ = reference_job
+    report = check_job(job)
+    assert all(c["ok"] for c in report["checks"]), report["checks"]
+    assert {c["check"] for c in report["checks"]} >= {"voxel", "image size", "codes in slices",
+                                                     "dpi", "layers", "tray"}
+    vox_mm3 = (25.4 / 600) * (25.4 / 300) * 0.027
+    for m, r in report["materials"].items():
+        assert r["volume_ml"] == pytest.approx(r["voxels"] * vox_mm3 / 1000, rel=1e-9)
+        if m != "empty":
+            assert 1.17 <= r["mass_g"] / max(r["volume_ml"], 1e-300) <= 1.19 or r["voxels"] == 0
+    assert main(["evaluate", "job", str(job)]) == 0
+    text = capsys.readouterr().out
+    assert "volume ml" in text and "mass g" in text and "columns:" in text
+    assert "dpi: pHYs 600.0 x 300.0 dpi" in text
+
+
+def test_evaluate_job_against_another_printer_and_a_foreign_code(reference_job, tmp_path,
+                                                                  capsys):
+    import shutil
+
+    from PIL import Image
+
+    job, manifest, _ = reference_job
+    report = check_job(job, "j850-paper")  # another grid: voxel, layers and dpi disagree
+    bad = {c["check"] for c in report["checks"] if not c["ok"]}
+    assert {"voxel", "layers", "dpi"} <= bad and not report["consistent"]
+    copy = tmp_path / "J"
+    shutil.copytree(job, copy)
+    first = copy / "slices" / "00000.png"
+    im = np.asarray(Image.open(first).convert("RGB")).copy()
+    im[0, 0] = (150, 190, 225)  # the display colour of Clear written into a slice
+    Image.fromarray(im).save(first)
+    report = check_job(copy)
+    bad = {c["check"]: c["text"] for c in report["checks"] if not c["ok"]}
+    assert "codes in slices" in bad and "(150, 190, 225)" in bad["codes in slices"]
+    assert "dpi" in bad  # Pillow wrote no pHYs into that slice: some slices lack it
+    assert main(["evaluate", "job", str(copy)]) == 2
+    assert "not consistent" in capsys.readouterr().err

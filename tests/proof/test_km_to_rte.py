@@ -83,3 +83,44 @@ def test_relation_is_the_stated_one():
     sa, ss = rte_coefficients([2.0, 0.0], [0.75, 3.0])
     np.testing.assert_allclose(sa, [1.0, 0.0])
     np.testing.assert_allclose(ss, [1.0, 4.0])
+
+
+def test_hg_keeps_the_reduced_scattering_coefficient():
+    import pytest
+
+    from dreamprint_gui.proof.km_to_rte import parse_phase
+
+    for g in (0.0, 0.4, -0.3, 0.9):
+        sa, ss = rte_coefficients([2.0], [0.75], g)
+        np.testing.assert_allclose(sa, [1.0])
+        np.testing.assert_allclose(ss * (1 - g), [1.0])   # sigma_s' = 4 S / 3
+    assert parse_phase("isotropic") == 0.0 and parse_phase("hg:0.4") == 0.4
+    for bad in ("hg:1", "hg:x", "hg:", "rayleigh", "hg:nan"):
+        with pytest.raises(ValueError):
+            parse_phase(bad)
+
+
+def test_profile_proof_section_round_trips_and_is_checked():
+    import pytest
+
+    from dreamprint_gui.core.errors import DreamPrintError
+    from dreamprint_gui.core.profile import default_profile, profile_from_dict
+    from dreamprint_gui.proof.optics import resolve_optics
+
+    d = default_profile().to_json_dict()
+    assert "proof" not in d                      # the built-in K, S: no surface, isotropic
+    assert resolve_optics(None, None, {}).describe() == {"surface": "none",
+                                                         "phase": "isotropic"}
+    d["proof"] = {"surface": "glossy", "refractive_index": 1.52, "phase": "hg:0.4"}
+    p = profile_from_dict(d)
+    assert p.to_json_dict()["proof"] == d["proof"]
+    assert p.fingerprint() == default_profile().fingerprint()    # tables do not depend on it
+    o = resolve_optics(None, None, p.proof_optics)
+    assert (o.surface, o.ior, o.g) == ("glossy", 1.52, 0.4)
+    o = resolve_optics("none", "isotropic", p.proof_optics)     # the command line wins
+    assert (o.surface, o.g) == ("none", 0.0)
+    for bad in ({"surface": "satin"}, {"refractive_index": 0.5}, {"phase": "hg:2"},
+                {"colour": 1}, {"roughness": "rough"}):
+        d["proof"] = bad
+        with pytest.raises(DreamPrintError):
+            profile_from_dict(d)

@@ -9,7 +9,8 @@ here (lazily, see :func:`__getattr__`) for older imports.
 Conventions shared by every reader:
 
 * Arrays are ordered (z, y, x) so a slab of layers is contiguous; z is the build direction.
-  Source z maps to printer z (no axis swap: a y-up scene must be rotated by its author).
+  A reader's z is the printer's z; a job turns a source (``--up``, ``--rotate``) by wrapping
+  it (:mod:`.orient`), so readers never see an axis swap.
 * Voxel (i, j, k) of a :class:`PrintGrid` has its centre, in source units, at
   ``origin + ((i + .5) * vx, (j + .5) * vy, (k + .5) * vz) / mm_per_unit``.
 * Density rule (every reader, every format)::
@@ -58,20 +59,23 @@ class PrintGrid:
 
 
 def grid_for_source(source, voxel_mm, *, height_mm: float | None = None,
-                    size_mm: tuple[float, float, float] | None = None) -> PrintGrid:
+                    size_mm: tuple[float, float, float] | None = None,
+                    bounds=None) -> PrintGrid:
     """Scale ``source`` to a physical size and lay the printer grid over it.
 
     ``height_mm``: the source's z extent becomes ``height_mm`` (aspect kept).
     ``size_mm=(X, Y, Z)``: the largest uniform scale that fits the source in that box.
-    Exactly one must be given.  The grid covers the source's bounds and is centred on them.
+    Exactly one must be given.  The grid covers the source's bounds (or ``bounds``, e.g. the
+    occupied part: ``--fit occupied``) and is centred on them.
     """
     if (height_mm is None) == (size_mm is None):
         raise DreamPrintError("give exactly one of a height (mm) or a box size (mm)")
     vox = tuple(float(v) for v in voxel_mm)
     if len(vox) != 3 or not all(math.isfinite(v) and v > 0 for v in vox):
         raise DreamPrintError(f"printer voxel size must be three positive numbers, got {voxel_mm}")
-    lo = np.asarray(source.bounds[0], float)
-    hi = np.asarray(source.bounds[1], float)
+    box = source.bounds if bounds is None else bounds
+    lo = np.asarray(box[0], float)
+    hi = np.asarray(box[1], float)
     ext = hi - lo
     if not (np.all(np.isfinite(ext)) and np.all(ext >= 0) and ext.max() > 0):
         raise DreamPrintError(f"the source has empty or invalid bounds {source.bounds}",

@@ -272,6 +272,19 @@ class VoxSource:
         _nearest_kernel(self.index, idx[0], idx[1], idx[2], self.rgb_lut, dens_lut, rgb, sigma)
         return rgb, sigma
 
+    def occupied_bounds(self):
+        """The box of the filled voxels (source units), exactly; None if none is filled."""
+        filled = self.index > 0
+        if not filled.any():
+            return None
+        lo, hi = [], []
+        for a in range(3):
+            other = tuple(k for k in range(3) if k != 2 - a)
+            idx = np.flatnonzero(filled.any(axis=other))
+            lo.append(float(self.lo[a] + idx[0]))
+            hi.append(float(self.lo[a] + idx[-1] + 1))
+        return (tuple(lo), tuple(hi))
+
     def info(self) -> dict:
         return {"format": self.format, "grids": self._grids}
 

@@ -1,14 +1,14 @@
 """OpenVDB ``.vdb`` fog volumes (and level sets on request), sampled sparsely.
 
-Defines :class:`VdbSource`, :func:`open_path`, :func:`inspect_path` and :func:`helper_command`.
+Defines :class:`VdbSource`, :func:`open_path`, :func:`inspect_path` and :func:`check_header`.
 
-The file is read by Debian's ``python3-openvdb`` in an isolated helper process
-(:mod:`._vdb_helper`, run by ``/usr/bin/python3 -I``; override with ``DREAMPRINT_VDB_PYTHON``),
-which writes the active 8^3 leaf blocks of the grids we need to a folder of the transfer cache
-(``_cached_extract``: a second opening of the same file skips the helper) or a private
-temporary folder. They are memory-mapped here and sampled by the compiled sparse trilinear
-sampler (:mod:`.sampling`); a print job densifies a fog volume over its leaves when that fits
-(:mod:`.leaf_grid`, bit-identical and ~10-100x faster), else samples the leaves.
+The file is read in process by :mod:`.vdb_file` (a reader written to OpenVDB's published file
+format: Python + numpy, blosc through imagecodecs, zip through zlib; no system package). The
+grids we need become 8^3 blocks (:meth:`.vdb_file.VdbGrid.blocks`: leaves and tiles of every
+level, over the 128^3 chunks of the grid's active box, blocks equal to the background left
+out), sampled by the compiled sparse trilinear sampler (:mod:`.sampling`); a print job
+densifies a fog volume over its blocks when that fits (:mod:`.leaf_grid`, bit-identical and
+~10-100x faster), else samples the blocks.
 
 Semantics follow OpenVDB: voxel (i, j, k) holds its value at world ``M (i, j, k)`` (the grid's
 linear transform), interpolation is trilinear in index space (``BoxSampler``), voxels outside
@@ -25,14 +25,7 @@ Overview", "Grid classes"); Museth, "VDB", ACM TOG 32(3), 2013.
 
 from __future__ import annotations
 
-import hashlib
-import json
-import os
-import shutil
-import subprocess
-import tempfile
 import threading
-import weakref
 from pathlib import Path
 
 import numpy as np
@@ -48,26 +41,19 @@ from dreamprint_gui.io.volumes.base import (
 )
 from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
 from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
+from dreamprint_gui.io.volumes.vdb_file import VdbError, VdbGrid, read_file, read_grid
 
-__all__ = ["VdbSource", "open_path", "inspect_path", "helper_command", "check_header"]
+__all__ = ["VdbSource", "open_path", "inspect_path", "check_header"]
 
-HELPER = Path(__file__).with_name("_vdb_helper.py")
 # Values (all grids of a source together, 512 MB of float32) densified for sample_slab.
 DENSE_BUDGET = 1 << 27
 COLOUR_VEC = ("Cd", "color", "colour", "Color", "rgb", "albedo")
 COLOUR_RGB = (("color_r", "color_g", "color_b"), ("Cd_r", "Cd_g", "Cd_b"),
               ("colour_r", "colour_g", "colour_b"), ("r", "g", "b"))
-MISSING = ("reading OpenVDB files needs Debian's python3-openvdb under /usr/bin/python3 "
-           "(sudo apt-get install python3-openvdb; ./quickstart.sh installs it)")
-
-
-def helper_command() -> list[str]:
-    """The interpreter command that runs the helper (Debian's Python, isolated)."""
-    py = os.environ.get("DREAMPRINT_VDB_PYTHON", "/usr/bin/python3")
-    return [py, "-I", str(HELPER)]
 
 
 def _memory_limit() -> int:
+    """Bytes the extracted blocks of one grid may take (80 % of the machine's memory)."""
     try:
         import psutil
         return int(psutil.virtual_memory().total * 0.8)
@@ -75,38 +61,9 @@ def _memory_limit() -> int:
         return 16 << 30
 
 
-def _run(path: Path, *args: str) -> dict:
-    cmd = helper_command()
-    if not Path(cmd[0]).exists() and shutil.which(cmd[0]) is None:
-        raise DreamPrintError(MISSING, path)
-    try:
-        r = subprocess.run([*cmd, "--max-bytes", str(_memory_limit()), *args],
-                           capture_output=True, text=True, check=False)
-    except OSError as exc:
-        raise DreamPrintError(f"{MISSING} ({exc})", path) from None
-    out = r.stdout.strip().splitlines()
-    try:
-        res = json.loads(out[-1]) if out else None
-    except json.JSONDecodeError:
-        res = None
-    if r.returncode < 0:
-        raise DreamPrintError(f"the OpenVDB reader crashed on this file (signal {-r.returncode}):"
-                              " damaged or truncated?", path)
-    if not isinstance(res, dict):
-        tail = (r.stderr.strip().splitlines() or ["no output"])[-1]
-        raise DreamPrintError(f"the OpenVDB reader failed: {tail}", path)
-    if "error" in res:
-        if res.get("missing"):
-            raise DreamPrintError(f"{MISSING} ({res['error']})", path)
-        msg = res["error"]
-        if "not a VDB" in msg or "magic" in msg.lower():
-            msg = f"not an OpenVDB file ({msg})"
-        raise DreamPrintError(f"cannot read OpenVDB: {msg}", path)
-    return res
-
-
 _MAGIC = 0x56444220
-_MIN_VERSION = 221          # OPENVDB_FILE_VERSION_FLOAT_FRUSTUM_BBOX: older files are refused
+_MIN_VERSION = 222          # OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION: older files are refused
+_MAX_VERSION = 225          # OPENVDB_FILE_VERSION_HALF_GRID: newer files are refused
 _MAX_ENTRIES = 1_000_000
 
 
@@ -155,7 +112,7 @@ class _Header:
 
 def check_header(path: Path) -> dict:
     """Check a .vdb's header and grid descriptors (OpenVDB file format, ``io/Archive.cc``
-    ``readHeader`` and ``io/File.cc`` ``readGridDescriptors``) before the helper reads it.
+    ``readHeader`` and ``io/File.cc`` ``readGridDescriptors``) before its grids are read.
 
     Layout: int64 magic 0x56444220, uint32 file version, uint32 library major and minor, char
     "has grid offsets", (char "compressed" for file versions 220-221), a 36-character UUID; then
@@ -180,16 +137,18 @@ def check_header(path: Path) -> dict:
                f"{_MAGIC:#x})")
     version = h.u32("the file version")
     if version < _MIN_VERSION:
-        h.fail(f"OpenVDB file format version {version} is older than {_MIN_VERSION}, which "
-               "OpenVDB no longer reads")
+        h.fail(f"OpenVDB file format version {version} is older than {_MIN_VERSION} (OpenVDB "
+               "before 2.0): re-save it with a current OpenVDB")
+    if version > _MAX_VERSION:
+        h.fail(f"OpenVDB file format version {version} is newer than {_MAX_VERSION}, the newest "
+               "this reader knows (written by a newer OpenVDB)")
     lib = (h.u32("the library version"), h.u32("the library version"))
     offsets = h.take(1, "the grid-offsets flag") != b"\x00"
-    if 220 <= version < 222:
-        h.take(1, "the compression flag")
     h.take(36, "the file UUID")
     out = {"file_version": version, "library_version": list(lib), "grids": []}
-    if not offsets:  # a stream without grid offsets: only the helper can walk it
-        return out
+    if not offsets:
+        h.fail("written as a stream without grid offsets, which this reader does not read "
+               "(save it as a file)")
     n_meta = h.i32("the file metadata count")
     if not 0 <= n_meta <= _MAX_ENTRIES:
         h.fail(f"damaged: the header claims {n_meta:,} metadata entries")
@@ -207,11 +166,12 @@ def check_header(path: Path) -> dict:
     for k in range(n_grids):
         name = h.string(f"grid descriptor {k + 1} of {n_grids}").split("\x1e")[0]
         gtype = h.string(f"the type of grid {name!r}")
-        if version >= 216:
-            h.string(f"the instance parent of grid {name!r}")
+        parent = h.string(f"the instance parent of grid {name!r}")
         grid_pos = h.i64(f"the offsets of grid {name!r}")
         block_pos = h.i64(f"the offsets of grid {name!r}")
         end_pos = h.i64(f"the offsets of grid {name!r}")
+        if parent:                        # an instance has no blocks (block offset 0)
+            block_pos = grid_pos
         if not (0 < grid_pos <= block_pos <= end_pos):
             h.fail(f"damaged: grid {name!r} has inconsistent offsets {grid_pos}, {block_pos}, "
                    f"{end_pos}")
@@ -223,118 +183,56 @@ def check_header(path: Path) -> dict:
     return out
 
 
-# ---------------------------------------------------------------------------- transfer cache
-# The helper's transfer (start Debian's Python, import pyopenvdb, read the file, write the
-# leaves: ~1-2 s for a 10 MB smoke cache) is kept in the user cache folder, keyed by the
-# file's path, size and modification time, the helper's interpreter and its code, so a second
-# opening of the same file (every worker process of a job, a preview then an export, a rerun)
-# memory-maps the leaves at once. DREAMPRINT_VDB_CACHE=0 turns it off, =FOLDER moves it;
-# DREAMPRINT_VDB_CACHE_MB (default 2048) bounds its size, the least recently used go first.
-
-def _cache_root() -> Path | None:
-    v = os.environ.get("DREAMPRINT_VDB_CACHE", "")
-    if v == "0":
-        return None
-    if v:
-        return Path(v)
-    from platformdirs import user_cache_path
-
-    return user_cache_path("dreamprint") / "vdb"
-
-
-def _file_key(path: Path) -> str:
-    st = path.stat()
-    h = hashlib.sha256()
-    h.update(f"{path.resolve()}|{st.st_size}|{st.st_mtime_ns}|{helper_command()[0]}|"
-             .encode())
-    h.update(HELPER.read_bytes())
-    return h.hexdigest()[:24]
+# ---------------------------------------------------------------------------- reading
+def _grid_info(g: VdbGrid) -> dict:
+    """The description of one grid read by :mod:`.vdb_file` (the fields the former helper
+    process gave: class, value type, active voxels, index bbox, range, transform...)."""
+    st = g.stats()
+    vals = st["active_values"]
+    count = st["active_voxels"]
+    lo = hi = None
+    vec = None
+    if g.channels == 1:
+        v = vals[:, 0]
+        lo, hi = (v.min().item(), v.max().item()) if len(v) else (0.0, 0.0)
+    elif len(vals):
+        x = vals.astype(np.float64)
+        m = np.sqrt(np.sum(x * x, axis=1))
+        vec = {"component_min": x.min(axis=0).tolist(), "component_max": x.max(axis=0).tolist(),
+               "magnitude": [float(m.min()), float(m.max())]}
+        lo, hi = vec["component_min"], vec["component_max"]
+    bg = g.background.tolist()
+    meta = {k: v for k, v in g.metadata.items() if isinstance(v, (int, float, str, bool))}
+    return {"name": g.name, "class": g.grid_class, "type": g.value_type, "vector": vec,
+            "active_voxels": count, "empty": count == 0, "bbox": st["bbox"], "min": lo,
+            "max": hi, "background": bg[0] if len(bg) == 1 else bg, "half": g.half,
+            "transform": g.transform, "metadata": meta}
 
 
-def _cached_info(path: Path) -> dict:
-    """The helper's ``info`` of ``path``, from the cache when it holds it."""
-    root = _cache_root()
-    if root is None:
-        return _run(path, "info", str(path))
-    entry = root / _file_key(path)
-    f = entry / "info.json"
+def _read(path: Path, tree_for=None) -> tuple[dict, dict[str, VdbGrid]]:
+    """({"grids": [per-grid description], "metadata": file metadata}, {name: VdbGrid}) of
+    a .vdb, every grid read (a grid this reader cannot take, say of an unknown type, is
+    described with ``unsupported`` and its reason); damaged data raises a DreamPrintError
+    naming the file and the grid. Grids in the order of their unique names (OpenVDB's)."""
+    check_header(path)
     try:
-        res = json.loads(f.read_text())
-        os.utime(entry)
-        return res
-    except (OSError, ValueError):
-        pass
-    res = _run(path, "info", str(path))
-    try:
-        entry.mkdir(parents=True, exist_ok=True)
-        tmp = entry / f".info-{os.getpid()}-{threading.get_ident()}.json"
-        tmp.write_text(json.dumps(res))
-        os.replace(tmp, f)
-    except OSError:
-        pass                              # a full or read-only cache folder: not cached
-    return res
-
-
-def _cached_extract(path: Path, names: list[str]):
-    """(folder holding the leaves of grids ``names``, the helper's result, a cleanup to call
-    when the source is done with them or None): from the cache when it holds them, else
-    extracted (into the cache when it can take them, else a temporary folder)."""
-    root = _cache_root()
-    if root is not None:
-        sub = hashlib.sha256("\0".join(names).encode()).hexdigest()[:12]
-        final = root / _file_key(path) / f"extract-{sub}"
-        try:
-            res = json.loads((final / "result.json").read_text())
-            os.utime(final.parent)
-            return final, res, None
-        except (OSError, ValueError):
-            pass
-        try:
-            final.parent.mkdir(parents=True, exist_ok=True)
-            work = Path(tempfile.mkdtemp(prefix=".extract-", dir=final.parent))
-        except OSError:
-            work = None
-        if work is not None:
+        vf = read_file(path)
+        infos, grids = [], {}
+        for gd in sorted(vf.grids, key=lambda d: d.unique_name):
             try:
-                res = _run(path, "extract", str(path), str(work), *names)
-                (work / "result.json").write_text(json.dumps(res))
-                try:
-                    os.rename(work, final)
-                except OSError:           # another process cached it meanwhile: use theirs
-                    shutil.rmtree(work, ignore_errors=True)
-                    res = json.loads((final / "result.json").read_text())
-            except BaseException:
-                shutil.rmtree(work, ignore_errors=True)
-                raise
-            _trim_cache(root, keep=final.parent)
-            return final, res, None
-    tmp = tempfile.mkdtemp(prefix="dreamprint-vdb-")
-    try:
-        res = _run(path, "extract", str(path), tmp, *names)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return Path(tmp), res, tmp
-
-
-def _trim_cache(root: Path, keep: Path) -> None:
-    """Remove the least recently used entries until the cache holds at most
-    DREAMPRINT_VDB_CACHE_MB (a file's memory map outlives its removal on POSIX)."""
-    limit = float(os.environ.get("DREAMPRINT_VDB_CACHE_MB", "2048")) * 1e6
-    entries = []
-    for e in root.iterdir():
-        try:
-            size = sum(f.stat().st_size for f in e.rglob("*") if f.is_file())
-            entries.append((e.stat().st_mtime, size, e))
-        except OSError:
-            continue
-    total = sum(x[1] for x in entries)
-    for _, size, e in sorted(entries):
-        if total <= limit:
-            break
-        if e != keep:
-            shutil.rmtree(e, ignore_errors=True)
-            total -= size
+                g = read_grid(vf, gd)
+            except VdbError as exc:
+                if not exc.unsupported:
+                    raise
+                infos.append({"name": gd.name, "class": "unsupported", "type": gd.tree_type,
+                              "unsupported": exc.reason, "empty": True})
+                continue
+            infos.append(_grid_info(g))
+            grids.setdefault(g.name, g)
+    except VdbError as exc:
+        raise DreamPrintError(str(exc), path) from None
+    file_meta = {k: v for k, v in vf.metadata.items() if isinstance(v, (int, float, str, bool))}
+    return {"grids": infos, "metadata": file_meta}, grids
 
 
 def _affine(t: dict, name: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -359,6 +257,10 @@ def _class_name(g: dict) -> str:
 
 
 def _info_entry(g: dict, path: Path) -> dict:
+    if "unsupported" in g:
+        return {"name": g["name"], "class": f"unsupported ({g['unsupported']})",
+                "shape": [], "active_voxels": None, "dtype": g["type"], "bounds": None,
+                "index_bounds": None}
     lo_i, hi_i = np.asarray(g["bbox"][0], float), np.asarray(g["bbox"][1], float)
     try:
         o, s = _affine(g["transform"], g["name"], path)
@@ -372,7 +274,7 @@ def _info_entry(g: dict, path: Path) -> dict:
     out = {}
     if isinstance(lo, (list, tuple)):
         # OpenVDB's evalMinMax orders vectors lexicographically, which is no range at all: the
-        # helper reads the active values for per-component and magnitude ranges instead.
+        # reader gives per-component and magnitude ranges of the active values instead.
         lo = hi = None
         vec = g.get("vector")
         if vec:
@@ -386,24 +288,26 @@ def _info_entry(g: dict, path: Path) -> dict:
 
 def inspect_path(path: Path) -> dict:
     """Per-grid description of a .vdb file (the ``inspect`` JSON)."""
-    check_header(path)
-    res = _cached_info(path)
+    res, _ = _read(path)
     return {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}
 
 
 class _Grid:
-    """One extracted grid: sparse blocks + its index-to-world map."""
+    """One grid's sparse blocks (:meth:`.vdb_file.VdbGrid.blocks` over its active box) + its
+    index-to-world map."""
 
-    def __init__(self, meta: dict, folder: Path, n: int, path: Path):
+    def __init__(self, meta: dict, grid: VdbGrid, path: Path):
         self.name = meta["name"]
         self.origin, self.scale = _affine(meta["transform"], self.name, path)
-        origins = np.load(folder / f"{n}.origins.npy")
-        nc = int(meta["channels"])
-        if len(origins):
-            values = np.memmap(folder / f"{n}.values", np.float32, "r",
-                               shape=(len(origins), 8, 8, 8, nc))
-        else:
+        nc = grid.channels
+        if meta["empty"]:
+            origins = np.zeros((0, 3), np.int32)
             values = np.zeros((0, 8, 8, 8, nc), np.float32)
+        else:
+            try:
+                origins, values = grid.blocks(*meta["bbox"], max_bytes=_memory_limit())
+            except VdbError as exc:
+                raise DreamPrintError(str(exc), path) from None
         bg = np.asarray(meta["background"], np.float32)
         self.blocks = SparseBlocks(origins, values, bg, self.name)
 
@@ -443,7 +347,8 @@ class VdbSource:
     """A fog volume (or solidified level set) from a .vdb file, with optional colour grids."""
 
     def __init__(self, path: Path, density_grid: str, colour_grids: list[str], info: dict,
-                 grids_meta: list[dict], *, colour=(1.0, 1.0, 1.0), level_set: str = "refuse",
+                 grids_meta: list[dict], grids: dict[str, VdbGrid], *,
+                 colour=(1.0, 1.0, 1.0), level_set: str = "refuse",
                  solid_density: float = 1.0, colour_encoding: str = "linear"):
         self.name = str(path)
         self.format = "OpenVDB"
@@ -453,15 +358,15 @@ class VdbSource:
         self.level_set = level_set
         self.solid_density = float(solid_density)
         names = [density_grid, *colour_grids]
-        folder, res, tmp = _cached_extract(path, names)
-        self._tmp = str(folder)
-        self._cleanup = weakref.finalize(self, shutil.rmtree, tmp, True) if tmp else \
-            weakref.finalize(self, lambda: None)
-        grids = [_Grid(m, folder, n, path) for n, m in enumerate(res["grids"])]
-        self.density = grids[0]
-        self.colour_grids = grids[1:]
-        self.is_level_set = _class_name(res["grids"][0]) == "level set"
-        d = res["grids"][0]
+        by_name = {}
+        for m in grids_meta:
+            by_name.setdefault(m["name"], m)
+        metas = [by_name[n] for n in names]
+        made = [_Grid(m, grids[m["name"]], path) for m in metas]
+        self.density = made[0]
+        self.colour_grids = made[1:]
+        self.is_level_set = _class_name(metas[0]) == "level set"
+        d = metas[0]
         lo_i, hi_i = np.asarray(d["bbox"][0], float), np.asarray(d["bbox"][1], float)
         o, s = self.density.origin, self.density.scale
         self.bounds = (tuple(float(v) for v in o + (lo_i - 0.5) * s),
@@ -529,9 +434,7 @@ class VdbSource:
                 np.empty((3, cdense.shape[2]), np.float32), self.colour_encoding == "linear")
 
     def close(self) -> None:
-        """Delete the extracted blocks now (otherwise when the source is collected), unless
-        they are in the transfer cache."""
-        self._cleanup()
+        """Nothing to release: the blocks are in memory, freed with the source."""
 
     def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
                     out: SlabBuffers | None = None):
@@ -566,9 +469,10 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
     "solid" (with ``solid_density`` per source unit)."""
     if level_set not in ("refuse", "solid"):
         raise DreamPrintError(f"level_set must be 'refuse' or 'solid', got {level_set!r}", path)
-    check_header(path)
-    res = _cached_info(path)
-    grids = {g["name"]: g for g in res["grids"]}
+    res, read = _read(path)
+    grids = {}
+    for g in res["grids"]:
+        grids.setdefault(g["name"], g)
     info = {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}
     if not grids:
         raise DreamPrintError("the file holds no grids", path)
@@ -591,6 +495,8 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
     if density_grid not in grids:
         raise DreamPrintError(f"no grid named {density_grid!r} (has: {', '.join(grids)})", path)
     g = grids[density_grid]
+    if "unsupported" in g:
+        raise DreamPrintError(f"grid {density_grid!r}: {g['unsupported']}", path)
     if g["type"] not in ("float", "double", "half"):
         raise DreamPrintError(f"grid {density_grid!r} holds {g['type']} values, not a scalar "
                               "density", path)
@@ -606,6 +512,9 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
     if colour_grid is not None:
         if colour_grid not in grids:
             raise DreamPrintError(f"no colour grid named {colour_grid!r}", path)
+        if "unsupported" in grids[colour_grid]:
+            raise DreamPrintError(f"grid {colour_grid!r}: {grids[colour_grid]['unsupported']}",
+                                  path)
         if not grids[colour_grid]["type"].startswith("vec3"):
             raise DreamPrintError(f"grid {colour_grid!r} is not a vec3 colour grid", path)
         colour_grids = [colour_grid]
@@ -617,6 +526,6 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
             colour_grids = [vec[0]]
         elif trip:
             colour_grids = list(trip[0])
-    return VdbSource(path, density_grid, colour_grids, info, res["grids"], colour=colour,
+    return VdbSource(path, density_grid, colour_grids, info, res["grids"], read, colour=colour,
                      level_set=level_set, solid_density=solid_density,
                      colour_encoding=colour_encoding)

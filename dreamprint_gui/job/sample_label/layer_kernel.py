@@ -34,7 +34,7 @@ from dreamprint_gui.gamut.alignment import (
     lookup_align_block,
     stage_voxel,
 )
-from dreamprint_gui.job.halftone import fg_threshold, label_rows, mask_columns, scatter_counts
+from dreamprint_gui.job.halftone import fg_threshold, label_rows, scatter_counts, tile_layout
 
 __all__ = ["layer_labels", "slab_labels", "block_conc_sums"]
 
@@ -69,11 +69,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     (clamped low, clamped high, worst low shortfall, worst high shortfall)."""
     ny, nx = labels.shape
     mz, my, mx = mask.shape
-    mzz = (z + oz) % mz
-    xs = mask_columns(0, nx, ox, mx)
-    mrows = np.empty(ny, np.int64)
-    for j in range(ny):
-        mrows[j] = (j + oy) % my
+    cols, rows, tiles = tile_layout(0, nx, 0, ny, z, ox, oy, oz, mz, my, mx, seed)
     RB = ROW_BLOCK
     # Foreground voxels of consecutive rows (flat position, row) wait here until a block is
     # full: narrow rows would otherwise give the vector passes a few voxels at a time.
@@ -112,7 +108,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
                 jj = jdx[k0 + k]
                 i = p - jj * nx
                 stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
-                tt[k] = fg_threshold(method, mask[mzz, mrows[jj]], xs, seed, i, i, jj, z)
+                tt[k] = fg_threshold(method, mask, tiles, cols, rows, seed, i, jj, i, jj, z)
             lookup_align_block(flat, n, rho_k, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tt, mb, order, bg_label, lab)
             scatter_counts(out, idx, k0, lab, mb, counts)

@@ -78,12 +78,9 @@ WRITE = textwrap.dedent('''
 
 
 @pytest.fixture(scope="session")
-def vdbs(tmp_path_factory):
+def vdbs(tmp_path_factory, openvdb_python):
     out = tmp_path_factory.mktemp("vdb")
     script = out / "write.py"
     script.write_text(WRITE)
-    from dreamprint_gui.io.volumes.openvdb import helper_command
-
-    cmd = helper_command()
-    subprocess.run([cmd[0], "-I", str(script), str(out)], check=True)
+    subprocess.run([openvdb_python, "-I", str(script), str(out)], check=True)
     return out

@@ -1,0 +1,76 @@
+"""The command line as an operator meets it: closed pipes, summaries of large files, a missing
+size reported before any work."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from dreamprint_gui.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run(capsys, *args):
+    code = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _big_csv(path: Path, n: int) -> Path:
+    wl = np.arange(380, 731, 10)
+    lines = ["wavelength," + ",".join(f"s{i}" for i in range(n))]
+    lines += [f"{w}," + ",".join(f"{0.2 + 0.6 * i / n:.4f}" for i in range(n)) for w in wl]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_spectra_summarises_a_large_file_and_lists_all_on_request(tmp_path, capsys):
+    f = _big_csv(tmp_path / "big.csv", 40)
+    code, out, _ = run(capsys, "spectra", f)
+    assert code == 0
+    rows = [ln for ln in out.splitlines() if ln.startswith("  s")]
+    assert [r.split()[0] for r in rows] == [f"s{i}" for i in range(8)]
+    assert "... and 32 more samples (s8 to s39: 380-730 nm, values 0.32 to 0.785)" in out
+    code, out, _ = run(capsys, "spectra", f, "--all")
+    assert code == 0 and "more samples" not in out
+    assert [ln.split()[0] for ln in out.splitlines() if ln.startswith("  s")] == \
+        [f"s{i}" for i in range(40)]
+    code, out, _ = run(capsys, "spectra", _big_csv(tmp_path / "small.csv", 12))
+    assert code == 0 and "more samples" not in out and "  s11 " in out
+
+
+def test_a_closed_pipe_is_not_an_error(tmp_path):
+    # Far more than a pipe buffer (64 kB), so the writer meets the closed pipe.
+    f = _big_csv(tmp_path / "big.csv", 3000)
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    p = subprocess.Popen([sys.executable, "-m", "dreamprint_gui.cli", "spectra", str(f), "--all"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    first = p.stdout.readline()
+    p.stdout.close()
+    err = p.stderr.read()
+    assert p.wait(timeout=120) == 0, err
+    assert first.startswith(b"file: ") and err == b""
+
+
+def test_missing_size_is_reported_before_opening_the_source(tmp_path, capsys, shared_data):
+    src = shared_data / "volumes" / "hydrogen.vti"
+    code, _, err = run(capsys, "convert", src, "-o", tmp_path / "JOB")
+    assert code == 2
+    assert err == "dreamprint: error: give exactly one of --height-mm and --size-mm\n"
+    assert not (tmp_path / "JOB").exists()
+
+
+def test_evaluate_job_explains_its_columns(tmp_path, capsys):
+    job = tmp_path / "JOB"
+    code, _, err = run(capsys, "convert", "demo", "-o", job, "--height-mm", "0.3",
+                       "--table-size", "17", "-q")
+    assert code == 0, err
+    code, out, err = run(capsys, "evaluate", "job", job)
+    assert code == 0, err
+    lines = out.splitlines()
+    assert lines[1].startswith("  per material: fraction = ") and "intended = " in lines[1] \
+        and "z = " in lines[1]
+    assert lines[2].split()[1:6:2] == ["fraction", "intended", "z"]
