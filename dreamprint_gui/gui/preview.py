@@ -477,10 +477,12 @@ class PreviewPage(QWidget):
             self._emit_rendered()
 
     def size_text(self) -> str:
-        """The print's size as `dreamprint inspect --height-mm` states it (the source's bounds
-        at the job's scale, two decimals), then the printer grid that holds it."""
+        """The print's size as `dreamprint inspect --height-mm` states it ("the print is":
+        the bounds the grid covers, occupied or the declared box as ``--fit`` says, at the
+        job's scale, two decimals), then the printer grid that holds it."""
         g = self.ctx.grid
-        lo, hi = (np.asarray(b, dtype=np.float64) for b in self.ctx.source.bounds)
+        bounds = getattr(self.ctx, "fit_bounds", None) or self.ctx.source.bounds
+        lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
         obj = (hi - lo) * g.mm_per_unit
         nx, ny, nz = g.shape_xyz
         gx, gy, gz = g.size_mm
