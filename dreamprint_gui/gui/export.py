@@ -705,7 +705,7 @@ class ExportDialog(QDialog):
             wide = min(900, int(0.7 * screen.width())) if screen is not None else 900
             if self.width() < wide:
                 self.setMinimumWidth(wide)
-                self.resize(wide, self.height())
+                self.resize(wide, self.size().height())  # (self.height: a spin box)
                 self.layout().activate()
         doc.setTextWidth(box.viewport().width())
         need = int(doc.size().height()) + 2 * box.frameWidth() + 8
