@@ -40,10 +40,13 @@ def _print_xyz(medium, bands, view, res, spp, seed, sampler=None, rr_depth=None)
 
     st, al = medium_coefficients(medium.fractions, bands.K, bands.S)
     lo, hi = medium.box_mm
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     img, info = render_print(st, al, lo, hi, [view], res, spp, seed,
                              sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth)
     t = time.perf_counter() - t0
+    # CPU seconds of all this process's threads: on a shared machine the wall time says more
+    # about the other processes than about the variant (llvm or scalar)
+    info["cpu_s"] = time.process_time() - c0
     T = optical_depth(st, lo, medium.cell_mm, view, res, sub=3)
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
     return print_xyz(bands, img[0], T, False), 1.0 - T @ y_w, t, info
@@ -89,17 +92,19 @@ def speed(args) -> None:
     print(f"source render (per view)      {time.perf_counter() - t3:7.1f} s")
     spd = samples_per_degree(2 * view.half_mm / args.resolution, s.viewing_distance_mm)
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
-    print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'s/view':>7s} {'floor dE00 mean':>16s} "
-          f"{'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}")
+    print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'s/view':>7s} {'CPU s':>6s} "
+          f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}")
     for sampler, rr in [(a, b) for a in samplers for b in rrs]:
         _print_xyz(med, bands, view, args.resolution, 1, 0, sampler, rr)  # JIT warm-up
         for spp in spps:
             a, alpha, ta, info = _print_xyz(med, bands, view, args.resolution, spp, 1, sampler,
                                             rr)
-            b, _, tb, _ = _print_xyz(med, bands, view, args.resolution, spp, 2, sampler, rr)
+            b, _, tb, info_b = _print_xyz(med, bands, view, args.resolution, spp, 2, sampler,
+                                          rr)
             f = noise_floor(a, b, alpha, bands.observer, spd)
+            cpu = (info["cpu_s"] + info_b["cpu_s"]) / 2
             print(f"{sampler:12s} {info['rr_depth']:4d} {spp:5d} {(ta + tb) / 2:7.1f} "
-                  f"{f['mean_de2000']:16.2f} "
+                  f"{cpu:6.1f} {f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
                   f"{f['p95_scielab_de2000']:6.2f}", flush=True)
     print(f"({info['variant']}, {info['passes']} Mitsuba passes per render; s/view is one "

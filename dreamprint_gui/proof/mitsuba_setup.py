@@ -20,8 +20,8 @@ than :data:`MIN_LLVM` is never given to Dr.Jit. Looked for, in this order:
    LLVM Windows installer's ``LLVM-C.dll`` (``%ProgramFiles%\\LLVM\\bin``, or on ``PATH``).
 
 Without one the scalar variant renders the same images (same integrator, same scene) one path
-at a time, more slowly (``benchmarks/bench_proof.py --variant scalar``); the note says so and
-what to install.
+at a time per thread; on the proof's scenes it was measured no slower (``benchmarks/bench_proof.py
+--variant scalar``, README "Print proof"); the note says which variant and what to install.
 """
 
 from __future__ import annotations
@@ -176,11 +176,11 @@ def load_mitsuba(prefer: str = "llvm") -> tuple[Any, str, str]:
                 note = f"Mitsuba {mi.__version__} llvm_ad_rgb (libLLVM {llvm}, from {why})"
             else:
                 note = (f"Mitsuba {mi.__version__} scalar_rgb: Dr.Jit could not start its LLVM "
-                        f"backend with {llvm} ({why}); rendering is slower. Install: "
+                        f"backend with {llvm} ({why}). For the LLVM variant install: "
                         f"{INSTALL_HINT}")
         elif prefer == "llvm":
-            note = (f"Mitsuba {mi.__version__} scalar_rgb: {why}; rendering is slower. "
-                    f"Install: {INSTALL_HINT}")
+            note = (f"Mitsuba {mi.__version__} scalar_rgb: {why}. For the LLVM variant "
+                    f"install: {INSTALL_HINT}")
         else:
             note = f"Mitsuba {mi.__version__} scalar_rgb"
         mi.set_variant(variant)

@@ -49,8 +49,8 @@ def test_pyinstaller_recipe():
         assert name in spec and "freeze_support()" in (PKG / name).read_text()
     # what the analysis cannot see: Mitsuba's variants, the libLLVM tree, the kernels' sources
     for needed in ('"mitsuba"', '"drjit"', "karellen-llvm-core", '"llvm/lib"',
-                   '{"dreamprint_gui": "pyz+py"}', '"vtkmodules"', '"imagecodecs"', '"gsply"',
-                   '"OpenEXR"'):
+                   '"dreamprint_gui": "pyz+py"', '"mitsuba": "pyz+py"', '"drjit": "pyz+py"',
+                   '"vtkmodules"', '"imagecodecs"', '"gsply"', '"OpenEXR"'):
         assert needed in spec, needed
 
 

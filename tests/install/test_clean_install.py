@@ -9,11 +9,6 @@ distribution holds (pyproject, README, the package, resources/), not in editable
 missing dependency or a file left out of the installed package fails here. pip reuses its
 wheel cache; ``--no-compile`` skips byte-compiling what it installs (the commands compile what
 they import).
-
-The OpenVDB rows are expected to fail until branch ``vdb`` lands: today's reader runs Debian's
-python3-openvdb in a helper process with the system Python; here the helper is pointed at the
-fresh environment's own interpreter (``DREAMPRINT_VDB_PYTHON``), which is what a machine without
-Debian's package has. The pure reader ignores the variable.
 """
 
 from __future__ import annotations
@@ -159,7 +154,6 @@ def clean_env(tmp_path_factory, shared_data):
     files = _write_samples(samples, shared_data)
     env = {k: v for k, v in os.environ.items()
            if k not in ("PYTHONPATH", "DRJIT_LIBLLVM_PATH", "VIRTUAL_ENV", "PYTHONHOME")}
-    env["DREAMPRINT_VDB_PYTHON"] = str(venv / "bin" / "python")   # see the module docstring
     env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
     return venv / "bin" / "dreamprint", env, files, seconds, base
 
