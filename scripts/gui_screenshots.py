@@ -4,7 +4,8 @@ Run under a virtual screen:  xvfb-run -a -s "-screen 0 1280x800x24" \
     .venv/bin/python scripts/gui_screenshots.py [--table-size 100]
 
 Drives the application as an operator would: the main window on the default profile and the demo
-volume (preview), the gamut page with a picked colour and the hexagon chart, a voxel model (the
+volume (preview), the gamut page with a picked colour and the hexagon chart, the print proof
+tab (one small view of the demo), a voxel model (the
 sample .vox: preview, export dialog with its pre-flight, the finished job's summary), and the
 calibration wizard's measurements page and its fit of a two-thickness calibration set (ink
 measurements generated from the default profile with the forward model, 1 % noise, written as
@@ -93,6 +94,18 @@ def main() -> int:
     w.gamut.pages.setCurrentIndex(1)
     settle(600)
     grab_window(w, str(out / "gamut-chart.png"))
+
+    # the print proof tab: one small view of the demo (Mitsuba; about a minute)
+    w.tabs.setCurrentWidget(w.proof)
+    pp = w.proof
+    pp.views.setValue(1)
+    pp.resolution.setValue(96)
+    pp.spp.setValue(8)
+    pp.cells.setValue(48)
+    pp.render()
+    wait(pp.finished)
+    settle()
+    grab_window(w, str(out / "proof-tab.png"))
 
     voxel = Path(args.voxel_model)
     if voxel.is_file():

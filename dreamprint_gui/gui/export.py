@@ -688,20 +688,27 @@ class ExportDialog(QDialog):
         self.form_box.setVisible(False)
         self.preflight_box.setVisible(False)
         self.summary.setVisible(True)
-        self._fit_text(self.summary, 120)
+        self._fit_text(self.summary, 120, widen=True)
         self.start_button.setVisible(False)
         self.cancel_button.setVisible(False)
         self.close_button.setVisible(True)
         self._finish_run()
         self.finished_job.emit(manifest)
 
-    def _fit_text(self, box: QTextBrowser, least: int) -> None:
+    def _fit_text(self, box: QTextBrowser, least: int, widen: bool = False) -> None:
         """Make the dialog tall enough for the whole text of ``box`` (within the screen; the
-        box scrolls beyond that)."""
+        box scrolls beyond that); ``widen``: first wide enough that long lines (the job's
+        warnings) wrap into few lines (up to 900 px, 70 % of the screen)."""
         doc = box.document()
+        screen = self.screen().availableGeometry() if self.screen() else None
+        if widen:
+            wide = min(900, int(0.7 * screen.width())) if screen is not None else 900
+            if self.width() < wide:
+                self.setMinimumWidth(wide)
+                self.resize(wide, self.size().height())  # (self.height: a spin box)
+                self.layout().activate()
         doc.setTextWidth(box.viewport().width())
         need = int(doc.size().height()) + 2 * box.frameWidth() + 8
-        screen = self.screen().availableGeometry() if self.screen() else None
         limit = int(0.9 * screen.height()) if screen is not None else 900
         other = self.sizeHint().height() - max(box.sizeHint().height(), box.minimumHeight())
         box.setMinimumHeight(max(least, min(need, limit - other)))

@@ -477,17 +477,19 @@ class PreviewPage(QWidget):
             self._emit_rendered()
 
     def size_text(self) -> str:
-        """The print's size as `dreamprint inspect --height-mm` states it (the source's bounds
-        at the job's scale, two decimals), then the printer grid that holds it."""
+        """The print's size as `dreamprint inspect --height-mm` states it ("the print is":
+        the bounds the grid covers, occupied or the declared box as ``--fit`` says, at the
+        job's scale, two decimals), then the printer grid that holds it."""
         g = self.ctx.grid
-        lo, hi = (np.asarray(b, dtype=np.float64) for b in self.ctx.source.bounds)
+        bounds = getattr(self.ctx, "fit_bounds", None) or self.ctx.source.bounds
+        lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
         obj = (hi - lo) * g.mm_per_unit
         nx, ny, nz = g.shape_xyz
         gx, gy, gz = g.size_mm
         return (f"{Path(str(self.source_path)).name}: print "
                 + " x ".join(f"{v:.2f}" for v in obj)
-                + f" mm on {printer_name(self.printer)} (a grid of {nx} x {ny} x {nz} voxels, "
-                f"{gx:.2f} x {gy:.2f} x {gz:.2f} mm)")
+                + f" mm on {printer_name(self.printer)}; its grid {nx} x {ny} x {nz} voxels, "
+                f"{gx:.2f} x {gy:.2f} x {gz:.2f} mm")
 
     # pre-flight -------------------------------------------------------------------------------
     def _start_preflight(self) -> None:

@@ -54,14 +54,25 @@ class ScaledImage(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._pixmap: QPixmap | None = None
-        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+        policy = QSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Preferred)
+        policy.setHeightForWidth(True)  # as tall as its width makes the image: the title
+        self.setSizePolicy(policy)      # above and the colour bar below stay beside it
         self.setMinimumSize(64, 64)
 
     def sizeHint(self) -> QSize:  # noqa: N802 - Qt override
         return QSize(320, 320)
 
+    def hasHeightForWidth(self) -> bool:  # noqa: N802 - Qt override
+        return True
+
+    def heightForWidth(self, width: int) -> int:  # noqa: N802 - Qt override
+        if self._pixmap is None or self._pixmap.isNull() or self._pixmap.width() == 0:
+            return width
+        return max(64, round(width * self._pixmap.height() / self._pixmap.width()))
+
     def setPixmap(self, pixmap: QPixmap) -> None:  # noqa: N802 - QLabel's name
         self._pixmap = pixmap
+        self.updateGeometry()
         self.update()
 
     def pixmap(self) -> QPixmap:
@@ -73,8 +84,7 @@ class ScaledImage(QWidget):
             return QRect()
         box = self.contentsRect()
         size = self._pixmap.size().scaled(box.size(), Qt.AspectRatioMode.KeepAspectRatio)
-        return QRect(box.x() + (box.width() - size.width()) // 2,
-                     box.y() + (box.height() - size.height()) // 2,
+        return QRect(box.x() + (box.width() - size.width()) // 2, box.y(),
                      size.width(), size.height())
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
@@ -188,11 +198,12 @@ class ProofPage(QWidget):
                  "dE2000, source vs print"), self.image_labels, strict=True)):
             col = QVBoxLayout()
             col.addWidget(QLabel(title, alignment=Qt.AlignmentFlag.AlignCenter))
-            col.addWidget(lab, 1)
+            col.addWidget(lab)
             if k == 2:
                 col.addWidget(self.colour_bar)
             else:  # the images stay level with the dE map above its bar
                 col.addSpacing(self.colour_bar.height())
+            col.addStretch(1)
             pics.addLayout(col)
         right = QVBoxLayout()
         right.addWidget(self.view_pick)

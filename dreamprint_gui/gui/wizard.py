@@ -553,7 +553,8 @@ def _fmt_err(x: float | None) -> str:
 
 FIT_TABLE_HEAD = ("<tr><th align='left'>ink</th><th align='left'>layers</th>"
                   "<th>held-out rms R</th><th>held-out rms T</th><th>worst held out</th>"
-                  "<th>fit residual R / T</th><th align='left'>what this says</th></tr>")
+                  "<th>fit residual R / T<br>(worst wavelength)</th>"
+                  "<th align='left'>what this says</th></tr>")
 
 
 def _fit_row(fit, layers: list, held: list, notes: list[str]) -> str:

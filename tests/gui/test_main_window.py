@@ -249,7 +249,7 @@ def test_voxel_model_previews_solid_with_its_intent(qtbot, gl_display, table_siz
 
     res = CliRunner().invoke(cli, ["inspect", str(knight), "--height-mm", "4"])
     assert res.exit_code == 0, res.output
-    span = res.output.split("the bounds span ")[1].split(" mm")[0]
+    span = res.output.split("the print is ")[1].split(" mm")[0]
     assert f"print {span} mm on " in p.status.text(), (span, p.status.text())
     occupied = p.data.source_sigma > 0
     assert 0.01 < occupied.mean() < 0.5
