@@ -15,7 +15,7 @@ __all__ = ["BACKGROUNDS", "CONTENTS", "SAMPLINGS", "background_name", "printer_n
 # The command line's options as the GUI's controls are labelled (engine messages name options)
 _OPTIONS = {"--content": "Content", "--density-scale": "Density scale",
             "--background": "Background", "--sampling": "Voxel edges", "--up": "Up",
-            "--rotate": "Turn", "--fit": "Size of"}
+            "--rotate": "Turn", "--fit": "Size of", "--intent": "Rendering intent"}
 
 # (id, name, what it means) in the order the combo boxes offer them
 BACKGROUNDS = (
