@@ -16,6 +16,9 @@ Defines
   which the print job's per-layer kernel calls directly; :func:`kernel_table`: the table the
   lookup reads (the packed fields padded to :data:`LANES` float32 per node, interpolated in
   float32 as whole vectors by :func:`interpolate_block`).
+- :func:`lookup_runs`: the same interpolation for a block whose voxels come in runs of one
+  colour, once per run and copied along it (the same bits; :func:`lookup_align_block` takes it
+  when the runs average :data:`RUN_MIN` voxels or more).
 - :func:`predicted_appearance`: what a voxel will look like after lookup + alignment (GUI).
 
 Lowering (eq. 12): ``C = rho C* + (1 - rho) Cl``. With an ideal Clear (K = S = 0) the mixture's

@@ -27,11 +27,13 @@ How each figure is estimated
 - Disk and time: up to 16 full layers (evenly spaced, at most ~8e6 voxels) sampled, labelled
   and PNG-encoded exactly as the job's slabs are; their mean size times the layer count, plus
   the manifest; their time per voxel (the first layer's left out: it warms the caches) times
-  the job's voxels, shared by the workers at :data:`PARALLEL_EFFICIENCY`, plus
-  :data:`CONVERT_OVERHEAD_S`. Timing the job's own source and kernels makes the estimate
-  follow the source kind (a splat scene's sampling costs ~10x a dense grid's per voxel), the
-  printer's grid and the machine; first-use builds (colour tables, blue-noise mask) happen in
-  the preparation, before the pre-flight, and are announced there with their own estimate
+  the job's voxels, plus the time to write each slice file (the layers' PNGs written beside the
+  job, removed at once) times the layer count, shared by the workers at
+  :data:`PARALLEL_EFFICIENCY`, plus :data:`CONVERT_OVERHEAD_S`. Timing the job's own source
+  and kernels makes the estimate follow the source kind (a splat scene's sampling costs
+  several times a dense grid's per voxel), the printer's grid, the file system and the
+  machine. First-use builds (compiled kernels, colour tables, blue-noise mask) happen in the
+  preparation, before the pre-flight, and are announced there with their own estimate
   (:func:`...job.plan.prepare_job`).
 - :func:`record_rate` keeps the finished jobs' rates (``rates.json``) for the record; the
   estimate no longer uses them (they mixed source kinds and sizes: one rate for all misjudged
@@ -43,6 +45,8 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
+import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -59,7 +63,7 @@ from dreamprint_gui.gamut.tables import F_CONC, F_GREY, F_SIGMA
 from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
 from dreamprint_gui.job.plan import ConvertSettings, JobContext, prepare_job
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
-from dreamprint_gui.job.slab import _oriented, _slab_into
+from dreamprint_gui.job.slab import _oriented, _slab_into, _write_new
 from dreamprint_gui.physics.colorimetry import delta_E2000
 
 __all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measured_rate",
@@ -305,29 +309,51 @@ def _node_fields(tables, rgb: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndar
     return reach, de
 
 
-def _layer_estimate(ctx, nz: int) -> tuple[int, float, int]:
-    """(bytes of the job's slices, seconds per voxel on one worker, layers timed): up to 16
-    evenly spaced full layers (at most ~8e6 voxels in all) sampled, labelled and PNG-encoded as
-    the job's slabs do, their mean size times nz, and their time per voxel (without the first
-    layer's when there are several: it warms the source's and the kernels' caches)."""
-
+def _layer_estimate(ctx, nz: int) -> tuple[int, float, int, float]:
+    """(bytes of the job's slices, seconds per voxel on one worker, layers timed, seconds to
+    write one slice file): up to 16 evenly spaced full layers (at most ~8e6 voxels in all)
+    sampled, labelled and PNG-encoded as the job's slabs do, their mean size times nz, and their
+    time per voxel (without the first layer's when there are several: it warms the source's and
+    the kernels' caches); their PNGs written as the slabs write slices, into a hidden temporary
+    folder beside the job's (same file system), removed at once."""
     nx, ny, _ = ctx.shape_xyz
     n_layers = max(1, min(16, nz, 8_000_000 // max(1, nx * ny)))  # ~8e6 voxels at most
     zs = sorted({int(round(v)) for v in np.linspace(0, nz - 1, n_layers + 2)[1:-1]} or {0})
     total = 0
     timed = 0.0
+    pngs = []
     for i, z in enumerate(zs):
         t0 = time.perf_counter()
         labels = np.empty((1, ny, nx), np.uint8)
         _slab_into(ctx, ctx.grid, z, z + 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
                    np.zeros(4))
-        total += len(encode_labels_pngs(_oriented(ctx, labels), ctx.palette,
-                                        ctx.printer.png_mode)[0])
+        pngs.append(encode_labels_pngs(_oriented(ctx, labels), ctx.palette,
+                                       ctx.printer.png_mode)[0])
+        total += len(pngs[-1])
         if i > 0 or len(zs) == 1:
             timed += time.perf_counter() - t0
     n_timed = max(1, len(zs) - 1)
     spv = timed / (n_timed * nx * ny)
-    return int(total / len(zs) * nz) + 16_384, spv, n_timed  # + the manifest
+    return int(total / len(zs) * nz) + 16_384, spv, n_timed, _write_seconds(ctx, pngs)
+
+
+def _write_seconds(ctx, pngs: list[bytes]) -> float:
+    """Mean seconds to write one of ``pngs`` as a new file, as the slabs write slices."""
+    out = getattr(ctx.settings, "output", None)
+    parent = Path(out).resolve().parent if out else None
+    try:
+        folder = tempfile.mkdtemp(prefix=".dp-preflight-", dir=parent)
+    except OSError:
+        folder = tempfile.mkdtemp(prefix=".dp-preflight-")
+    try:
+        t0 = time.perf_counter()
+        for i, png in enumerate(pngs):
+            _write_new(os.path.join(folder, f"{i:05d}.png"), png)
+        return (time.perf_counter() - t0) / max(1, len(pngs))
+    except OSError:
+        return 0.0
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 # Share of the workers' time that is useful work when a job's slabs run on every core (slab
@@ -429,9 +455,9 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
             up = float(s.density_scale * np.min(reach[pos] / ftarget[pos]))
     oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
     worst = float(de.max()) if len(de) else 0.0
-    disk, spv, n_timed = _layer_estimate(ctx, nz)
+    disk, spv, n_timed, write_s = _layer_estimate(ctx, nz)
     workers = max(1, min(int(s.workers or os.cpu_count() or 1), nz))
-    seconds = CONVERT_OVERHEAD_S + spv * total / (workers * PARALLEL_EFFICIENCY)
+    seconds = CONVERT_OVERHEAD_S + (spv * total + write_s * nz) / (workers * PARALLEL_EFFICIENCY)
     rate = total / seconds
     rate_source = (f"timed on {n_timed} full layer{'s' if n_timed > 1 else ''} of this job, "
                    f"{workers} worker{'s' if workers > 1 else ''}")

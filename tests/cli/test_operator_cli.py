@@ -71,6 +71,10 @@ def test_evaluate_job_explains_its_columns(tmp_path, capsys):
     code, out, err = run(capsys, "evaluate", "job", job)
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[1].startswith("  per material: fraction = ") and "intended = " in lines[1] \
-        and "z = " in lines[1]
-    assert lines[2].split()[1:6:2] == ["fraction", "intended", "z"]
+    header = next(ln for ln in lines if ln.split()[:1] == ["material"])
+    assert header.split() == ["material", "voxels", "fraction", "intended", "z", "volume", "ml",
+                              "mass", "g"]
+    legend = out[out.index("  columns: "):]
+    for column in ("voxels = ", "fraction = ", "intended = ", "z = ", "volume ml = ",
+                   "mass g = "):
+        assert column in legend, column

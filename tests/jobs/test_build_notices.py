@@ -17,7 +17,8 @@ def test_builds_are_announced_once(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))      # colour tables
     monkeypatch.setenv("DREAMPRINT_CACHE", str(tmp_path / "dp"))     # blue-noise mask
     monkeypatch.setattr(halftone, "_generate_mask", _fast_mask)
-    s = ConvertSettings(source="demo", output=tmp_path / "JOB", height_mm=0.3, table_size=9)
+    s = ConvertSettings(source="demo", output=tmp_path / "JOB", height_mm=0.3, table_size=9,
+                        printer="j850-paper")
     first: list[str] = []
     prepare_job(s, notify=first.append)
     tables = [m for m in first if m.startswith("building colour tables (")]

@@ -4,14 +4,16 @@ honest about being estimated from a sample."""
 from dreamprint_gui.job.preflight import Preflight, PreflightWarning, _warnings
 
 
-def _pf(seconds: float, clamped: int = 0, safe: float | None = None) -> Preflight:
+def _pf(seconds: float, clamped: int = 0, safe: float | None = None,
+        lost: float | None = None) -> Preflight:
     fr = {"C": 0.1, "M": 0.1, "Y": 0.1, "K": 0.1, "W": 0.1, "Cl": 0.5, "empty": 0.0}
     return Preflight(
         grid_shape=(10, 10, 10), size_mm=(1.0, 1.0, 1.0), slices=10, total_voxels=1000,
         disk_bytes=2000, fractions=fr, sampled_voxels=1000, clamped_fraction=clamped / 1000,
         clamped_voxels=clamped, safe_density_scale=safe, out_of_gamut_fraction=0.0,
         worst_dE2000=0.0, seconds=seconds, rate_voxels_per_s=1e6, rate_source="benchmark",
-        content={"mode": "fog", "reason": "test"}, density_scale=50.0, background="clear")
+        content={"mode": "fog", "reason": "test"}, density_scale=50.0, background="clear",
+        printed_fraction=0.5, clamped_printed_fraction=clamped / 500, lost_at_safe_scale=lost)
 
 
 def test_sub_second_estimate_is_not_about_under():
@@ -28,7 +30,14 @@ def test_longer_estimates_keep_about():
 
 
 def test_clamp_hint_says_it_is_a_sample_estimate():
-    w = {x.code: x for x in _warnings(_pf(5.0, clamped=40, safe=3.29))}
+    w = {x.code: x for x in _warnings(_pf(5.0, clamped=40, safe=3.29, lost=0.01))}
     msg = w["clamped"].message
     assert isinstance(w["clamped"], PreflightWarning)
     assert "--density-scale 3.29 or less" in msg and "sampled" in msg and "\n" not in msg
+
+
+def test_clamp_hint_keeps_a_dense_object_dense():
+    """A lower scale that would turn much of the object to background is not suggested."""
+    w = {x.code: x for x in _warnings(_pf(5.0, clamped=40, safe=3.29, lost=0.3))}
+    msg = w["clamped"].message
+    assert "or less" not in msg and "the scale is kept" in msg and "30 %" in msg

@@ -12,7 +12,8 @@ vector instruction (AVX2 / AVX-512) instead of one voxel's latency chain at a ti
 the voxels whose density reaches the background threshold (branch-free compaction), across rows
 until a block of ``ROW_BLOCK`` voxels is full (a narrow row alone would feed the vector passes a
 few voxels at a time), with their clean colour, target, grey and halftone threshold; (2)
-trilinear lookup of the table node fields (:func:`gamut.alignment.interpolate_block`); (3)
+trilinear lookup of the table node fields (:func:`gamut.alignment.interpolate_block`, or once
+per run of one colour: :func:`gamut.alignment.lookup_runs`); (3)
 density alignment (:func:`gamut.alignment.align_rows`); (4) halftone
 (:func:`halftone.label_rows`), then the labels are scattered into the layer
 (:func:`halftone.scatter_counts`) and their intended concentrations summed

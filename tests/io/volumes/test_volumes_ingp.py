@@ -395,9 +395,9 @@ def test_convert_a_snapshot(tmp_path):
     grid = np.zeros(128 ** 3, np.float32)
     grid[: 128 ** 3 // 8] = 1.0                     # Morton: the first octant (x, y, z < 0.5)
     p = write_snapshot(tmp_path / "s.ingp", cfg, [d0, d1], rmats, table, density_grid=grid)
-    out = tmp_path / "JOB"
+    out = tmp_path / "JOB"  # over the whole box (--fit box): the occupied octant is 1/8 of it
     rc = main(["convert", str(p), "-o", str(out), "--height-mm", "0.5", "--table-size", "17",
-               "--workers", "2", "--slab-layers", "4", "--option", "view=mean"])
+               "--workers", "2", "--slab-layers", "4", "--option", "view=mean", "--fit", "box"])
     assert rc == 0
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["source"]["options"] == {"view": "mean"}

@@ -116,7 +116,9 @@ def test_inria_sample_file(shared_data, capsys):
     assert info["gaussians"] == 9080 and info["sh_degree"] == 3
     assert main(["inspect", "--json", str(f)]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"format", "gaussians", "skipped", "sh_degree", "bounds", "content"}
+    assert set(out) == {"format", "gaussians", "skipped", "sh_degree", "bounds", "content",
+                        "placement"}
+    assert out["placement"]["orientation"]["up"] == "-y"  # 3DGS: y down, stood up
     assert out["content"] == {"mode": "fog", "reason": "Gaussian splats"}
 
 
