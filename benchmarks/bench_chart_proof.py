@@ -7,7 +7,7 @@ mixtures of K, C, M, Y, W, measured 380-730 nm) is public but under a non-commer
 it is not shipped: convert it to these two CSVs (see docs/physics.md, "Chart proof").
 
     python benchmarks/bench_chart_proof.py RECIPES.csv REFLECTANCE.csv [--spp 512]
-        [--variants none,glossy,matte,none+hg:0.4] [--no-folds] [--geometry d:8]
+        [--variants none,glossy,matte,none+hg:0.4 | --variants ""] [--no-folds] [--geometry d:8]
 
 Prints, per variant with the built-in profile, the chart proof's dE2000 (mean, p95, max) and
 Kubelka-Munk R_inf's on the same patches; then per fold the calibration's own cross-validated
@@ -69,7 +69,7 @@ def main() -> None:
     allidx = np.arange(len(c))
     km = delta_E2000(lab, obs.spectra_to_Lab(reflectance_infinite(*mix(c, base.K, base.S))))
     print(f"built-in profile, KM R_inf (36 wavelengths)   {fmt(km)}")
-    for v in args.variants.split(","):
+    for v in [v for v in args.variants.split(",") if v]:
         de, t = proof(base, allidx, v)
         print(f"built-in profile, chart proof {v:16s} {fmt(de)}   ({t:.0f} s)", flush=True)
     if args.no_folds:

@@ -75,9 +75,9 @@ def test_proof_images_scale_with_the_page_and_the_de_map_has_a_colour_bar(qtbot)
     de = np.full((32, 32), np.nan)
     de[8:24, 8:24] = 10.0
     report = {"overall": {"mean_de2000": 10.0, "p95_de2000": 10.0, "psnr_db": 20.0,
-                          "mean_scielab_de2000": 6.0, "ssim": 0.5, "source_coverage": 0.25,
+                          "mean_scielab_de2000": 4.0, "ssim": 0.5, "source_coverage": 0.25,
                           "print_coverage": 0.25},
-              "viewing": {"distance_mm": 300.0},
+              "viewing": {"distance_mm": 500.0}, "noise_floor": None,
               "renderer": {"variant": "scalar_rgb"}, "timings_s": {"total": 1.0}}
     page._on_result({"report": report, "images": [{"source": src, "print": src, "de2000": de}]})
     qtbot.wait(50)

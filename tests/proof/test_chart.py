@@ -100,8 +100,15 @@ def test_chart_proof_command(tmp_path, capsys):
     assert {p.name for p in out.iterdir()} == {"chart_proof.json", "patches.csv", "chart.png"}
     assert rep["geometry"] == "d:8" and rep["optics"]["surface"] == "none"
     assert len(rep["patches"]) == 3 and all("de2000" in r for r in rep["patches"])
-    # "measured" here is the profile's own R_inf: the proof reproduces it (noise, RTE vs KM)
-    assert rep["de2000"]["mean"] < 1.5 and rep["de2000"]["worst_patches"][0]["patch"] in (1, 2, 3)
+    # "measured" here is the profile's own KM R_inf; the proof is the RTE (up to 0.06 darker
+    # for light patches, test above): a few dE2000, recomputed here from the written Labs
+    import colour
+
+    de = [colour.delta_E(r["measured_lab"], r["proof_lab"], method="CIE 2000")
+          for r in rep["patches"]]
+    np.testing.assert_allclose([r["de2000"] for r in rep["patches"]], de, atol=2e-3)
+    assert rep["de2000"]["mean"] == pytest.approx(np.mean(de), abs=2e-3) and max(de) < 6
+    assert rep["de2000"]["worst_patches"][0]["patch"] == int(np.argmax(de)) + 1
     lines = (out / "patches.csv").read_text().splitlines()
     assert len(lines) == 4 and lines[0].endswith("de2000")
 
