@@ -250,22 +250,26 @@ def test_voxel_model_previews_solid_with_its_intent(qtbot, gl_display, table_siz
     res = CliRunner().invoke(cli, ["inspect", str(knight), "--height-mm", "4"])
     assert res.exit_code == 0, res.output
     span = res.output.split("the print is ")[1].split(" mm")[0]
-    assert f"print {span} mm on " in p.status.text(), (span, p.status.text())
+    # the status line says the size once the preview has rendered (before: what it prepares)
+    qtbot.waitUntil(lambda: f"print {span} mm on " in p.status.text(), timeout=120000)
     occupied = p.data.source_sigma > 0
     assert 0.01 < occupied.mean() < 0.5
     assert np.all(p.data.source_sigma[occupied] == SOLID_SIGMA)  # opaque, not a haze
     # the printed solid is far denser than the fog the same file gives
     solid_print = float(np.median(p.data.print_sigma[occupied]))
-    with qtbot.waitSignal(p.rendered, timeout=120000):
-        p.set_params(content="fog")
+    # a render of the solid may still be on its way: wait for the fog's own data
+    p.set_params(content="fog")
+    qtbot.waitUntil(lambda: p.ctx.content.mode == "fog"
+                    and float(p.data.source_sigma.max()) < 0.1 * SOLID_SIGMA, timeout=120000)
     assert p.ctx.content.mode == "fog" and not p.ctx.content.picked
     fog = p.data.source_sigma[p.data.source_sigma > 0]
     assert fog.max() < 0.1 * SOLID_SIGMA
     assert float(np.median(p.data.print_sigma[occupied])) < solid_print
     # the demo cloud offers no voxel-edge choice and goes back to auto
-    with qtbot.waitSignal(p.rendered, timeout=120000):
-        w.open_path("demo")
-    assert not p.sampling.isEnabled() and p.params()["content"] == "auto"
+    w.open_path("demo")
+    qtbot.waitUntil(lambda: not p.sampling.isEnabled() and p.ctx.source is not None
+                    and "demo" in str(getattr(p.ctx.settings, "source", "")), timeout=120000)
+    assert p.params()["content"] == "auto"
     assert p.ctx.content.mode == "fog"
     w.close()
 
