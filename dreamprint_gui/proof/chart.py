@@ -38,8 +38,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -59,6 +57,7 @@ from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics, resolve_optics
 from dreamprint_gui.proof.print_render import INTEGRATOR
 from dreamprint_gui.proof.spectral import SpectralBands, spectral_bands
+from dreamprint_gui.proof.staging import staged_folder
 
 __all__ = ["ChartSettings", "load_chart", "render_chart", "run_chart_proof", "GEOMETRIES",
            "DEFAULT_GEOMETRY", "DEFAULT_CHART_SPP", "PATCH_MM", "THICK_MM", "SPOT_MM"]
@@ -334,19 +333,6 @@ def run_chart_proof(s: ChartSettings) -> dict[str, Any]:
     band_R, info = render_chart(chart.recipes, chart.profile, chart.optics, bands, s.geometry,
                                 s.thickness_mm, s.spp, s.seed, s.max_depth)
     rep = chart_report(s, chart, band_R, bands, info)
-    tmp = out.absolute().parent / f".{out.name}.chart-tmp-{os.getpid()}"
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir()
-    try:
+    with staged_folder(out, "chart") as tmp:
         _write(rep, chart, band_R, bands, tmp)
-        if out.exists():
-            old = out.absolute().parent / f".{out.name}.chart-old-{os.getpid()}"
-            os.replace(out, old)
-            os.replace(tmp, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return rep

@@ -68,6 +68,7 @@ from dreamprint_gui.proof.runner import ProofProgress, ProofSettings, _in_thread
 from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import (
     SourceField,
+    _box,
     optical_depth,
     render_source,
     sample_source,
@@ -170,21 +171,8 @@ def _backproject(origins, d, lo, cell, sigma, h, box_lo, box_size, values, num, 
     gf = np.empty(3)
     for r in range(origins.shape[0]):
         o = origins[r]
-        t0, t1 = -1e30, 1e30
-        miss = False
-        for a in range(3):
-            if abs(d[a]) < 1e-12:
-                if o[a] < lo[a] or o[a] > hi[a]:
-                    miss = True
-            else:
-                ta = (lo[a] - o[a]) / d[a]
-                tb = (hi[a] - o[a]) / d[a]
-                if ta > tb:
-                    ta, tb = tb, ta
-                t0 = max(t0, ta)
-                t1 = min(t1, tb)
-        t0 = max(t0, 0.0)
-        if miss or t1 <= t0:
+        t0, t1 = _box(o, d, lo, hi)  # the source render's ray-box entry and exit
+        if t1 <= t0:
             continue
         T = 1.0
         n = int(math.ceil((t1 - t0) / h))

@@ -16,8 +16,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
 import threading
 import time
 from collections.abc import Generator
@@ -54,6 +52,7 @@ from dreamprint_gui.proof.source_render import (
     sample_source,
 )
 from dreamprint_gui.proof.spectral import spectral_bands
+from dreamprint_gui.proof.staging import staged_folder
 
 __all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_proof",
            "write_proof", "print_xyz", "MAX_RESOLUTION", "MAX_SPP", "DEFAULT_SPP",
@@ -428,22 +427,9 @@ def run_proof(s: ProofSettings, cancel: threading.Event | None = None
         raise JobCancelled("the proof was cancelled")
     yield ProofProgress("writing", 0, 1, result["report"]["timings_s"]["total"],
                         "writing images")
-    tmp = out.absolute().parent / f".{out.name}.proof-tmp-{os.getpid()}"
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir()
-    try:
+    with staged_folder(out, "proof") as tmp:
         write_proof(result, tmp)
         if cancel is not None and cancel.is_set():
             raise JobCancelled("the proof was cancelled")
-        if out.exists():
-            old = out.absolute().parent / f".{out.name}.proof-old-{os.getpid()}"
-            os.replace(out, old)
-            os.replace(tmp, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     yield ProofProgress("done", 1, 1, result["report"]["timings_s"]["total"], str(out))
     return result["report"]
