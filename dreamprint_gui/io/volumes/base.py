@@ -196,3 +196,16 @@ class VolumeSource(Protocol):
     # ``job.sample_label.leaf_grid_job``) up to its layer arrays, or None. A source offers it
     # so that a print job samples and labels one layer at a time (DenseSource, VdbSource,
     # NanoVdbSource).
+
+
+def occupied_ranges(mask: np.ndarray) -> list[tuple[int, int]] | None:
+    """Per axis x, y, z, the first and one-past-last index where a (z, y, x) boolean ``mask``
+    holds anything; None when it holds nothing (the occupied box of a voxel model or of a
+    coarse occupancy grid, :mod:`.orient`)."""
+    if not mask.any():
+        return None
+    out = []
+    for a in range(3):
+        idx = np.flatnonzero(mask.any(axis=tuple(k for k in range(3) if k != 2 - a)))
+        out.append((int(idx[0]), int(idx[-1]) + 1))
+    return out

@@ -24,7 +24,13 @@ import numpy as np
 from numba import njit
 
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
+from dreamprint_gui.io.volumes.base import (
+    PrintGrid,
+    SlabBuffers,
+    check_slab,
+    occupied_ranges,
+    voxel_centres,
+)
 from dreamprint_gui.io.volumes.dense import DenseVolume
 
 __all__ = ["read_vox", "VoxSource", "open_path", "DEFAULT_PALETTE"]
@@ -274,16 +280,11 @@ class VoxSource:
 
     def occupied_bounds(self):
         """The box of the filled voxels (source units), exactly; None if none is filled."""
-        filled = self.index > 0
-        if not filled.any():
+        ranges = occupied_ranges(self.index > 0)
+        if ranges is None:
             return None
-        lo, hi = [], []
-        for a in range(3):
-            other = tuple(k for k in range(3) if k != 2 - a)
-            idx = np.flatnonzero(filled.any(axis=other))
-            lo.append(float(self.lo[a] + idx[0]))
-            hi.append(float(self.lo[a] + idx[-1] + 1))
-        return (tuple(lo), tuple(hi))
+        return (tuple(float(self.lo[a] + i0) for a, (i0, _) in enumerate(ranges)),
+                tuple(float(self.lo[a] + i1) for a, (_, i1) in enumerate(ranges)))
 
     def info(self) -> dict:
         return {"format": self.format, "grids": self._grids}

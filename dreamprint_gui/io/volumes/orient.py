@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit
 
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers
+from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, occupied_ranges
 
 __all__ = ["UP_AXES", "ROTATIONS", "FIT_MODES", "orientation_matrix", "Orientation",
            "auto_up", "choose_orientation", "orient_source", "OrientedSource",
@@ -329,13 +329,12 @@ def occupied_bounds(source, cells: int = 96):
     for z in range(0, n[2], step_z):
         _, sigma = source.sample_slab(grid, z, min(n[2], z + step_z), density_scale=1.0)
         occ[z:z + step_z] = np.asarray(sigma) > 0
-    if not occ.any():
+    ranges = occupied_ranges(occ)
+    if ranges is None:
         return None
     out_lo, out_hi = [], []
     for a in range(3):
-        other = tuple(k for k in range(3) if k != 2 - a)
-        idx = np.flatnonzero(occ.any(axis=other))
-        i0, i1 = max(0, int(idx[0]) - 1), min(n[a], int(idx[-1]) + 2)
+        i0, i1 = max(0, ranges[a][0] - 1), min(n[a], ranges[a][1] + 1)
         out_lo.append(float(lo[a] + i0 * cell[a]) if ext[a] > 0 else float(lo[a]))
         out_hi.append(float(min(hi[a], lo[a] + i1 * cell[a])) if ext[a] > 0 else float(hi[a]))
     return (tuple(out_lo), tuple(out_hi))
