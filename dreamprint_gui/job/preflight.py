@@ -334,17 +334,16 @@ def _layer_estimate(ctx, nz: int) -> tuple[int, float, int, float]:
             timed += time.perf_counter() - t0
     n_timed = max(1, len(zs) - 1)
     spv = timed / (n_timed * nx * ny)
-    return int(total / len(zs) * nz) + 16_384, spv, n_timed, _write_seconds(ctx, pngs)
+    return int(total / len(zs) * nz) + 16_384, spv, n_timed, _write_seconds(pngs)
 
 
-def _write_seconds(ctx, pngs: list[bytes]) -> float:
-    """Mean seconds to write one of ``pngs`` as a new file, as the slabs write slices."""
-    out = getattr(ctx.settings, "output", None)
-    parent = Path(out).resolve().parent if out else None
-    try:
-        folder = tempfile.mkdtemp(prefix=".dp-preflight-", dir=parent)
-    except OSError:
-        folder = tempfile.mkdtemp(prefix=".dp-preflight-")
+def _write_seconds(pngs: list[bytes]) -> float:
+    """Mean seconds to write one of ``pngs`` as a new file, as the slabs write slices.
+
+    Timed in the system's temporary folder, never beside the job's output: a pre-flight runs
+    while the operator edits or cancels an export, and nothing of it may appear in (or be left
+    in) the folder the job goes to."""
+    folder = tempfile.mkdtemp(prefix=".dp-preflight-")
     try:
         t0 = time.perf_counter()
         for i, png in enumerate(pngs):
