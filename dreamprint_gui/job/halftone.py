@@ -48,7 +48,8 @@ from numba import njit
 from dreamprint_gui.core.profile import INKS
 
 __all__ = ["blue_noise_mask", "mask_shape_for_voxel", "uniform_hash", "Halftoner",
-           "pick_label", "label_rows", "fg_threshold", "scatter_labels", "scatter_counts",
+           "pick_label", "label_rows", "fg_threshold", "threshold_row", "scatter_labels",
+           "scatter_counts",
            "tile_layout", "TILING", "mask_build_estimate", "MASK_BUILD_SECONDS",
            "fraction_variance_ratio", "box_for_voxel", "HALFTONE_METHODS", "MASK_VERSION"]
 
@@ -354,6 +355,38 @@ def fg_threshold(method, mask, tiles, cols, rows, seed, i, j, x, y, z):
         xx -= mx if xx >= mx else 0
         return np.float64(mask[t[0], yy, xx])
     return _uniform(seed, x, y, z)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def threshold_row(method, mask, tiles, cols, rows, seed, j, x0, y, z, i0, i1, out):
+    """:func:`fg_threshold` of columns ``i0 <= i < i1`` of row ``j`` (position ``(x0 + i, y,
+    z)``) into ``out[i]`` (float64), the same values. Blue noise: per tile along the row, its
+    mask row (``tiles[rows[1, j], a]``), rotated by the tile's x shift, copied as two runs;
+    random: the position hash of each voxel."""
+    if method != 0:
+        for i in range(i0, i1):
+            out[i] = _uniform(seed, x0 + i, y, z)
+        return
+    my = mask.shape[1]
+    mx = mask.shape[2]
+    b = rows[1, j]
+    ry = rows[0, j]
+    i = i0
+    while i < i1:
+        a = cols[1, i]
+        c0 = cols[0, i]
+        e = min(i1, i + mx - c0)  # the tile's last column + 1: cols[0] runs c0 .. mx - 1
+        yy = ry + tiles[b, a, 1]
+        yy -= my if yy >= my else 0
+        mrow = mask[tiles[b, a, 0], yy]
+        xx = c0 + tiles[b, a, 2]
+        xx -= mx if xx >= mx else 0
+        n1 = min(e - i, mx - xx)
+        for q in range(n1):
+            out[i + q] = np.float64(mrow[xx + q])
+        for q in range(n1, e - i):
+            out[i + q] = np.float64(mrow[q - n1])
+        i = e
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -215,8 +215,7 @@ class JobContext:
             _, tables = self.resources()
             ht = self.halftoner
             args = (np.float32(ht.threshold), ht.bg_label, kernel_table(tables),
-                    tables.packed.shape[0], tables.brightness_rho_k.astype(np.float64),
-                    np.float32(tables.sigma_clear), *ht.kernel_args())
+                    tables.packed.shape[0], np.float32(tables.sigma_clear), *ht.kernel_args())
             self.__dict__["_kernel_args"] = args
         return args
 

@@ -87,3 +87,16 @@ def test_predicted_appearance_shape_and_colour(profile, small_tables):
     srgb, sigma = predicted_appearance(small_tables, profile, rgb, 5.0)
     assert srgb.shape == (4, 5, 3) and sigma.shape == (4, 5)
     assert np.all(np.isfinite(srgb)) and np.all(sigma > 0)
+
+
+def test_kernel_table_carries_the_grey_rho_k_of_each_node(small_tables):
+    from dreamprint_gui.gamut.alignment import K_RHOK, LANES, kernel_table
+    from dreamprint_gui.gamut.grey import rho_k_for
+
+    n = small_tables.packed.shape[0]
+    lane = kernel_table(small_tables).reshape(n, n, n, LANES)[..., K_RHOK]
+    a = np.arange(n) / (n - 1)
+    bright = (a[:, None, None] + a[None, :, None] + a[None, None, :]) / 3.0
+    np.testing.assert_array_equal(
+        lane, rho_k_for(small_tables.brightness_rho_k, bright).astype(np.float32))
+    assert lane.min() < 0.05 and lane.max() > 0.95  # black and white greys

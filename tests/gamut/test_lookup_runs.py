@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.gamut.alignment import (
-    K_GREY,
     K_RHOK,
     K_TARGET,
     ROW_BLOCK,
@@ -62,17 +61,15 @@ def test_lookup_runs_writes_the_per_voxel_lanes(small_tables, m, mean_run):
     rng = np.random.default_rng(m)
     flat = kernel_table(small_tables)
     n = small_tables.packed.shape[0]
-    rk = small_tables.brightness_rho_k.astype(np.float64)
     raw = _runs_block(rng, m, mean_run)
     dens = rng.uniform(0, 40, m).astype(np.float32)
     col, W, off, A, G, _ = _stage(raw, dens)
     ref = [a.copy() for a in (col, W, off, A, G)]
-    finish_staging(ref[0], ref[4], m, rk)
+    finish_staging(ref[0], m)
     interpolate_block(flat, n, ref[0], m, ref[1], ref[2], ref[3], ref[4])
-    finish_staging(col, G, m, rk)  # cleans; its rho_K lane is overwritten by lookup_runs
-    G[K_RHOK * RS:K_RHOK * RS + m] = np.nan
-    lookup_runs(flat, n, rk, col, m, W, off, A, G)
-    for q in list(range(K_GREY + 1)) + [K_RHOK, K_TARGET]:
+    finish_staging(col, m)
+    lookup_runs(flat, n, col, m, W, off, A, G)
+    for q in list(range(K_RHOK + 1)) + [K_TARGET]:
         np.testing.assert_array_equal(_bits(G[q * RS:q * RS + m]),
                                       _bits(ref[4][q * RS:q * RS + m]), err_msg=f"lane {q}")
     clean = ref[0].reshape(3, RS)[:, :m]
@@ -87,7 +84,6 @@ def test_lookup_align_block_gives_the_per_voxel_concentrations(small_tables, mea
     rng = np.random.default_rng(int(mean_run * 10) % 97)
     flat = kernel_table(small_tables)
     n = small_tables.packed.shape[0]
-    rk = small_tables.brightness_rho_k.astype(np.float64)
     sc = np.float32(small_tables.sigma_clear)
     m = ROW_BLOCK - 5
     raw = _runs_block(rng, m, mean_run)
@@ -100,8 +96,8 @@ def test_lookup_align_block_gives_the_per_voxel_concentrations(small_tables, mea
     runs = count_runs(np.where(np.isnan(col), 0, np.clip(col, 0, 1)).astype(np.float32), m)
     assert (runs * RUN_MIN <= m) == (mean_run >= 8)  # both paths are exercised
     stats = np.zeros(4)
-    lookup_align_block(flat, n, rk, sc, col, m, W, off, A, G, C, stats)
-    finish_staging(ref[0], ref[4], m, rk)
+    lookup_align_block(flat, n, sc, col, m, W, off, A, G, C, stats)
+    finish_staging(ref[0], m)
     interpolate_block(flat, n, ref[0], m, ref[1], ref[2], ref[3], ref[4])
     lo, hi = align_rows(ref[4], m, sc, ref[5])
     for q in range(8):

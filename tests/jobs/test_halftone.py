@@ -224,3 +224,38 @@ def test_every_tile_reads_the_whole_mask_once():
             np.testing.assert_array_equal(np.sort(tile.ravel()), ref)
             shifts.add(tile.tobytes())
     assert len(shifts) == 4  # the tiles differ
+
+
+@pytest.mark.parametrize("method", ["blue-noise", "random"])
+def test_threshold_row_equals_the_voxels_thresholds(method):
+    from numba import njit
+
+    from dreamprint_gui.job.halftone import fg_threshold, threshold_row, tile_layout
+
+    @njit
+    def both(method, mask, ox, oy, oz, seed, x0, nx, y0, ny, z, row, one):
+        mz, my, mx = mask.shape
+        cols, rows, tiles = tile_layout(x0, nx, y0, ny, z, ox, oy, oz, mz, my, mx, seed)
+        for j in range(ny):
+            threshold_row(method, mask, tiles, cols, rows, seed, j, x0, y0 + j, z, 0, nx,
+                          row[j])
+            lo = j % 7
+            hi = max(lo, nx - j % 5)
+            part = np.full(nx, -2.0)
+            threshold_row(method, mask, tiles, cols, rows, seed, j, x0, y0 + j, z, lo, hi, part)
+            for i in range(nx):
+                if (lo <= i < hi) != (part[i] == row[j, i]):
+                    row[j, i] = -3.0  # a span's thresholds are the row's, and only the span
+            for i in range(nx):
+                one[j, i] = fg_threshold(method, mask, tiles, cols, rows, seed, i, j, x0 + i,
+                                         y0 + j, z)
+
+    h = Halftoner.create(method, 17, VOX)
+    code, mask, ox, oy, oz, seed, _ = h.kernel_args()
+    for x0, nx, y0, ny, z in [(0, 101, 0, 90, 3), (5, 37, 11, 40, 200), (0, 1, 0, 2, 0),
+                              (23, 12, 2, 3, 77)]:
+        row = np.full((ny, nx + 3), -1.0)
+        one = np.empty((ny, nx))
+        both(code, mask, ox, oy, oz, seed, x0, nx, y0, ny, z, row, one)
+        np.testing.assert_array_equal(row[:, :nx], one)
+        assert np.all(row[:, nx:] == -1.0)  # nothing past the row

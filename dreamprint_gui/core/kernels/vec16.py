@@ -4,10 +4,8 @@ Defines
 -------
 - :func:`weighted_sum16`: ``out[d:d+16] = (((w0 a0 + w1 a1) + w2 a2) + ... ) + w7 a7`` where
   ``a_n = src[o_n:o_n+16]``: the trilinear interpolation of one voxel's 16 table lanes.
-- :func:`transpose16x12`: 16 rows of 16 floats (voxel-major) -> their first 12 columns as rows
+- :func:`transpose16x13`: 16 rows of 16 floats (voxel-major) -> their first 13 columns as rows
   (lane-major), the layout in which the alignment pass vectorises across voxels.
-- :func:`grey_rho_k16`: :func:`.gamut.alignment.grey_rho_k` of 16 voxels at once, its two
-  table reads as vector gathers.
 - :func:`accumulate8`: ``acc[8 j : 8 j + 8] += src[o : o + 8]`` in float64, the step of a sum
   kept as 8 partial sums (a float reduction written as a loop stays one add at a time: LLVM may
   not reorder float additions).
@@ -29,18 +27,15 @@ from __future__ import annotations
 
 from llvmlite import ir
 from numba import types
-from numba.core import cgutils
 from numba.extending import intrinsic
 
-__all__ = ["weighted_sum16", "transpose16x12", "grey_rho_k16", "accumulate8"]
+__all__ = ["weighted_sum16", "transpose16x13", "accumulate8"]
 
 _F32 = ir.FloatType()
 _I32 = ir.IntType(32)
 _I64 = ir.IntType(64)
 _F64 = ir.DoubleType()
 _V16 = ir.VectorType(_F32, 16)
-_D16 = ir.VectorType(_F64, 16)
-_L16 = ir.VectorType(_I64, 16)
 
 
 def _data(context, builder, aty, value):
@@ -94,8 +89,8 @@ def weighted_sum16(typingctx, src, offsets, weights, out, d):
 
 
 @intrinsic
-def transpose16x12(typingctx, src, s0, dst, d0, stride):
-    """``src[s0 + 16 r + q]`` (r, q < 16) -> ``dst[d0 + q * stride + r]`` for q < 12; ``src``
+def transpose16x13(typingctx, src, s0, dst, d0, stride):
+    """``src[s0 + 16 r + q]`` (r, q < 16) -> ``dst[d0 + q * stride + r]`` for q < 13; ``src``
     and ``dst`` float32 1-D arrays, ``s0``, ``d0``, ``stride`` int64."""
     if not (_f32_array(src) and _f32_array(dst) and _is_i64(s0) and _is_i64(d0)
             and _is_i64(stride)):
@@ -121,65 +116,9 @@ def transpose16x12(typingctx, src, s0, dst, d0, stride):
                     rows[r], rows[r + h], _mask(c + h if not c & h else 16 + c for c in range(16)))
             rows = new
             h //= 2
-        for q in range(12):
+        for q in range(13):
             at = builder.add(args[3], builder.mul(args[4], ir.Constant(_I64, q)))
             builder.store(rows[q], _vec_at(builder, db, at), align=4)
-        return context.get_dummy_value()
-
-    return sig, codegen
-
-
-def _splat(builder, value, vec_type):
-    one = builder.insert_element(ir.Constant(vec_type, None), value, ir.Constant(_I32, 0))
-    return builder.shuffle_vector(one, ir.Constant(vec_type, None), _mask([0] * 16))
-
-
-def _gather_f64(builder, base, index):
-    """``base[index]`` for a <16 x i64> ``index``: one masked gather, every lane on."""
-    addr = builder.add(builder.shl(index, ir.Constant(_L16, [3] * 16)),
-                       _splat(builder, builder.ptrtoint(base, _I64), _L16))
-    ptrs = builder.inttoptr(addr, ir.VectorType(_F64.as_pointer(), 16))
-    fnty = ir.FunctionType(_D16, [ptrs.type, _I32, ir.VectorType(ir.IntType(1), 16), _D16])
-    fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.masked.gather.v16f64.v16p0")
-    return builder.call(fn, [ptrs, ir.Constant(_I32, 8),
-                             ir.Constant(ir.VectorType(ir.IntType(1), 16), [1] * 16),
-                             ir.Constant(_D16, None)])
-
-
-@intrinsic
-def grey_rho_k16(typingctx, col, k0, stride, table, out, o0):
-    """``out[o0 + l] = grey_rho_k(table, r, g, b)`` of the clean colours ``r, g, b =
-    col[k0 + l + c * stride]`` (c = 0, 1, 2), l < 16, with the scalar function's operations:
-    x = ((r + g) + b) / 3 * (n - 1) in float32, j = min(int(x), n - 2), v = x - j,
-    float32(table[j] (1 - v) + table[j + 1] v) in float64. The colours must be in [0, 1] (every
-    lane: an index is read for each), ``table`` float64 with n >= 2 entries."""
-    if not (_f32_array(col) and _f32_array(out) and _is_i64(k0) and _is_i64(stride)
-            and _is_i64(o0) and isinstance(table, types.Array) and table.ndim == 1
-            and table.dtype == types.float64):
-        return None
-    sig = types.void(col, k0, stride, table, out, o0)
-
-    def codegen(context, builder, signature, args):
-        cb = _data(context, builder, signature.args[0], args[0])
-        tab = context.make_array(signature.args[3])(context, builder, value=args[3])
-        ob = _data(context, builder, signature.args[4], args[4])
-        k0, stride = args[1], args[2]
-        r, g, b = (builder.load(_vec_at(builder, cb, builder.add(k0, builder.mul(
-            stride, ir.Constant(_I64, c)))), align=4) for c in range(3))
-        n = builder.extract_value(tab.shape, 0)
-        three = _splat(builder, ir.Constant(_F32, 3.0), _V16)
-        x = builder.fdiv(builder.fadd(builder.fadd(r, g), b), three)
-        x = builder.fmul(x, _splat(builder, builder.sitofp(builder.sub(n, ir.Constant(_I64, 1)),
-                                                           _F32), _V16))
-        j = builder.fptosi(x, _L16)
-        top = _splat(builder, builder.sub(n, ir.Constant(_I64, 2)), _L16)
-        j = builder.select(builder.icmp_signed("<", j, top), j, top)
-        v = builder.fpext(builder.fsub(x, builder.sitofp(j, _V16)), _D16)
-        lo = _gather_f64(builder, tab.data, j)
-        hi = _gather_f64(builder, tab.data, builder.add(j, ir.Constant(_L16, [1] * 16)))
-        res = builder.fadd(builder.fmul(lo, builder.fsub(ir.Constant(_D16, [1.0] * 16), v)),
-                           builder.fmul(hi, v))
-        builder.store(builder.fptrunc(res, _V16), _vec_at(builder, ob, args[5]), align=4)
         return context.get_dummy_value()
 
     return sig, codegen

@@ -34,7 +34,7 @@ __all__ = ["dense_slab_labels", "window_slab_labels"]
 @njit(cache=True, nogil=True, error_model="numpy")
 def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                       srows, planes, planes_nz, plane_layer, row, cpl, scale, uniform, linear,
-                      rgb, dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear, method,
+                      rgb, dens, z0, threshold, bg_label, flat, n, sigma_clear, method,
                       mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
     """Labels (L, ny, nx) of layers ``z0 .. z0 + L - 1`` of a dense grid ``vol`` (channel 0
     density, 1-3 premultiplied colour if it has 4 channels, else ``uniform`` sRGB colour (3,)):
@@ -60,7 +60,7 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
                     mode, scale)
         if colour and linear:
             encode_where(rgb, dens, threshold, labels.shape[2])
-        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
 
 
@@ -68,7 +68,7 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
 def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                        srows, planes, planes_nz, plane_layer, row, cpl, low, inv_width, lut,
                        density, use_outside, outside_z, outside_y, outside_x, values, rgb, dens,
-                       z0, threshold, bg_label, flat, n, rho_k, sigma_clear, method, mask, ox,
+                       z0, threshold, bg_label, flat, n, sigma_clear, method, mask, ox,
                        oy, oz, seed, order, labels, counts, sums, stats):
     """Labels (L, ny, nx) of layers ``z0 .. z0 + L - 1`` of a scalar image (``vol`` one
     channel): per layer, the trilinear samples (:func:`..io.volumes.dense_sampler.dense_layer`)
@@ -89,5 +89,5 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
                 for i in range(nx):
                     if outside_z[k] or outside_y[j] or outside_x[i]:
                         dens[j * nx + i] = 0.0
-        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)

@@ -9,9 +9,11 @@ Defines
 
 In passes over blocks of foreground voxels, so that the arithmetic of 8-16 voxels runs in one
 vector instruction (AVX2 / AVX-512) instead of one voxel's latency chain at a time: (1) gather
-the voxels whose density reaches the background threshold (branch-free compaction), across rows
-until a block of ``ROW_BLOCK`` voxels is full (a narrow row alone would feed the vector passes a
-few voxels at a time), with their clean colour, target, grey and halftone threshold; (2)
+the voxels whose density reaches the background threshold with their halftone threshold
+(a row with enough foreground: the whole row's thresholds as copies of mask rows,
+:func:`halftone.threshold_row`, then a branch-free compaction; a sparse row: voxel by voxel),
+across rows until a block of ``ROW_BLOCK`` voxels is full (a narrow row alone would feed the
+vector passes a few voxels at a time), then stage their colour and target; (2)
 trilinear lookup of the table node fields (:func:`gamut.alignment.interpolate_block`, or once
 per run of one colour: :func:`gamut.alignment.lookup_runs`); (3)
 density alignment (:func:`gamut.alignment.align_rows`); (4) halftone
@@ -35,9 +37,20 @@ from dreamprint_gui.gamut.alignment import (
     lookup_align_block,
     stage_voxel,
 )
-from dreamprint_gui.job.halftone import fg_threshold, label_rows, scatter_counts, tile_layout
+from dreamprint_gui.job.halftone import (
+    fg_threshold,
+    label_rows,
+    scatter_counts,
+    threshold_row,
+    tile_layout,
+)
 
-__all__ = ["layer_labels", "slab_labels", "block_conc_sums"]
+__all__ = ["layer_labels", "slab_labels", "block_conc_sums", "DENSE_ROW"]
+
+# A row with at least 1/DENSE_ROW of its voxels in the foreground gets its halftone thresholds
+# for the whole row (:func:`.halftone.threshold_row`) and a branch-free compaction; a sparser
+# row, its foreground voxels' thresholds one by one.
+DENSE_ROW = 8
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -62,7 +75,7 @@ def block_conc_sums(C, m, acc, sums):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
+def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
                  method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
     """``rgb`` (ny*nx, 3) float32 sRGB, ``dens`` (ny*nx,) float32 1/mm of layer ``z`` ->
     ``labels`` (ny, nx) uint8. Accumulates ``counts`` (7,) int64, ``sums`` (7,) float64
@@ -72,13 +85,13 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     mz, my, mx = mask.shape
     cols, rows, tiles = tile_layout(0, nx, 0, ny, z, ox, oy, oz, mz, my, mx, seed)
     RB = ROW_BLOCK
-    # Foreground voxels of consecutive rows (flat position, row) wait here until a block is
-    # full: narrow rows would otherwise give the vector passes a few voxels at a time.
+    # Foreground voxels of consecutive rows (flat position, halftone threshold) wait here until
+    # a block is full: narrow rows would otherwise give the vector passes a few voxels at a time.
     idx = np.empty(RB + nx, np.int64)
-    jdx = np.empty(RB + nx, np.int64)
+    tq = np.empty(RB + nx)
+    trow = np.empty(nx)
     col, W, off, A, G, C = block_buffers()
     C2 = C.reshape((8, ROW_STRIDE))
-    tt = np.empty(RB)
     lab = np.empty(RB, np.uint8)
     acc = np.empty(48)
     out = labels.reshape(-1)
@@ -86,19 +99,32 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
     m = 0
     for j in range(ny):
         base = j * nx
-        m_row = m
-        fg = False
-        for i in range(nx):  # vectorised: an empty row (a third or more of most jobs) is
-            fg |= dens[base + i] >= threshold  # filled with no compaction
-        if fg:
-            for i in range(nx):
+        out[base:base + nx] = bg_label
+        # vectorised: the row's foreground count and span [lo, hi]; an empty row (a third or
+        # more of most jobs) is filled with no compaction, and a row's compaction covers its
+        # span only (a sparse source's rows are two to three times their foreground)
+        n_fg = 0
+        lo = nx
+        hi = -1
+        for i in range(nx):
+            f = dens[base + i] >= threshold  # NaN is background
+            n_fg += 1 if f else 0
+            lo = min(lo, i if f else nx)
+            hi = max(hi, i if f else -1)
+        n_bg += nx - n_fg
+        if n_fg * DENSE_ROW >= hi + 1 - lo:
+            # the span's thresholds at once (copies of mask rows), then a branch-free compaction
+            threshold_row(method, mask, tiles, cols, rows, seed, j, 0, j, z, lo, hi + 1, trow)
+            for i in range(lo, hi + 1):
                 idx[m] = base + i
-                jdx[m] = j
-                m += 1 if dens[base + i] >= threshold else 0  # NaN is background
-                out[base + i] = bg_label
-        else:
-            out[base:base + nx] = bg_label
-        n_bg += nx - (m - m_row)
+                tq[m] = trow[i]
+                m += 1 if dens[base + i] >= threshold else 0
+        elif n_fg > 0:  # few foreground voxels: their thresholds one by one
+            for i in range(lo, hi + 1):
+                if dens[base + i] >= threshold:
+                    idx[m] = base + i
+                    tq[m] = fg_threshold(method, mask, tiles, cols, rows, seed, i, j, i, j, z)
+                    m += 1
         if m < RB and j < ny - 1:
             continue
         k0 = 0
@@ -106,29 +132,26 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, rho_k, sigma_clear,
             mb = min(RB, m - k0)
             for k in range(mb):
                 p = idx[k0 + k]
-                jj = jdx[k0 + k]
-                i = p - jj * nx
                 stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
-                tt[k] = fg_threshold(method, mask, tiles, cols, rows, seed, i, jj, i, jj, z)
-            lookup_align_block(flat, n, rho_k, sigma_clear, col, mb, W, off, A, G, C, stats)
-            label_rows(C2, tt, mb, order, bg_label, lab)
+            lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
+            label_rows(C2, tq[k0:], mb, order, bg_label, lab)
             scatter_counts(out, idx, k0, lab, mb, counts)
             block_conc_sums(C, mb, acc, sums)
             k0 += mb
         for k in range(m - k0):  # the unfinished block's voxels move to the front
             idx[k] = idx[k0 + k]
-            jdx[k] = jdx[k0 + k]
+            tq[k] = tq[k0 + k]
         m -= k0
     counts[bg_label] += n_bg
     sums[bg_label] += n_bg
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def slab_labels(rgb, dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear,
+def slab_labels(rgb, dens, z0, threshold, bg_label, flat, n, sigma_clear,
                 method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
     """:func:`layer_labels` for layers ``z0 .. z0 + L - 1``: ``rgb`` (L, ny*nx, 3), ``dens``
     (L, ny*nx), ``labels`` (L, ny, nx); ``sums`` (L, 7), one row per layer (a layer's sum does
     not depend on the slab it was in, so the job's total need not either)."""
     for k in range(labels.shape[0]):
-        layer_labels(rgb[k], dens[k], z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+        layer_labels(rgb[k], dens[k], z0 + k, threshold, bg_label, flat, n, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)

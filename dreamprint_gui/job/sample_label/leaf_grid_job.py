@@ -23,7 +23,7 @@ __all__ = ["leaf_grid_slab_labels", "leaf_grid_colour_slab_labels"]
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def leaf_grid_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, uniform, rgb,
-                          dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear, method,
+                          dens, z0, threshold, bg_label, flat, n, sigma_clear, method,
                           mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
     """Labels (L, ny, nx) of layers ``z0 .. z0 + L - 1`` of a densified leaf grid: the slab's
     plan (``dense, rows_nz, k0, wk`` per layer, ``j0, wj, i0, wi``, ``plane`` scratch, density
@@ -34,14 +34,14 @@ def leaf_grid_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, 
         rgb[:, c] = uniform[c]
     for k in range(labels.shape[0]):
         leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens)
-        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def leaf_grid_colour_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, cdense,
                                  crows_nz, ck0, cwk, cj0, cwj, ci0, cwi, cplane, linear, rgb,
-                                 dens, z0, threshold, bg_label, flat, n, rho_k, sigma_clear,
+                                 dens, z0, threshold, bg_label, flat, n, sigma_clear,
                                  method, mask, ox, oy, oz, seed, order, labels, counts, sums,
                                  stats):
     """As :func:`leaf_grid_slab_labels`, the colour sampled per layer from a densified vec3
@@ -60,5 +60,5 @@ def leaf_grid_colour_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, 
             encode_where(rgb, dens, threshold, nx)
         else:
             clip_where(rgb, dens, threshold, nx)
-        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, rho_k, sigma_clear,
+        layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
                      method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
