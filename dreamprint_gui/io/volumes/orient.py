@@ -284,10 +284,7 @@ def _turned_gaussians(cloud, m: np.ndarray):
     turned = full[:, src][:, :, src] * (sgn[:, None] * sgn[None, :])
     c.inv_cov = np.ascontiguousarray(np.stack(
         [turned[:, i, k] for i, k in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))], 1))
-    zmin = c.mean[:, 2] - c.half[:, 2]
-    c._order = np.argsort(zmin, kind="stable")
-    c._zmin_sorted = zmin[c._order]
-    c._zmax = c.mean[:, 2] + c.half[:, 2]
+    c.index_by_height()
     c.bounds = _turned_bounds(cloud.bounds, m)
     c.orientation = None
     return c

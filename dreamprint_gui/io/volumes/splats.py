@@ -38,7 +38,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import splat_formats
 from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
 from dreamprint_gui.io.volumes.dense import bounds_list
-from dreamprint_gui.io.volumes.splat_raster import rasterise_splats
+from dreamprint_gui.io.volumes.splat_raster import pack_gaussians, rasterise_splats
 
 __all__ = ["GaussianCloud", "peak_density", "open_path", "SH_C0"]
 
@@ -142,10 +142,7 @@ class GaussianCloud:
         self.half = np.ascontiguousarray(half[ok])
         self.peak = np.ascontiguousarray(peak_density(opacity, sigmas))
         self.rgb = np.ascontiguousarray(rgb)
-        zmin = self.mean[:, 2] - self.half[:, 2]
-        self._order = np.argsort(zmin, kind="stable")
-        self._zmin_sorted = zmin[self._order]
-        self._zmax = self.mean[:, 2] + self.half[:, 2]
+        self.index_by_height()
         if bounds is None:
             if len(self.mean):
                 lo = (self.mean - self.half).min(0)
@@ -155,17 +152,31 @@ class GaussianCloud:
             bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
         self.bounds = bounds
 
+    def index_by_height(self) -> None:
+        """The rasteriser's copy of the Gaussians (:func:`.splat_raster.pack_gaussians`) in
+        order of their lowest z, with their lowest and highest z and the running maximum of the
+        highest: a slab's Gaussians are then one stretch of rows, found by two binary
+        searches, read one after another (in file order they were gathered from all over the
+        arrays: ~2 ns per voxel to select them, and a cache miss per array and Gaussian)."""
+        zmin = self.mean[:, 2] - self.half[:, 2]
+        order = np.argsort(zmin, kind="stable")
+        self._packed = pack_gaussians(self.mean, self.inv_cov, self.half, self.peak, self.rgb,
+                                      order)
+        self._zmin_sorted = zmin[order]
+        self._zmax_sorted = (self.mean[:, 2] + self.half[:, 2])[order]
+        self._zmax_reach = np.maximum.accumulate(self._zmax_sorted) if len(order) else zmin
+
     def sample_slab(self, grid: PrintGrid, z0: int, z1: int, *, density_scale: float = 1.0,
                     out: SlabBuffers | None = None):
         check_slab(grid, z0, z1)
-        xs = voxel_centres(grid, 0)
-        ys = voxel_centres(grid, 1)
         zs = voxel_centres(grid, 2, z0, z1)
         n = np.searchsorted(self._zmin_sorted, zs[-1], side="right")
-        cand = self._order[:n]
-        cand = np.sort(cand[self._zmax[cand] >= zs[0]])      # fixed order: deterministic sums
-        return rasterise_splats(cand, self.mean, self.inv_cov, self.peak, self.rgb, self.half,
-                                xs, ys, zs, density_scale / grid.mm_per_unit, out)
+        lo = np.searchsorted(self._zmax_reach[:n], zs[0], side="left")
+        # ascending rows of the height order: a fixed order, deterministic sums
+        cand = lo + np.flatnonzero(self._zmax_sorted[lo:n] >= zs[0])
+        pitch = tuple(float(v) / grid.mm_per_unit for v in grid.voxel_mm)
+        return rasterise_splats(cand, self._packed, grid.origin, pitch, grid.shape_xyz, z0, z1,
+                                density_scale / grid.mm_per_unit, out)
 
     def info(self) -> dict:
         return {"format": self.format, "gaussians": int(self.n_total),
