@@ -8,10 +8,16 @@ it is not shipped: convert it to these two CSVs (see docs/physics.md, "Chart pro
 
     python benchmarks/bench_chart_proof.py RECIPES.csv REFLECTANCE.csv [--spp 512]
         [--variants none,glossy,matte,none+hg:0.4 | --variants ""] [--no-folds] [--geometry d:8]
+        [--fold-variants default,matte,...]
 
 Prints, per variant with the built-in profile, the chart proof's dE2000 (mean, p95, max) and
 Kubelka-Munk R_inf's on the same patches; then per fold the calibration's own cross-validated
-figure and the chart proof of the held-out half with the calibrated profile (default optics).
+figure, KM R_inf of the held-out half (at the profile's wavelengths and in the proof's bands:
+the floor the band integration sets) and the chart proof of the held-out half with the
+calibrated profile, for each of ``--fold-variants`` (``default``: the proof's default optics).
+A variant is SURFACE[+PHASE], e.g. ``matte+hg:0.4``.
+
+The target figure (issue 28): the last line, ``2-fold chart proof ... default``.
 """
 
 from __future__ import annotations
@@ -43,6 +49,7 @@ def main() -> None:
     ap.add_argument("--geometry", default="d:8")
     ap.add_argument("--variants", default="none,glossy,matte,none+hg:0.4")
     ap.add_argument("--no-folds", action="store_true")
+    ap.add_argument("--fold-variants", default="default")
     args = ap.parse_args()
 
     base = default_profile()
@@ -59,7 +66,8 @@ def main() -> None:
 
     def proof(profile, idx, variant):
         surface, _, phase = variant.partition("+")
-        optics = resolve_optics(surface, phase or None, profile.proof_optics)
+        optics = resolve_optics(None if surface == "default" else surface, phase or None,
+                                profile.proof_optics)
         b = spectral_bands(profile, args.bands)
         t0 = time.perf_counter()
         Rb, _ = render_chart(c[idx], profile, optics, b, args.geometry, spp=args.spp)
@@ -76,19 +84,28 @@ def main() -> None:
         return
     perm = np.random.default_rng(0).permutation(len(c))
     halves = (np.sort(perm[: len(c) // 2]), np.sort(perm[len(c) // 2:]))
-    res = []
+    fvars = [v for v in args.fold_variants.split(",") if v]
+    res: dict[str, list] = {v: [] for v in fvars}
     for k, (train, test) in enumerate((halves, halves[::-1])):
         fit = fit_chart(base, c[train], R[train], name=f"fold{k}")
         p = fit.profile
         km = delta_E2000(lab[test], obs.spectra_to_Lab(reflectance_infinite(*mix(c[test], p.K,
                                                                                  p.S))))
-        de, t = proof(p, test, "none")
-        res.append(de)
+        b = spectral_bands(p, args.bands)
+        kmb = delta_E2000(lab[test], b.observer.XYZ_to_Lab(
+            b.to_XYZ(reflectance_infinite(*mix(c[test], b.K, b.S)))))
         print(f"fold {k + 1}: calibrated on {len(train)} patches (its own 5-fold CV "
               f"{fit.cv_dE2000.mean():.2f}); held-out {len(test)}: KM R_inf {fmt(km)}; "
-              f"chart proof {fmt(de)} ({t:.0f} s)", flush=True)
-    both = np.concatenate(res)
-    print(f"2-fold chart proof, both halves: {fmt(both)}; load average {os.getloadavg()[0]:.1f}")
+              f"in {args.bands} bands {fmt(kmb)}", flush=True)
+        for v in fvars:
+            de, t = proof(p, test, v)
+            res[v].append(de)
+            print(f"fold {k + 1}: chart proof {v:16s} {fmt(de)} ({t:.0f} s)", flush=True)
+    for v in fvars:
+        both = np.concatenate(res[v])
+        print(f"2-fold chart proof, both halves, {v}: {fmt(both)}; load average "
+              f"{os.getloadavg()[0]:.1f}")
+    print(f"CPU time of this process {time.process_time():.0f} s")
 
 
 if __name__ == "__main__":

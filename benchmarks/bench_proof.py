@@ -4,15 +4,17 @@ Default: the demo volume at 40 mm (the default object proof), one 256 x 256 view
 spp and sampler: prints the seconds of each stage (labels, source render, print render per view
 after Mitsuba's JIT warm-up) and the proof's noise floor: the print rendered at two seeds, mean
 and p95 per-pixel dE2000 and S-CIELAB dE2000 (at the proof's viewing distance) between them
-over the object. Targets: floor <= 0.5 mean S-CIELAB dE2000, <= 60 s per view on CPU.
-``--spp 16,64 --samplers independent,ldsampler`` sweeps (the measurement behind the defaults).
+over the object, and the wall and CPU seconds of one render of the view. Targets: floor <= 0.5
+mean S-CIELAB dE2000, <= 60 s per view on CPU. ``--spp 16,64 --thick-spp 0,48 --samplers
+independent,multijitter`` sweeps (the measurement behind the defaults); ``--thick-spp``: more
+samples on the tiles where the print is optically thick (``runner.THICK_T``).
 
 ``--block-error``: a small job (demo, 3 mm) whose print is rendered from the full-resolution
 labels (one cell per printer voxel) and from blocks of the default 40 mm job's size (4 x 11 x 22
 voxels): prints dE2000 between the two print images (mean, 95th percentile over the object).
 
     python benchmarks/bench_proof.py [--height-mm 40] [--resolution 256] [--spp 16[,64]]
-                                     [--samplers independent[,ldsampler,...]]
+                                     [--thick-spp 0[,48]] [--samplers independent[,...]]
     python benchmarks/bench_proof.py --variant scalar   # Mitsuba's scalar_rgb (no libLLVM)
     python benchmarks/bench_proof.py --block-error
 """
@@ -32,24 +34,33 @@ def _medium(lab, block, layers_per_block):
     return block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block, layers_per_block)
 
 
-def _print_xyz(medium, bands, view, res, spp, seed, sampler=None, rr_depth=None):
+def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None,
+               thick_spp=0):
+    """The print of one view rendered at each of ``seeds``: (XYZ per seed, coverage, wall s,
+    render info with ``cpu_s``), the thick tiles rendered ``thick_spp`` more."""
     from dreamprint_gui.proof.medium import medium_coefficients
-    from dreamprint_gui.proof.print_render import DEFAULT_SAMPLER, render_print
-    from dreamprint_gui.proof.runner import print_xyz
+    from dreamprint_gui.proof.print_render import (
+        DEFAULT_SAMPLER,
+        render_print_seeds,
+        thick_tiles,
+    )
+    from dreamprint_gui.proof.runner import THICK_T, print_xyz
     from dreamprint_gui.proof.source_render import optical_depth
 
     st, al = medium_coefficients(medium.fractions, bands.K, bands.S)
     lo, hi = medium.box_mm
+    T = optical_depth(st, lo, medium.cell_mm, view, res, sub=3)
+    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    extra = [(0, r) for r in thick_tiles(T @ y_w, THICK_T)]
     t0, c0 = time.perf_counter(), time.process_time()
-    img, info = render_print(st, al, lo, hi, [view], res, spp, seed,
-                             sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth)
+    imgs, info = render_print_seeds(st, al, lo, hi, [view], res, spp, tuple(seeds),
+                                    sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth,
+                                    extra=extra, extra_spp=thick_spp)
     t = time.perf_counter() - t0
     # CPU seconds of all this process's threads: on a shared machine the wall time says more
     # about the other processes than about the variant (llvm or scalar)
     info["cpu_s"] = time.process_time() - c0
-    T = optical_depth(st, lo, medium.cell_mm, view, res, sub=3)
-    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
-    return print_xyz(bands, img[0], T, False), 1.0 - T @ y_w, t, info
+    return [print_xyz(bands, im[0], T, False) for im in imgs], 1.0 - T @ y_w, t, info
 
 
 def speed(args) -> None:
@@ -59,7 +70,12 @@ def speed(args) -> None:
     from dreamprint_gui.proof.methods import method_labels
     from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
     from dreamprint_gui.proof.print_render import DEFAULT_SAMPLER
-    from dreamprint_gui.proof.runner import DEFAULT_SPP, ProofSettings
+    from dreamprint_gui.proof.runner import (
+        DEFAULT_SPP,
+        DEFAULT_THICK_SPP,
+        THICK_T,
+        ProofSettings,
+    )
     from dreamprint_gui.proof.scielab import samples_per_degree
     from dreamprint_gui.proof.source_render import render_source, sample_source
     from dreamprint_gui.proof.spectral import spectral_bands
@@ -69,6 +85,7 @@ def speed(args) -> None:
     spps = [int(x) for x in (args.spp or str(DEFAULT_SPP)).split(",")]
     samplers = (args.samplers or DEFAULT_SAMPLER).split(",")
     rrs = [None] if args.rr_depths is None else [int(x) for x in args.rr_depths.split(",")]
+    thicks = [int(x) for x in (args.thick_spp or str(DEFAULT_THICK_SPP)).split(",")]
     s = ProofSettings(source="demo", height_mm=args.height_mm, resolution=args.resolution)
     print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {spps}, "
           f"samplers {samplers}, {os.cpu_count()} cores, load average "
@@ -92,24 +109,23 @@ def speed(args) -> None:
     print(f"source render (per view)      {time.perf_counter() - t3:7.1f} s")
     spd = samples_per_degree(2 * view.half_mm / args.resolution, s.viewing_distance_mm)
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
-    print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'s/view':>7s} {'CPU s':>6s} "
+    print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'thick':>5s} {'s/view':>7s} {'CPU s':>6s} "
           f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}")
     for sampler, rr in [(a, b) for a in samplers for b in rrs]:
-        _print_xyz(med, bands, view, args.resolution, 1, 0, sampler, rr)  # JIT warm-up
-        for spp in spps:
-            a, alpha, ta, info = _print_xyz(med, bands, view, args.resolution, spp, 1, sampler,
-                                            rr)
-            b, _, tb, info_b = _print_xyz(med, bands, view, args.resolution, spp, 2, sampler,
-                                          rr)
+        _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr)  # JIT warm-up
+        for spp, thick in [(a, b) for a in spps for b in thicks]:
+            (a, b), alpha, t, info = _print_xyz(med, bands, view, args.resolution, spp, (1, 2),
+                                                sampler, rr, thick)
             f = noise_floor(a, b, alpha, bands.observer, spd)
-            cpu = (info["cpu_s"] + info_b["cpu_s"]) / 2
-            print(f"{sampler:12s} {info['rr_depth']:4d} {spp:5d} {(ta + tb) / 2:7.1f} "
-                  f"{cpu:6.1f} {f['mean_de2000']:16.2f} "
+            print(f"{sampler:12s} {info['rr_depth']:4d} {spp:5d} {thick:5d} {t / 2:7.1f} "
+                  f"{info['cpu_s'] / 2:6.1f} {f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
                   f"{f['p95_scielab_de2000']:6.2f}", flush=True)
-    print(f"({info['variant']}, {info['passes']} Mitsuba passes per render; s/view is one "
-          f"render of one view; the proof with its noise floor renders each view twice; "
-          f"load average now {os.getloadavg()[0]:.1f})")
+    share = info["extra_pixels"] / args.resolution ** 2
+    print(f"({info['variant']}, {info['passes']} Mitsuba passes per render; thick tiles "
+          f"(direct transmittance < {THICK_T}) {share:.0%} of the frame; s/view and CPU s are "
+          f"one render of one view (the two seeds' mean); the proof with its noise floor "
+          f"renders each view twice; load average now {os.getloadavg()[0]:.1f})")
 
 
 def block_error(args) -> None:
@@ -126,7 +142,7 @@ def block_error(args) -> None:
     view = orbit_views(full.print_size_mm, 1)[0]
     res = 96
     spp = int(args.spp or 16) * 4
-    a, alpha, _, _ = _print_xyz(full, bands, view, res, spp, 1)
+    (a,), alpha, _, _ = _print_xyz(full, bands, view, res, spp, (1,))
     obs = bands.observer
     obj = alpha > 0.05
 
@@ -136,15 +152,15 @@ def block_error(args) -> None:
 
     print(f"demo 3 mm, full resolution {full.cells_xyz} cells (one per printer voxel), {res} px, "
           f"spp {spp}; dE2000 over the object against the full-resolution render:")
-    b, *_ = _print_xyz(full, bands, view, res, spp, 2)
+    (b,), *_ = _print_xyz(full, bands, view, res, spp, (2,))
     print(f"  full resolution, another seed (noise floor): {de_to(b)}")
     for block in ((2, 6, 11), (4, 11, 22)):
         med = _medium(lab, block, 0)
-        b, *_ = _print_xyz(med, bands, view, res, spp, 1)
+        (b,), *_ = _print_xyz(med, bands, view, res, spp, (1,))
         cell = ", ".join(f"{c:.3f}" for c in med.cell_mm)
         print(f"  blocks of {block} voxels ({cell} mm, {med.cells_xyz} cells): {de_to(b)}")
     med = _medium(lab, (4, 11, 22), 2)
-    b, *_ = _print_xyz(med, bands, view, res, spp, 1)
+    (b,), *_ = _print_xyz(med, bands, view, res, spp, (1,))
     print(f"  blocks of (4, 11, 22), 2 layers read per block (the default): {de_to(b)}")
 
 
@@ -154,6 +170,8 @@ def main() -> None:
     ap.add_argument("--resolution", type=int, default=256)
     ap.add_argument("--spp", default=None, help="spp, or a comma-separated list (default: "
                     "the proof's default)")
+    ap.add_argument("--thick-spp", default=None, help="extra spp on the optically thick tiles, "
+                    "or a comma-separated list (default: the proof's)")
     ap.add_argument("--rr-depths", default=None, help="Mitsuba's rr_depth (Russian roulette "
                     "from this bounce on), comma-separated (default: the proof's)")
     ap.add_argument("--samplers", default=None, help="Mitsuba samplers, comma-separated "

@@ -8,6 +8,12 @@ from pathlib import Path
 import pytest
 
 import dreamprint_gui  # noqa: F401  (sets the numba cache folder before numba is imported)
+from dreamprint_gui.proof import thick_patch
+
+# A surface's or hg phase's thick-patch curve (proof/thick_patch.py) is rendered the first time
+# it is needed: in tests at 32 spp (a few seconds; cached under its own key, apart from the
+# product's 256 spp curves). Tests checking a curve's accuracy set their own.
+thick_patch.CURVE_SPP = 32
 
 SHARED_DATA = Path(os.environ.get("DREAMPRINT_SAMPLE_DATA")
                    or Path(__file__).resolve().parents[2] / "shared" / "data")

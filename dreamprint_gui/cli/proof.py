@@ -98,6 +98,10 @@ def _common(f, halftones: bool = False):
                      help="Image width and height in pixels."),
         click.option("--spp", type=int, default=16, show_default=True,
                      help="Samples per pixel of the print render."),
+        click.option("--thick-spp", type=int, default=0, show_default=True,
+                     help="More samples per pixel on the tiles where the print is optically "
+                          "thick (direct transmittance < 0.1), where its render noise is; 0: "
+                          "none."),
         halftone,
         click.option("--seed", type=int, default=0, show_default=True),
         click.option("--density-scale", type=float, default=1.0, show_default=True),
@@ -151,7 +155,8 @@ def _settings(source, output, method, kw, overwrite=False, compensation=None):
         max_cells=kw["max_cells"], layers_per_block=kw["layers_per_block"], bands=kw["bands"],
         max_depth=kw["max_depth"], key_light=kw["key_light"], floor=kw["floor"],
         viewing_distance_mm=kw["viewing_distance_mm"], noise_floor=kw["noise_floor"],
-        sampler=kw["sampler"], surface=kw["surface"], phase=kw["phase"], overwrite=overwrite,
+        sampler=kw["sampler"], thick_spp=kw["thick_spp"], surface=kw["surface"],
+        phase=kw["phase"], overwrite=overwrite,
         table_size=kw["table_size"], source_options=_options(kw["source_options"]),
         up=placement_values(kw["up"], kw["rotate"])[0],
         rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"])
@@ -367,7 +372,7 @@ def _held_out_correction(source, kw, prefix, iterations, views):
               help="Correction file to write (.npz).")
 @click.option("--height-mm", type=float, default=None, help="Height (z) of the print.")
 @click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm.")
-@click.option("--printer", default=None, help="Printer name or .toml (default j850-paper).")
+@click.option("--printer", default=None, help="Printer name or .toml (default voxelprint-27um).")
 @click.option("--profile", default=None, help="Ink profile JSON (default: built-in).")
 @click.option("--views", type=int, default=3, show_default=True,
               help="Training cameras (not the proof's).")

@@ -1,11 +1,14 @@
 """Chart proof: each recipe of a printed chart as a flat patch, seen as an instrument sees it.
 
-Defines :class:`ChartSettings`, :func:`load_chart`, :func:`render_chart`, :func:`run_chart_proof`,
-:data:`GEOMETRIES` and :data:`DEFAULT_GEOMETRY`.
+Defines :class:`ChartSettings`, :class:`Chart`, :func:`load_chart` (files),
+:func:`chart_from_arrays` (the calibration wizard's arrays), :func:`render_chart`,
+:func:`proof_chart` (render + report, nothing written), :func:`chart_picture`,
+:func:`run_chart_proof` (the command), :data:`GEOMETRIES` and :data:`DEFAULT_GEOMETRY`.
 
 The same model as the object proof (:mod:`.runner`): a patch is a uniform mixture whose K and S
 mix linearly in the recipe's fractions (paper eq. 5), converted to sigma_a, sigma_s and phase
-function by :mod:`.km_to_rte` with the proof's optics (:mod:`.optics`: surface, phase), rendered
+function by :mod:`.km_to_rte` with the proof's optics (:mod:`.optics`: surface, phase) so that
+each thick patch reads KM's R_inf at the chart's geometry (the calibration's model), rendered
 by Mitsuba's ``volpath`` in the proof's spectral bands (:mod:`.spectral`) and integrated to XYZ
 and CIELAB with the CIE 1931 observer under D65, as the measured spectra are.
 
@@ -38,6 +41,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -49,9 +53,11 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS, InkProfile, load_profile
 from dreamprint_gui.io.recipes import read_recipes
 from dreamprint_gui.io.spectra import read_spectra
+from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
 from dreamprint_gui.proof.cameras import View
 from dreamprint_gui.proof.compare import to_display
+from dreamprint_gui.proof.km_to_rte import describe_conversion
 from dreamprint_gui.proof.medium import medium_coefficients
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics, resolve_optics
@@ -59,7 +65,8 @@ from dreamprint_gui.proof.print_render import INTEGRATOR
 from dreamprint_gui.proof.spectral import SpectralBands, spectral_bands
 from dreamprint_gui.proof.staging import staged_folder
 
-__all__ = ["ChartSettings", "load_chart", "render_chart", "run_chart_proof", "GEOMETRIES",
+__all__ = ["ChartSettings", "Chart", "load_chart", "render_chart", "run_chart_proof",
+           "chart_from_arrays", "proof_chart", "chart_picture", "chart_report", "GEOMETRIES",
            "DEFAULT_GEOMETRY", "DEFAULT_CHART_SPP", "PATCH_MM", "THICK_MM", "SPOT_MM"]
 
 GEOMETRIES = ("d:8", "45:0")
@@ -98,6 +105,16 @@ class Chart:
     optics: Optics
 
 
+def _checked_optics(surface: str | None, phase: str | None, profile: InkProfile,
+                    geometry: str) -> Optics:
+    optics = resolve_optics(surface, phase, profile.proof_optics)
+    if optics.surface == "glossy" and geometry == "45:0":
+        raise DreamPrintError("a glossy surface cannot be proofed at 45:0 (the renderer cannot "
+                              "connect a directional light through a smooth surface); use "
+                              "geometry d:8 or a matte surface")
+    return optics
+
+
 def load_chart(s: ChartSettings) -> Chart:
     """Read and check everything before any rendering: one-line errors, nothing written."""
     if s.geometry not in GEOMETRIES:
@@ -110,7 +127,7 @@ def load_chart(s: ChartSettings) -> Chart:
     if not 1 <= int(s.bands) <= 36:
         raise DreamPrintError(f"--bands must be 1..36, got {s.bands}")
     profile = load_profile(s.profile)
-    optics = resolve_optics(s.surface, s.phase, profile.proof_optics)
+    optics = _checked_optics(s.surface, s.phase, profile, s.geometry)
     recipes = read_recipes(Path(s.recipes))
     if len(recipes) > MAX_PATCHES:
         raise DreamPrintError(f"{len(recipes)} recipes; at most {MAX_PATCHES}", s.recipes)
@@ -211,21 +228,29 @@ def _spots(view: View, res: int, rows: int, cols: int, n: int) -> list[NDArray]:
 
 def render_chart(recipes: NDArray, profile: InkProfile, optics: Optics, bands: SpectralBands,
                  geometry: str = DEFAULT_GEOMETRY, thickness_mm: float | None = None,
-                 spp: int = DEFAULT_CHART_SPP, seed: int = 0, max_depth: int = 512
+                 spp: int = DEFAULT_CHART_SPP, seed: int = 0, max_depth: int = 512,
+                 progress: Callable[[int, int], None] | None = None,
+                 cancelled: Callable[[], bool] | None = None
                  ) -> tuple[NDArray[np.float64], dict[str, Any]]:
-    """Band reflectance factors (n, n_bands) of the recipes (n, 6) as flat patches."""
+    """Band reflectance factors (n, n_bands) of the recipes (n, 6) as flat patches.
+
+    ``progress(done, total)`` after each render pass (three bands); ``cancelled()`` is polled
+    between passes (raises JobCancelled)."""
     mi, variant, note = load_mitsuba()
     n = len(recipes)
     rows, cols = _layout(n)
     frac = np.zeros((rows * cols, 7))
     frac[:n, :6] = recipes
     frac[n:, INKS.index("K")] = 1.0          # unused cells: black ink
-    st, al = medium_coefficients(frac.reshape(rows, cols, 7), bands.K, bands.S, optics.g)
+    st, al = medium_coefficients(frac.reshape(rows, cols, 7), bands.K, bands.S, optics,
+                                 geometry)
     nb = bands.n
     passes = -(-nb // 3)
     out = np.zeros((n, passes * 3))
     t = THICK_MM if thickness_mm is None else float(thickness_mm)
     for p in range(passes):
+        if cancelled is not None and cancelled():
+            raise JobCancelled("the chart proof was cancelled")
         ch = slice(3 * p, min(3 * p + 3, nb))
         st3 = np.zeros((rows, cols, 3), np.float32)
         al3 = np.zeros((rows, cols, 3), np.float32)
@@ -238,6 +263,8 @@ def render_chart(recipes: NDArray, profile: InkProfile, optics: Optics, bands: S
         flat = img.reshape(-1, 3)
         for k, idx in enumerate(_spots(view, res, rows, cols, n)):
             out[k, 3 * p:3 * p + 3] = factor * flat[idx].mean(axis=0)
+        if progress is not None:
+            progress(p + 1, passes)
     info = {"renderer": "mitsuba", "version": mi.__version__, "variant": variant, "note": note,
             "integrator": f"{INTEGRATOR} (no Russian roulette)", "spp": int(spp),
             "max_depth": int(max_depth), "passes": passes}
@@ -269,7 +296,9 @@ def chart_report(s: ChartSettings, chart: Chart, band_R: NDArray, bands: Spectra
                           "included" if s.geometry == "d:8" else
                           "light 45 degrees off the normal, viewed on the normal"),
         "thickness_mm": s.thickness_mm, "optically_thick": s.thickness_mm is None,
-        "optics": chart.optics.describe(), "spectral": bands.describe(), "renderer": info,
+        "optics": chart.optics.describe(),
+        "km_to_rte": describe_conversion(chart.optics, s.geometry),
+        "spectral": bands.describe(), "renderer": info,
         "patches": patches}
     if chart.measured_lab is not None:
         de = delta_E2000(chart.measured_lab, lab)
@@ -282,22 +311,12 @@ def chart_report(s: ChartSettings, chart: Chart, band_R: NDArray, bands: Spectra
     return rep
 
 
-def _write(rep: dict, chart: Chart, band_R: NDArray, bands: SpectralBands,
-           folder: Path) -> None:
-    from PIL import Image
-
+def chart_picture(chart: Chart, band_R: NDArray, bands: SpectralBands,
+                  px: int = 48) -> NDArray[np.uint8]:
+    """sRGB picture (rows * px, cols * px, 3): one square per patch, measured left half,
+    proofed right half (the proof alone without measurements)."""
     obs = bands.observer
-    with open(folder / "patches.csv", "w", newline="", encoding="utf-8") as f:
-        wr = csv.writer(f)
-        meas = chart.measured_lab is not None
-        wr.writerow(["patch", *INKS, "proof_L", "proof_a", "proof_b"]
-                    + (["measured_L", "measured_a", "measured_b", "de2000"] if meas else []))
-        for k, row in enumerate(rep["patches"]):
-            wr.writerow([k + 1, *[f"{v:.6g}" for v in chart.recipes[k]], *row["proof_lab"]]
-                        + ([*row["measured_lab"], row["de2000"]] if meas else []))
-    # picture: one square per patch, measured left half, proof right half
     rows, cols = _layout(len(chart.recipes))
-    px = 48
     img = np.full((rows * px, cols * px, 3), 255, np.uint8)
     proof_rgb = to_display(obs.XYZ_to_linear_sRGB(np.maximum(bands.to_XYZ(band_R), 0)))
     meas_rgb = None
@@ -313,8 +332,55 @@ def _write(rep: dict, chart: Chart, band_R: NDArray, bands: SpectralBands,
         img[y0:y0 + px - 4, x0:x0 + px - 4] = proof_rgb[k]
         if meas_rgb is not None:
             img[y0:y0 + px - 4, x0:x0 + (px - 4) // 2] = meas_rgb[k]
+    return img
+
+
+def _write(rep: dict, chart: Chart, band_R: NDArray, bands: SpectralBands,
+           folder: Path) -> None:
+    from PIL import Image
+
+    with open(folder / "patches.csv", "w", newline="", encoding="utf-8") as f:
+        wr = csv.writer(f)
+        meas = chart.measured_lab is not None
+        wr.writerow(["patch", *INKS, "proof_L", "proof_a", "proof_b"]
+                    + (["measured_L", "measured_a", "measured_b", "de2000"] if meas else []))
+        for k, row in enumerate(rep["patches"]):
+            wr.writerow([k + 1, *[f"{v:.6g}" for v in chart.recipes[k]], *row["proof_lab"]]
+                        + ([*row["measured_lab"], row["de2000"]] if meas else []))
+    img = chart_picture(chart, band_R, bands)
     Image.fromarray(img).save(folder / "chart.png")
     (folder / "chart_proof.json").write_text(json.dumps(rep, indent=2) + "\n", encoding="utf-8")
+
+
+def chart_from_arrays(recipes: NDArray, reflectance: NDArray | None, profile: InkProfile,
+                      surface: str | None = None, phase: str | None = None,
+                      geometry: str = DEFAULT_GEOMETRY) -> Chart:
+    """A chart from recipes (n, 6) and measured reflectance (n, n_wl on the profile's grid),
+    checked as :func:`load_chart` checks files (the calibration wizard's chart)."""
+    if geometry not in GEOMETRIES:
+        raise DreamPrintError(f"unknown geometry '{geometry}' (use {', '.join(GEOMETRIES)})")
+    optics = _checked_optics(surface, phase, profile, geometry)
+    c = np.asarray(recipes, np.float64)
+    lab = None
+    if reflectance is not None:
+        R = np.asarray(reflectance, np.float64)
+        if R.shape != (len(c), profile.wavelengths_nm.size):
+            raise DreamPrintError(f"{len(R)} measured spectra for {len(c)} recipes")
+        lab = observer_for(profile.wavelengths_nm).spectra_to_Lab(R)
+    return Chart(c, lab, profile, optics)
+
+
+def proof_chart(chart: Chart, s: ChartSettings,
+                progress: Callable[[int, int], None] | None = None,
+                cancelled: Callable[[], bool] | None = None
+                ) -> tuple[dict[str, Any], NDArray[np.float64], SpectralBands]:
+    """Render ``chart`` with ``s``'s geometry, thickness and sampling; the report (as
+    ``chart_proof.json``), the band reflectances and the bands. Writes nothing."""
+    bands = spectral_bands(chart.profile, s.bands)
+    band_R, info = render_chart(chart.recipes, chart.profile, chart.optics, bands, s.geometry,
+                                s.thickness_mm, s.spp, s.seed, s.max_depth, progress,
+                                cancelled)
+    return chart_report(s, chart, band_R, bands, info), band_R, bands
 
 
 def run_chart_proof(s: ChartSettings) -> dict[str, Any]:
@@ -329,10 +395,7 @@ def run_chart_proof(s: ChartSettings) -> dict[str, Any]:
     if not out.absolute().parent.is_dir():
         raise DreamPrintError("the folder to write into does not exist", out.absolute().parent)
     chart = load_chart(s)
-    bands = spectral_bands(chart.profile, s.bands)
-    band_R, info = render_chart(chart.recipes, chart.profile, chart.optics, bands, s.geometry,
-                                s.thickness_mm, s.spp, s.seed, s.max_depth)
-    rep = chart_report(s, chart, band_R, bands, info)
+    rep, band_R, bands = proof_chart(chart, s)
     with staged_folder(out, "chart") as tmp:
         _write(rep, chart, band_R, bands, tmp)
     return rep

@@ -14,7 +14,8 @@ voxels holds label fractions f_m; KM K and S mix linearly in the fractions (pape
 same rule the tables use for concentrations), so the cell's coefficients are::
 
     K_cell = sum_m f_m K_m,  S_cell = sum_m f_m S_m   (empty voxels contribute 0)
-    sigma_a = K_cell / 2,    sigma_s = 4 S_cell / 3   (:mod:`.km_to_rte`)
+    (sigma_a, sigma_s) = the conversion of (K_cell, S_cell) keeping a thick patch's KM
+                         reading R_inf (:mod:`.km_to_rte`; Gate's K/2, 4S/3 at its limits)
 
 Averaging inside a block replaces the voxel-scale ink pattern (tens of micrometres) by its mean;
 the error of that against full-resolution labels is measured by
@@ -39,7 +40,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.job.plan import JobCancelled
-from dreamprint_gui.proof.km_to_rte import rte_coefficients
+from dreamprint_gui.proof.km_to_rte import MAP_GEOMETRY, rte_coefficients
+from dreamprint_gui.proof.optics import Optics
 
 __all__ = ["BlockMedium", "block_fractions", "medium_coefficients", "block_for_cell",
            "N_LABELS", "EMPTY"]
@@ -146,16 +148,19 @@ def block_fractions(layer_labels: Callable[[int], NDArray[np.uint8]],
 
 
 def medium_coefficients(fractions: NDArray, K_bands: NDArray, S_bands: NDArray,
-                        g: float = 0.0) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+                        optics: Optics | float = 0.0, geometry: str = MAP_GEOMETRY
+                        ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
     """``(sigma_t, albedo)`` (..., n_bands) float32 of cells with label ``fractions`` (..., 7).
 
     ``K_bands``, ``S_bands``: (6, n_bands) per ink (INKS order) in 1/mm. Empty is vacuum.
-    ``g``: the phase function's asymmetry (:func:`.km_to_rte.rte_coefficients`).
+    ``optics``: the proof's surface and phase function (or a phase asymmetry g without a
+    surface) and ``geometry`` the instrument the K and S were read with: the conversion keeps
+    a thick patch of the mixture reading KM's R_inf (:func:`.km_to_rte.rte_coefficients`).
     """
     f = np.asarray(fractions, np.float64)[..., :6]
     K = f @ np.asarray(K_bands, np.float64)
     S = f @ np.asarray(S_bands, np.float64)
-    sa, ss = rte_coefficients(K, S, g)
+    sa, ss = rte_coefficients(K, S, optics, geometry)
     st = sa + ss
     albedo = np.divide(ss, st, out=np.zeros_like(st), where=st > 0)
     return st.astype(np.float32), albedo.astype(np.float32)

@@ -13,25 +13,51 @@ Defines :class:`Optics`, :func:`resolve_optics`, :data:`SURFACES` and the defaul
 
 Where the settings come from: the command line (``--surface``, ``--phase``), else the ink
 profile's ``proof`` section (``{"surface": ..., "refractive_index": ..., "roughness": ...,
-"phase": ...}``, the model its K and S were fitted through), else the defaults: no surface and
-isotropic scattering, the model of the built-in profile (its K and S are KM fits of measured
-reflectance that already include the surface; a surface on top would count it twice, see
-docs/physics.md "Calibration and proof share one optical model").
+"phase": ...}``), else the defaults: no surface and isotropic scattering. The K -> RTE
+conversion (:mod:`.km_to_rte`) keeps every thick patch's reading at KM's R_inf through whatever
+optics is chosen, so a surface does not count the K and S's surface twice; the defaults are what
+the chart proof measured best (docs/physics.md, "Chart proof on a real chart": with a surface at
+d:8, the surface's own 0.04 reflection keeps dark patches from reading as dark as measured).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.proof.km_to_rte import parse_phase, phase_name
 
-__all__ = ["Optics", "resolve_optics", "SURFACES", "DEFAULT_IOR", "DEFAULT_ROUGHNESS"]
+__all__ = ["Optics", "resolve_optics", "SURFACES", "DEFAULT_IOR", "DEFAULT_ROUGHNESS",
+           "parse_phase", "phase_name", "MAX_ABS_G"]
+
+MAX_ABS_G = 0.95
 
 SURFACES = ("none", "glossy", "matte")
 DEFAULT_IOR = 1.5
 DEFAULT_ROUGHNESS = 0.1
+
+
+def parse_phase(text: str) -> float:
+    """The asymmetry g of ``isotropic`` (0) or ``hg:G`` (``|G| <= MAX_ABS_G``); ValueError with
+    a one-line message otherwise."""
+    t = str(text).strip().lower()
+    if t == "isotropic":
+        return 0.0
+    if t.startswith("hg:"):
+        try:
+            g = float(t[3:])
+        except ValueError:
+            g = math.nan
+        if math.isfinite(g) and abs(g) <= MAX_ABS_G:
+            return g
+        raise ValueError(f"phase '{text}': G of hg:G must be a number in "
+                         f"[-{MAX_ABS_G}, {MAX_ABS_G}]")
+    raise ValueError(f"unknown phase function '{text}' (use isotropic or hg:G, e.g. hg:0.4)")
+
+
+def phase_name(g: float) -> str:
+    return "isotropic" if g == 0 else f"hg:{g:g}"
 
 
 @dataclass(frozen=True)

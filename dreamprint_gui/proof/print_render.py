@@ -44,8 +44,8 @@ from dreamprint_gui.proof.cameras import View
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics
 
-__all__ = ["render_print", "render_print_seeds", "hides_direct", "DEFAULT_MAX_DEPTH",
-           "DEFAULT_SAMPLER", "SAMPLERS"]
+__all__ = ["render_print", "render_print_seeds", "hides_direct", "thick_tiles",
+           "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER", "SAMPLERS"]
 
 DEFAULT_MAX_DEPTH = 512
 # volpathmis, not volpath: the three channels of a pass are three bands whose sigma_t differ
@@ -57,19 +57,34 @@ DEFAULT_SAMPLER = "independent"
 DEFAULT_RR_DEPTH = 5          # Mitsuba's: Russian roulette from the 5th bounce on
 SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
 BRICK_CELLS = 16
+TILE_PX = 32
 BRICK_GAP = 1.5e-4
 FLOOR_REFLECTANCE = 0.5
 
 
-def _sensor(mi, view: View, resolution: int, spp: int, sampler: str = "independent") -> dict:
+def _sensor(mi, view: View, resolution: int, spp: int, sampler: str = "independent",
+            crop: tuple[int, int, int, int] | None = None) -> dict:
     T = mi.ScalarTransform4f
     eye = [float(v) for v in view.eye]
+    to_world = (T().look_at(origin=eye, target=[0.0, 0.0, 0.0], up=[0.0, 0.0, 1.0])
+                @ T().scale([view.half_mm, view.half_mm, 1.0]))
+    width = height = int(resolution)
+    if crop is not None:
+        # a part of the frame as a camera of its own: a film of the part's size placed by its
+        # transform, not a crop of the frame's film: Dr.Jit compiles a crop's offset into the
+        # kernel (one kernel per crop), the transform not (one kernel for parts of one size).
+        # Mitsuba's camera x and y run against the film's columns and rows.
+        x0, y0, width, height = (int(c) for c in crop)
+        cx = 1.0 - (2.0 * x0 + width) / resolution
+        cy = 1.0 - (2.0 * y0 + height) / resolution
+        to_world = to_world @ T().translate([cx, cy, 0.0]) @ T().scale(
+            [width / resolution, height / resolution, 1.0])
+    film = {"type": "hdrfilm", "width": width, "height": height,
+            "rfilter": {"type": "box"}, "pixel_format": "rgb"}
     return {"type": "orthographic",
-            "to_world": T().look_at(origin=eye, target=[0.0, 0.0, 0.0], up=[0.0, 0.0, 1.0])
-            @ T().scale([view.half_mm, view.half_mm, 1.0]),
+            "to_world": to_world,
             "near_clip": 1e-3, "far_clip": 1e7,
-            "film": {"type": "hdrfilm", "width": int(resolution), "height": int(resolution),
-                     "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+            "film": film,
             "sampler": {"type": sampler, "sample_count": int(spp)}}
 
 
@@ -83,8 +98,11 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                views: list[View], resolution: int, spp: int, max_depth: int,
                key_light: float = 0.0, floor: bool = False, brick: int = BRICK_CELLS,
                sampler: str = "independent", optics: Optics | None = None,
-               rr_depth: int | None = None) -> dict:
-    """The Mitsuba scene description of one pass (three bands)."""
+               rr_depth: int | None = None,
+               crops: list[tuple[int, tuple[int, int, int, int]]] = ()) -> dict:
+    """The Mitsuba scene description of one pass (three bands). ``crops``: extra sensors
+    ``view_NN_crop_MMM``, (view index, (x0, y0, width, height) in pixels) each, rendering part
+    of a view's frame."""
     T = mi.ScalarTransform4f
     optics = optics or Optics()
     phase = ({"type": "isotropic"} if optics.g == 0
@@ -154,6 +172,8 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                           FLOOR_REFLECTANCE] * 3}}}
     for i, v in enumerate(views):
         d[f"view_{i:02d}"] = _sensor(mi, v, resolution, spp, sampler)
+    for j, (i, rect) in enumerate(crops):
+        d[f"view_{i:02d}_crop_{j:03d}"] = _sensor(mi, views[i], resolution, spp, sampler, rect)
     return d
 
 
@@ -183,9 +203,16 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                        progress: Callable[[int, int], None] | None = None,
                        cancelled: Callable[[], bool] | None = None,
                        sampler: str = DEFAULT_SAMPLER, optics: Optics | None = None,
-                       rr_depth: int | None = None) -> tuple[list[NDArray], dict]:
+                       rr_depth: int | None = None,
+                       extra: list[tuple[int, tuple[int, int, int, int]]] = (),
+                       extra_spp: int = 0) -> tuple[list[NDArray], dict]:
     """:func:`render_print` at each of ``seeds`` (one scene per pass serves them all): the
-    proof and its noise floor's second render. Returns the images per seed and the info."""
+    proof and its noise floor's second render. Returns the images per seed and the info.
+
+    ``extra``: rectangles (view index, (x0, y0, width, height)) rendered again at
+    ``extra_spp`` (:func:`thick_tiles`); their pixels are the mean of all their samples,
+    ``(spp * base + extra_spp * crop) / (spp + extra_spp)``, each sample independent (own
+    seed), so every pixel stays an unbiased estimate, with less variance where it was added."""
 
     mi, variant, note = load_mitsuba()
     nb_ = sigma_t.shape[-1]
@@ -197,28 +224,66 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
         albedo = np.concatenate([albedo, zeros], axis=-1)
     outs = [np.empty((len(views), resolution, resolution, passes * 3), np.float32)
             for _ in seeds]
-    total = passes * len(views) * len(seeds)
+    extra = list(extra) if extra_spp > 0 else []
+    total = passes * (len(views) + len(extra)) * len(seeds)
     done = 0
     for p in range(passes):
         ch = slice(3 * p, 3 * p + 3)
         scene = mi.load_dict(scene_dict(
             mi, np.ascontiguousarray(sigma_t[..., ch], np.float32),
             np.ascontiguousarray(albedo[..., ch], np.float32), lo, hi, views, resolution, spp,
-            max_depth, key_light, floor, sampler=sampler, optics=optics, rr_depth=rr_depth))
+            max_depth, key_light, floor, sampler=sampler, optics=optics, rr_depth=rr_depth,
+            crops=extra))
+        sensors = {sn.id(): sn for sn in scene.sensors()}
         for out, seed in zip(outs, seeds, strict=True):
             for i in range(len(views)):
                 if cancelled is not None and cancelled():
 
                     raise JobCancelled("the proof was cancelled")
-                img = mi.render(scene, sensor=i, spp=int(spp),
+                img = mi.render(scene, sensor=sensors[f"view_{i:02d}"], spp=int(spp),
                                 seed=int(seed) * 7919 + 101 * i + p)
                 out[i, :, :, ch] = np.asarray(img, np.float32)[..., :3]
+                done += 1
+                if progress is not None:
+                    progress(done, total)
+            for j, (i, (x0, y0, w, h)) in enumerate(extra):
+                if cancelled is not None and cancelled():
+
+                    raise JobCancelled("the proof was cancelled")
+                img = mi.render(scene, sensor=sensors[f"view_{i:02d}_crop_{j:03d}"],
+                                spp=int(extra_spp),
+                                seed=int(seed) * 7919 + 101 * i + p + 1000003 * (j + 1))
+                part = out[i, y0:y0 + h, x0:x0 + w, ch]
+                out[i, y0:y0 + h, x0:x0 + w, ch] = (
+                    spp * part + extra_spp * np.asarray(img, np.float32)[..., :3]) / (
+                    spp + extra_spp)
                 done += 1
                 if progress is not None:
                     progress(done, total)
     info = {"renderer": "mitsuba", "version": mi.__version__, "variant": variant, "note": note,
             "integrator": INTEGRATOR, "max_depth": int(max_depth), "spp": int(spp),
             "sampler": sampler, "passes": passes,
+            "extra_spp": int(extra_spp) if extra else 0,
+            "extra_pixels": int(sum(r[2] * r[3] for _, r in extra)),
             "rr_depth": int(DEFAULT_RR_DEPTH if rr_depth is None else rr_depth),
             **(optics or Optics()).describe()}
     return [out[..., :nb_] for out in outs], info
+
+
+def thick_tiles(direct_T: NDArray, threshold: float, tile: int = TILE_PX
+                ) -> list[tuple[int, int, int, int]]:
+    """Squares (x0, y0, tile, tile) of one size covering the pixels of one view whose direct
+    transmittance ``direct_T`` (res, res) is below ``threshold``: the optically thick parts of
+    the print, where the scattered light (and its noise) is. The tiles of a ``tile``-pixel grid
+    holding such pixels (those at the frame's right or bottom edge moved inwards, overlapping
+    their neighbour, so all have one size: one Mitsuba kernel serves them). The choice depends
+    on the medium only (the exact transmittance), never on the render's samples."""
+    thick = np.asarray(direct_T) < threshold
+    res_y, res_x = thick.shape
+    tile = min(int(tile), res_x, res_y)
+    out = []
+    for y0 in range(0, res_y, tile):
+        for x0 in range(0, res_x, tile):
+            if thick[y0:y0 + tile, x0:x0 + tile].any():
+                out.append((min(x0, res_x - tile), min(y0, res_y - tile), tile, tile))
+    return out

@@ -39,11 +39,17 @@ from dreamprint_gui.proof.compare import (
     to_display,
 )
 from dreamprint_gui.proof.contact_sheet import contact_sheet
+from dreamprint_gui.proof.km_to_rte import describe_conversion
 from dreamprint_gui.proof.labels import JobFolderLabels, is_job_folder
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
 from dreamprint_gui.proof.methods import METHODS, method_labels
 from dreamprint_gui.proof.optics import resolve_optics
-from dreamprint_gui.proof.print_render import SAMPLERS, hides_direct, render_print_seeds
+from dreamprint_gui.proof.print_render import (
+    SAMPLERS,
+    hides_direct,
+    render_print_seeds,
+    thick_tiles,
+)
 from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import (
     SourceField,
@@ -56,7 +62,7 @@ from dreamprint_gui.proof.staging import staged_folder
 
 __all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_proof",
            "write_proof", "print_xyz", "MAX_RESOLUTION", "MAX_SPP", "DEFAULT_SPP",
-           "DEFAULT_RESOLUTION", "DEFAULT_MAX_CELLS"]
+           "DEFAULT_RESOLUTION", "DEFAULT_MAX_CELLS", "DEFAULT_THICK_SPP", "THICK_T"]
 
 MAX_RESOLUTION = 4096
 MAX_SPP = 65536
@@ -64,6 +70,8 @@ MAX_VIEWS = 64
 DEFAULT_SPP = 16
 DEFAULT_RESOLUTION = 256
 DEFAULT_MAX_CELLS = 128
+DEFAULT_THICK_SPP = 0
+THICK_T = 0.1     # direct transmittance (luminance) below which a pixel gets thick_spp more
 
 
 @dataclass(frozen=True)
@@ -91,6 +99,7 @@ class ProofSettings:
     viewing_distance_mm: float = 500.0   # S-CIELAB: the print seen at its size from here
     noise_floor: bool = True             # render the print again at seed + 1 (twice the time)
     sampler: str = "independent"         # Mitsuba's sampler of the print render
+    thick_spp: int = DEFAULT_THICK_SPP   # extra spp on the tiles of the optically thick parts
     surface: str | None = None           # none | glossy | matte (None: the profile's, else none)
     phase: str | None = None             # isotropic | hg:G (None: the profile's, else isotropic)
     overwrite: bool = False
@@ -119,6 +128,8 @@ def validate(s: ProofSettings) -> None:
                               f"{s.resolution}")
     if not 1 <= int(s.spp) <= MAX_SPP:
         raise DreamPrintError(f"--spp must be 1..{MAX_SPP}, got {s.spp}")
+    if not 0 <= int(s.thick_spp) <= MAX_SPP:
+        raise DreamPrintError(f"--thick-spp must be 0..{MAX_SPP}, got {s.thick_spp}")
     if not 1 <= int(s.views) <= MAX_VIEWS:
         raise DreamPrintError(f"--views must be 1..{MAX_VIEWS}, got {s.views}")
     if s.method not in METHODS:
@@ -203,7 +214,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     if optics.surface != "none" and s.background == "empty":
         raise DreamPrintError("--surface needs --background clear (the profile asks for a "
                               f"{optics.surface} surface; give --surface none)")
-    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics.g)
+    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics)
 
     yield ProofProgress("source", 0, len(views), el(), "rendering the source")
     t1 = time.perf_counter()
@@ -222,6 +233,10 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
 
     t2 = time.perf_counter()
     seeds = (s.seed, s.seed + 1) if s.noise_floor else (s.seed,)
+    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    direct_T = [optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
+                for v in views]
+    extra = [(i, r) for i, T in enumerate(direct_T) for r in thick_tiles(T @ y_w, THICK_T)]
     box.clear()
     prog["p"] = (0, 1)
 
@@ -230,7 +245,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
             box["m"] = render_print_seeds(
                 sigma_t, albedo, lo, hi, views, s.resolution, s.spp, seeds, s.max_depth,
                 s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
-                cancelled=is_cancelled, sampler=s.sampler, optics=optics)
+                cancelled=is_cancelled, sampler=s.sampler, optics=optics, extra=extra,
+                extra_spp=s.thick_spp)
         except BaseException as exc:  # noqa: BLE001
             box["e"] = exc
 
@@ -243,14 +259,13 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
 
     t3 = time.perf_counter()
     yield ProofProgress("compare", 0, len(views), el(), "comparing")
-    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
     obs = bands.observer
     to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
     per_view, images = [], []
     # the print at its real size on the frame (orthographic), seen from the viewing distance
     spd = samples_per_degree(2.0 * views[0].half_mm / s.resolution, s.viewing_distance_mm)
     for i, v in enumerate(views):
-        T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
+        T = direct_T[i]
         prn_alpha = 1.0 - T @ y_w
         src_xyz = src_lin[i] @ to_xyz.T
         prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor, optics)
@@ -279,10 +294,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         "grid_dimensions": list(lab.shape_xyz),
         "medium": medium.describe(),
         "spectral": bands.describe(),
-        "km_to_rte": {"sigma_a": "K / 2", "sigma_s": "4 S / (3 (1 - g))",
-                      "phase": optics.describe()["phase"], "g": optics.g,
-                      "reference": "Gate 1974; Thennadil 2008 (diffuse incidence); reduced "
-                                   "scattering sigma_s (1 - g) kept (similarity relation)"},
+        "km_to_rte": describe_conversion(optics),
         "optics": {**optics.describe(),
                    "from": ("command line" if s.surface is not None or s.phase is not None
                             else "profile" if lab.profile.proof_optics else "defaults")},

@@ -184,6 +184,73 @@ def test_chart_only_calibration(qtbot, tmp_path, truth):
     assert "cross-validated dE2000" in wiz.fit_page.status.text()
     assert len(wiz.fit_page.chart_fig.axes[0].patches) == 2 * 14  # fit and CV bars
 
+    # after a chart calibration the wizard offers the chart proof (issue 28)
+    wiz.next()
+    page = wiz.chart_proof_page
+    assert wiz.currentPage() is page and page.isComplete()     # optional: Next skips it
+    page.spp.setValue(16)
+    page.run_button.click()
+    assert page.running and page.stop_button.isVisibleTo(wiz)
+    qtbot.waitUntil(lambda: page.report is not None or bool(page.error_text), timeout=300000)
+    assert not page.error_text, page.error_text
+    rep = page.report
+    assert rep["patches_count"] == 14 and rep["optics"]["surface"] == "none"
+    import colour
+
+    de = [colour.delta_E(r["measured_lab"], r["proof_lab"], method="CIE 2000")
+          for r in rep["patches"]]
+    assert rep["de2000"]["mean"] == pytest.approx(np.mean(de), abs=2e-3)
+    assert f"{rep['de2000']['mean']:.2f}" in page.status.text()
+    assert f"#{rep['de2000']['worst_patches'][0]['patch']} " in page.status.text()
+    pix = page.image.pixmap()
+    assert not pix.isNull() and (pix.width(), pix.height()) == page.picture.shape[1::-1]
+    assert not page.running and page.bar.value() == page.bar.maximum() == 4  # 12 bands / 3
+    wiz.next()
+    assert wiz.currentPage() is wiz.save_page
+
+
+def _chart_proof_page(qtbot, truth, profile=None):
+    """The chart proof page with a fitted profile and a chart in place (no fit run)."""
+    from dreamprint_gui.physics.mixture import predict
+
+    recipes = np.random.default_rng(5).dirichlet(np.ones(5), size=6)
+    recipes = np.hstack([recipes, np.zeros((6, 1))])
+    wiz = CalibrationWizard(None, base_profile=default_profile())
+    qtbot.addWidget(wiz)
+    wiz.chart_page.recipes = recipes
+    wiz.chart_page.reflectance = predict(truth, recipes[:, :5], thickness_mm=np.inf).R
+    wiz.fit_page.result = (profile or truth, [], object())
+    return wiz, wiz.chart_proof_page
+
+
+def test_chart_proof_stops_at_once_and_errors_are_one_line(qtbot, truth):
+    wiz, page = _chart_proof_page(qtbot, truth)
+    wiz.show()
+    page.spp.setValue(4096)
+    page.run_button.click()
+    assert page.running
+    page.stop_button.click()                    # returns at once; the pass ends in the back
+    assert not page.running and "stopped" in page.status.text()
+    assert page.run_button.isEnabled() and not page.stop_button.isVisibleTo(wiz)
+    qtbot.wait(200)
+    assert page.report is None
+
+    d = truth.to_json_dict()
+    d["proof"] = {"surface": "glossy"}
+    from dreamprint_gui.core.profile import profile_from_dict
+
+    wiz2, page2 = _chart_proof_page(qtbot, truth, profile_from_dict(d))
+    page2.geometry.setCurrentText("45:0")
+    page2.run_button.click()
+    qtbot.waitUntil(lambda: bool(page2.error_text), timeout=30000)
+    assert "cannot be proofed at 45:0" in page2.status.text()
+    assert "Traceback" not in page2.status.text() and "\n" not in page2.error_text
+    assert page2.report is None and page2.run_button.isEnabled()
+
+    wiz2.chart_page.recipes = None                    # no chart: said, nothing runs
+    page2.run_button.click()
+    assert "no chart calibration" in page2.status.text() and not page2.running
+
 
 def test_chart_file_problem_is_inline(qtbot, tmp_path):
     wiz = CalibrationWizard(None, base_profile=default_profile())

@@ -107,6 +107,78 @@ def test_render_is_deterministic_per_seed():
     np.testing.assert_array_equal(a, b)
 
 
+def test_thick_tiles_are_squares_of_one_size_covering_the_thick_pixels():
+    T = np.ones((40, 40))
+    T[3:5, 20:38] = 0.05
+    T[30, 2] = 0.0
+    tiles = pr.thick_tiles(T, 0.1, tile=16)
+    # the tile at x 32 is moved inwards to end at the frame's edge
+    assert tiles == [(16, 0, 16, 16), (24, 0, 16, 16), (0, 16, 16, 16)]
+    cover = np.zeros_like(T, bool)
+    for x0, y0, w, h in tiles:
+        cover[y0:y0 + h, x0:x0 + w] = True
+    assert cover[T < 0.1].all()
+
+
+def test_a_tile_sees_the_same_part_of_the_print_as_the_frame():
+    """A tile is a camera of its own (film of the tile's size, placed by its transform): its
+    image is the frame's pixels there. A White half-block in the frame's corner: the tile's
+    render agrees with the frame's pixels, not with them mirrored."""
+    mi, _, _ = load_mitsuba()
+    p = default_profile()
+    b = spectral_bands(p, 3)
+    frac = np.zeros((8, 8, 8, 7), np.float32)
+    frac[..., 6] = 1
+    frac[:, :4, :4, INKS.index("W")] = 1
+    frac[:, :4, :4, 6] = 0
+    st, al = medium_coefficients(frac, b.K, b.S)
+    lo = -np.full(3, 2.0)
+    views = orbit_views((4.0,) * 3, 1)
+    rect = (2, 10, 12, 12)
+    d = pr.scene_dict(mi, st, al, lo, -lo, views, RES, 64, 8, crops=[(0, rect)])
+    sc = mi.load_dict(d)
+    sens = {s.id(): s for s in sc.sensors()}
+    full = np.asarray(mi.render(sc, sensor=sens["view_00"], spp=64, seed=1))
+    part = np.asarray(mi.render(sc, sensor=sens["view_00_crop_000"], spp=64, seed=2))
+    x0, y0, w, h = rect
+    ref = full[y0:y0 + h, x0:x0 + w]
+    assert part.shape == ref.shape
+    err = np.abs(part - ref).mean()
+    assert err < 0.5 * np.abs(part - ref[::-1, ::-1]).mean()
+    assert err < 0.5 * np.abs(part - ref[:, ::-1]).mean()
+    assert err < 0.5 * np.abs(part - ref[::-1]).mean()
+
+
+def test_extra_samples_on_tiles_keep_the_mean_and_lower_the_noise():
+    """A White block rendered at 4 spp, its central tile at 4 + 28: outside the tile the
+    image is the 4-spp render itself; inside, the mean matches the 4-spp render within its
+    noise and two seeds differ less (about sqrt(8) less)."""
+    p = default_profile()
+    b = spectral_bands(p, 3)
+    frac = np.zeros((8, 8, 8, 7), np.float32)
+    frac[..., INKS.index("W")] = 0.3
+    frac[..., 6] = 0.7
+    st, al = medium_coefficients(frac, b.K, b.S)
+    lo = -np.full(3, 2.0)
+    views = orbit_views((4.0,) * 3, 1)
+    tile = (0, (4, 4, 16, 16))
+    base, _ = pr.render_print_seeds(st, al, lo, -lo, views, RES, 4, (1, 2))
+    more, info = pr.render_print_seeds(st, al, lo, -lo, views, RES, 4, (1, 2), extra=[tile],
+                                       extra_spp=28)
+    assert info["extra_spp"] == 28 and info["extra_pixels"] == 256
+    inside = np.zeros((RES, RES), bool)
+    inside[4:20, 4:20] = True
+    np.testing.assert_array_equal(more[0][0][~inside], base[0][0][~inside])
+    d_base = (base[0][0] - base[1][0])[inside]
+    d_more = (more[0][0] - more[1][0])[inside]
+    assert d_more.std() < 0.6 * d_base.std()
+    # means over the tile: the 4-spp ones carry the noise of 2 x 256 pixels x 4 samples
+    err = d_base.std() / np.sqrt(2 * inside.sum())
+    m_base = (base[0][0][inside] + base[1][0][inside]).mean() / 2
+    m_more = (more[0][0][inside] + more[1][0][inside]).mean() / 2
+    assert abs(m_more - m_base) < 4 * err
+
+
 def test_key_light_and_floor_only_when_asked():
     mi, _, _ = load_mitsuba()
     args = (mi, np.ones((2, 2, 2, 3), np.float32), np.zeros((2, 2, 2, 3), np.float32),
@@ -170,15 +242,23 @@ def test_surface_conserves_energy():
     assert absorbing[..., 1].mean() < absorbing[..., 0].mean() - 0.1
 
 
-def test_hg_phase_keeps_the_thick_colour():
-    """hg:0.4 with the reduced scattering coefficient kept: a thick White block under diffuse
-    light keeps its isotropic lightness (similarity relation), while scattering without the
-    (1 - g) correction makes it visibly darker."""
+def test_hg_phase_needs_its_own_conversion(tmp_path, monkeypatch):
+    """hg:0.4 rendered with the isotropic conversion's coefficients (no (1 - g) correction)
+    makes a White block visibly darker than isotropic scattering. With hg:0.4's own conversion
+    a flat thick patch reads what the isotropic one does (KM's R_inf; tests/proof/test_chart.py);
+    this 10 mm block, lit from every side and seen from 20 degrees, is not such a patch:
+    measured L* 87.7 isotropic, 94.3 hg:0.4 (the forward-scattering medium's albedo is higher
+    for the same thick reading; light entering its other faces carries further)."""
     from dreamprint_gui.physics.colorimetry import delta_E2000
+    from dreamprint_gui.proof import thick_patch
 
     p = default_profile()
     b = spectral_bands(p, 12)
     mi, _, _ = load_mitsuba()
+    # the hg curve of the conversion, rendered small for the test
+    monkeypatch.setenv("DREAMPRINT_CACHE", str(tmp_path))
+    monkeypatch.setattr(thick_patch, "CURVE_SPP", 128)
+    thick_patch._curve.cache_clear()
     lo = -np.full(3, 5.0)
     views = orbit_views((10.0,) * 3, 1)
     frac = np.zeros((8, 8, 8, 7), np.float32)
@@ -195,9 +275,5 @@ def test_hg_phase_keeps_the_thick_colour():
         c = slice(RES // 2 - 3, RES // 2 + 3)
         # the colour of the mean radiance over the centre (per-pixel Lab is biased by noise)
         labs[name] = b.observer.XYZ_to_Lab(xyz[c, c].reshape(-1, 3).mean(axis=0))
-    # lightness kept (measured: L* 85.21 vs 85.16); the hue is not: a*, b* -9.6, -1.6 -> -16.4,
-    # +5.1 (dE2000 7.2), the similarity relation holds for fluxes, not for the radiance seen
-    # from one direction where the bands' albedos differ (open, docs/physics.md)
-    assert abs(labs["iso"][0] - labs["hg"][0]) < 1.5
-    assert delta_E2000(labs["iso"], labs["hg"]) < 10
     assert labs["raw"][0] < labs["iso"][0] - 2
+    assert labs["raw"][0] < labs["hg"][0] - 2 and delta_E2000(labs["iso"], labs["hg"]) < 15
