@@ -3,12 +3,15 @@
 For each source and background: a correction is optimised (:mod:`dreamprint_gui.proof.compensate`)
 on its training cameras (elevation 35 degrees, azimuths between the proof's) with halftone and
 render seed ``SEED + 1``; then the proof (cameras at elevation 20 degrees, seed ``SEED``) of the
-paper's method and of the compensated job. Prints dE2000 mean / p95 and the coverage error of
-both on the held-out cameras, the reduction, and the optimisation's time; with the machine's
-load (``/proc/loadavg``), since the time depends on it.
+paper's method and of the compensated job. Prints dE2000 mean / p95, S-CIELAB and the
+coverage error of both on the held-out cameras, the reduction, the gamut floor, the render
+noise of the paper's proof (the print rendered again at seed + 1: what no method can go below
+at these samples per pixel), the optimisation's wall time and the row's CPU time (all threads);
+with the machine's load (``/proc/loadavg``), since the wall time depends on it.
 
     PYTHONPATH=. python benchmarks/bench_compensate.py [--height-mm 20] [--iterations 3]
         [--resolution 64] [--spp 4] [--views 3] [--backgrounds clear,empty] [--only knight]
+        [--seed 0] [--step 1.0] [--judge-spp 32]
 """
 
 from __future__ import annotations
@@ -136,6 +139,10 @@ def main() -> None:
     ap.add_argument("--views", type=int, default=3)
     ap.add_argument("--cells", type=int, default=32)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--step", type=float, default=1.0, help="The optimiser's step.")
+    ap.add_argument("--judge-spp", type=int, default=None,
+                    help="Samples per pixel of the held-out proofs (default: --spp). At 4 spp "
+                         "their render noise is as large as the errors judged.")
     ap.add_argument("--backgrounds", default="clear,empty")
     ap.add_argument("--only", default="knight,smoke,splat")
     ap.add_argument("--json", default=None, help="Also write the rows to this file.")
@@ -156,32 +163,37 @@ def main() -> None:
         src = SOURCES[name]
         for bg in a.backgrounds.split(","):
             load0 = open("/proc/loadavg").read().split()[:3]
+            cpu0 = time.process_time()
             fd, corr = tempfile.mkstemp(suffix=".npz")
             os.close(fd)
             t0 = time.perf_counter()
             cs = CompensateSettings(source=src, output=corr, height_mm=a.height_mm,
                                     views=a.views, iterations=a.iterations, seed=a.seed + 1,
                                     resolution=a.resolution, spp=a.spp, max_cells=a.cells,
-                                    background=bg, overwrite=True)
+                                    background=bg, overwrite=True, step=a.step)
             rep = drive(run_compensate(cs))
             t_opt = time.perf_counter() - t0
             res = {}
+            noise = {}
             floor = None
             for method, comp in (("paper", None), ("compensated", corr)):
                 ps = ProofSettings(source=src, height_mm=a.height_mm, views=4,
-                                   resolution=a.resolution, spp=a.spp, seed=a.seed,
+                                   resolution=a.resolution, spp=a.judge_spp or a.spp,
+                                   seed=a.seed,
                                    background=bg, max_cells=a.cells, layers_per_block=1,
                                    compensation=comp)
                 rep_m = drive(render_proof(ps))["report"]
                 res[method] = rep_m["overall"]
                 floor = rep_m["gamut_floor"] or floor
+                noise[method] = rep_m["noise_floor"]
             os.unlink(corr)
             load1 = open("/proc/loadavg").read().split()[:3]
             p, c = res["paper"], res["compensated"]
             row = {"source": name, "background": bg, "paper": p, "compensated": c,
-                   "gamut_floor": floor,
+                   "gamut_floor": floor, "noise_floor": noise,
                    "reduction_de_mean": 1 - c["mean_de2000"] / p["mean_de2000"],
                    "optimise_s": round(t_opt, 1), "training": rep["figures"],
+                   "cpu_s": round(time.process_time() - cpu0, 1),
                    "load_before": load0, "load_after": load1}
             rows.append(row)
             print(f"{name:7s} {bg:6s} paper dE {p['mean_de2000']:5.2f}/{p['p95_de2000']:5.2f} "
@@ -190,7 +202,10 @@ def main() -> None:
                   f"{c['p95_de2000']:5.2f} S-CIELAB {c['mean_scielab_de2000']:5.2f} "
                   f"cov {c['coverage_error']:+.3f} | "
                   f"{-100 * row['reduction_de_mean']:+.0f}% dE mean | floor dE "
-                  f"{floor['mean_de2000']:5.2f} | optimise {t_opt:.0f} s "
+                  f"{floor['mean_de2000']:5.2f} | render noise dE "
+                  f"{noise['paper']['mean_de2000']:4.2f} S-CIELAB "
+                  f"{noise['paper']['mean_scielab_de2000']:4.2f} | optimise {t_opt:.0f} s, all "
+                  f"{row['cpu_s']:.0f} CPU s "
                   f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:

@@ -5,7 +5,7 @@ Run under a virtual screen:  xvfb-run -a -s "-screen 0 1280x800x24" \
 
 Drives the application as an operator would: the main window on the default profile and the demo
 volume (preview), the gamut page with a picked colour and the hexagon chart, the print proof
-tab (one small view of the demo), a voxel model (the
+tab (one small view of the demo) and its appearance compensation, a voxel model (the
 sample .vox: preview, export dialog with its pre-flight, the finished job's summary), and the
 calibration wizard's measurements page and its fit of a two-thickness calibration set (ink
 measurements generated from the default profile with the forward model, 1 % noise, written as
@@ -106,6 +106,12 @@ def main() -> int:
     wait(pp.finished)
     settle()
     grab_window(w, str(out / "proof-tab.png"))
+    # its Compensate appearance: 2 iterations on 3 training cameras, then both proofs
+    pp.comp_iterations.setValue(2)
+    pp.compensate()
+    wait(pp.finished)
+    settle()
+    grab_window(w, str(out / "proof-compensation.png"))
 
     voxel = Path(args.voxel_model)
     if voxel.is_file():

@@ -179,17 +179,11 @@ def _compensate_for(settings, quiet: bool) -> Path:
     """``--compensate``: optimise a correction for ``settings`` (written as
     ``OUTPUT.correction.npz`` beside the job); returns its path."""
     from dreamprint_gui.job.plan import JobCancelled
-    from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
+    from dreamprint_gui.proof.compensate import run_compensate
+    from dreamprint_gui.proof.compensated import compensate_settings_for, correction_path_for
 
-    s = settings
-    out = Path(str(s.output).rstrip("/\\") + ".correction.npz")
-    cs = CompensateSettings(source=s.source, output=str(out), height_mm=s.height_mm,
-                            size_mm=s.size_mm, printer=s.printer, profile=s.profile,
-                            seed=s.seed, halftone=s.halftone, density_scale=s.density_scale,
-                            background=s.background, table_size=s.table_size,
-                            source_options=tuple(sorted(s.source_options.items())),
-                            up=s.up, rotate=s.rotate, fit=s.fit,
-                            overwrite=s.overwrite)
+    out = correction_path_for(settings.output)
+    cs = compensate_settings_for(settings, str(out))
     gen = run_compensate(cs)
     try:
         while True:

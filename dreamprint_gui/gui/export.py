@@ -4,10 +4,14 @@ Defines :func:`convert_settings` (the GUI's choices as the engine's ``ConvertSet
 same object ``dreamprint convert`` builds), :func:`export_job` (``job.run.run_conversion`` as
 a worker job) and :class:`ExportDialog`, which runs it on a worker thread with a progress bar,
 time remaining and Cancel (the engine removes a cancelled job's partial folder), then shows a
-summary from the manifest. Where the slabs run is the engine's choice too
-(``ConvertSettings.workers`` and ``.scheduler``): this computer's threads or processes with a
-worker count, or a ``dask.distributed`` cluster by address (:data:`SCHEDULERS`,
-:func:`check_scheduler_address`); the choices persist with QSettings (``export/...``).
+summary from the manifest. "Compensate appearance" first optimises a correction through the
+print proof (:func:`dreamprint_gui.proof.compensated.run_compensated_conversion`, as
+``dreamprint convert --compensate``; written beside the job as ``NAME.correction.npz``), then
+converts with it; one progress bar and time left over both. Where the slabs run is the
+engine's choice too (``ConvertSettings.workers`` and ``.scheduler``): this computer's threads
+or processes with a worker count, or a ``dask.distributed`` cluster by address
+(:data:`SCHEDULERS`, :func:`check_scheduler_address`); the choices persist with QSettings
+(``export/...``).
 """
 
 from __future__ import annotations
@@ -136,10 +140,17 @@ def placement_combos(params: dict | None = None) -> tuple[QComboBox, QComboBox, 
     return up, turn, fit
 
 
-def export_job(settings, preflight=True):
+def export_job(settings, preflight=True, compensate: dict | None = None):
     """A worker job running the conversion: progress items are ``ConvertProgress``.
     ``preflight``: an estimate already made for these settings (recorded in the manifest as
-    is), or True to make it first (``job.run.run_conversion``)."""
+    is), or True to make it first (``job.run.run_conversion``). ``compensate``: the
+    optimiser's settings (``{}`` for its defaults) to compensate the appearance first; progress
+    items are then ``CompensationProgress``."""
+    if compensate is not None:
+        from dreamprint_gui.proof.compensated import run_compensated_conversion
+
+        return generator_job(lambda cancel: run_compensated_conversion(
+            settings, cancel, preflight=preflight, **compensate))
     from dreamprint_gui.job.run import run_conversion
 
     return generator_job(lambda cancel: run_conversion(settings, cancel, preflight=preflight))
@@ -277,6 +288,7 @@ def manifest_summary(manifest: dict, target: str, elapsed_s: float | None = None
         f"<tr><td><b>Background</b></td><td>{escape(background_name(bg_mode))}"
         + (f" below {threshold:.3g} /mm" if isinstance(threshold, float) else "")
         + "</td></tr>"
+        + compensation_row(manifest.get("compensation")) +
         f"<tr><td><b>Clamped densities</b></td><td>{clamp_text}</td></tr>"
         f"<tr><td><b>Time</b></td><td>{time_text(t, elapsed_s)}"
         + (f", {t['voxels_per_second']:,.0f} voxels/s" if "voxels_per_second" in t else "")
@@ -284,6 +296,24 @@ def manifest_summary(manifest: dict, target: str, elapsed_s: float | None = None
         "<p><b>Materials</b></p>"
         "<table cellspacing=4><tr><th></th><th>label</th><th>material</th><th>voxels</th>"
         f"<th>share</th><th>mean conc.</th></tr>{''.join(rows)}</table>" + warn_html)
+
+
+def compensation_row(comp: dict | None) -> str:
+    """The summary's row of a compensated job: the correction file and the optimiser's
+    figures on its training cameras (empty without a correction)."""
+    from html import escape
+
+    if not comp:
+        return ""
+    f = comp.get("proof_figures") or {}
+    b, a = f.get("before") or {}, f.get("after") or {}
+    figs = (f"; on its training cameras dE2000 mean {b['mean_de2000']:.2f} -> "
+            f"{a['mean_de2000']:.2f}, coverage error {b['coverage_error']:+.3f} -> "
+            f"{a['coverage_error']:+.3f}" if "mean_de2000" in b and "mean_de2000" in a else "")
+    sec = comp.get("optimise_seconds")
+    took = f"; optimised in {_seconds(sec)}" if isinstance(sec, int | float) else ""
+    return (f"<tr><td><b>Compensation</b></td><td>{escape(Path(comp['path']).name)}"
+            f"{figs}{took}</td></tr>")
 
 
 def preflight_html(pf) -> str:
@@ -406,6 +436,12 @@ class ExportDialog(QDialog):
         default_name = (source_name or Path(str(source_path)).stem or "job") + "-job"
         self.job_name = QLineEdit(default_name)
         self.overwrite = QCheckBox("replace an existing job of that name")
+        self.compensate = QCheckBox("Compensate appearance")
+        self.compensate.setToolTip(
+            "Before converting, optimise a correction of the job's colours and densities "
+            "through the print proof (Mitsuba; minutes, about 5 for a 20 mm object), written "
+            "beside the job as NAME.correction.npz")
+        self.compensation_options: dict = {}  # the optimiser's settings (tests: small ones)
         frow = QHBoxLayout()
         frow.addWidget(self.folder, 1)
         frow.addWidget(browse)
@@ -438,11 +474,16 @@ class ExportDialog(QDialog):
         form.addRow("Density scale", self.density_scale)
         form.addRow("Background", self.background)
         form.addRow("Content", self.content)
-        form.addRow("Up", self.up)
-        form.addRow("Turn", self.turn)
-        form.addRow("Size of", self.fit)
+        place_row = QHBoxLayout()  # one row: the dialog fits a 1280 x 800 screen
+        for name, combo in (("Up", self.up), ("Turn", self.turn), ("Size of", self.fit)):
+            if place_row.count():
+                place_row.addSpacing(12)
+            place_row.addWidget(QLabel(name))
+            place_row.addWidget(combo, 1)
+        form.addRow("Placement", place_row)
         form.addRow("Halftoning", self.halftone)
         form.addRow("Rendering intent", self.intent)
+        form.addRow("Appearance", self.compensate)
         form.addRow("Seed", self.seed)
         form.addRow("Folder", frow)
         form.addRow("Job name", self.job_name)
@@ -453,6 +494,7 @@ class ExportDialog(QDialog):
         self.progress = QProgressBar(minimum=0, maximum=1000)
         self.progress.setValue(0)
         self.remaining = QLabel("")
+        self.remaining.setWordWrap(True)
         self.error = QLabel("")
         self.error.setStyleSheet("color: #d33;")
         self.error.setWordWrap(True)
@@ -496,7 +538,8 @@ class ExportDialog(QDialog):
         lay.addWidget(self.buttons)
         self._form_widgets = [self.printer, self.by_height, self.by_box, self.height, *self.box,
                               self.density_scale, self.background, self.content,
-                              self.halftone, self.intent, self.seed,
+                              self.up, self.turn, self.fit, self.halftone, self.intent,
+                              self.compensate, self.seed,
                               self.folder, browse, self.job_name, self.overwrite,
                               self.scheduler, self.scheduler_address, self.workers]
         self._printer_obj = None
@@ -657,7 +700,8 @@ class ExportDialog(QDialog):
         self._t_start = time.monotonic()
         self.elapsed_s = None
         same = _same_job(settings, self._preflight_settings) and self.preflight is not None
-        task = Task(export_job(settings, self.preflight if same else True), "export")
+        comp = dict(self.compensation_options) if self.compensate.isChecked() else None
+        task = Task(export_job(settings, self.preflight if same else True, comp), "export")
         task.progress.connect(self._progress)
         task.succeeded.connect(self._succeeded)
         task.failed.connect(self._failed)
@@ -665,6 +709,16 @@ class ExportDialog(QDialog):
         self.task = run_task(task)
 
     def _progress(self, p) -> None:
+        if hasattr(p, "fraction"):  # compensating, then converting: one bar over both
+            self.progress.setValue(int(1000 * p.fraction))
+            c = p.inner
+            what = (f"layer {c.layers_done} of {c.layers_total}"
+                    if p.stage == "converting" and getattr(c, "layers_total", 0)
+                    else f"{'compensating appearance' if p.stage == 'compensating' else p.stage}"
+                         f"{': ' + p.message if p.message else ''}")
+            self.remaining.setText(f"{what}; elapsed {format_duration(p.elapsed_s)}; "
+                                   f"remaining {format_duration(p.eta_s)}")
+            return
         if p.layers_total:
             self.progress.setValue(int(1000 * p.layers_done / p.layers_total))
         if p.stage == "converting" and p.layers_total:

@@ -5,7 +5,10 @@ printer, height, density scale, background) from a callable, so the proof judges
 the operator is about to print; Render runs :func:`dreamprint_gui.proof.runner.render_proof` on the
 background worker (:mod:`.workers`) with progress and Cancel; the result shows source | print |
 dE2000 map of the chosen view and the figures. Change the size, density or profile on the
-preview page and press Render again. The images scale with the page (:class:`ScaledImage`:
+preview page and press Render again. "Compensate appearance" optimises a correction through the
+proof (:func:`dreamprint_gui.proof.compensated.compare_compensation`: training cameras and seed
+apart from the proof's) and shows source | open-loop print | compensated print with the figures
+of both, on the proof's cameras. The images scale with the page (:class:`ScaledImage`:
 the aspect kept, pixels shown as blocks when enlarged) and the dE2000 map has its colour bar
 (:class:`ColourBar`).
 """
@@ -33,7 +36,37 @@ from PySide6.QtWidgets import (
 
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
-__all__ = ["ProofPage", "to_pixmap", "ScaledImage", "ColourBar"]
+__all__ = ["ProofPage", "to_pixmap", "ScaledImage", "ColourBar", "compensation_text"]
+
+PROOF_TITLES = ("source (emission-absorption)", "print (Mitsuba volpath)",
+                "dE2000, source vs print")
+COMPENSATION_TITLES = ("source (emission-absorption)", "open-loop print (paper's method)",
+                       "compensated print")
+
+
+def compensation_text(result: dict) -> str:
+    """The figures of a compensation (:func:`..proof.compensated.compare_compensation`):
+    open loop and compensated on the proof's cameras, the gamut floor, the optimiser's own."""
+    rows = []
+    for key, name in (("open_loop", "open loop"), ("compensated", "compensated")):
+        o = result[key]["report"]["overall"]
+        rows.append(f"{name}: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "
+                    f"S-CIELAB {o['mean_scielab_de2000']:.2f}; coverage error "
+                    f"{o['coverage_error']:+.3f}")
+    a = result["open_loop"]["report"]["overall"]
+    b = result["compensated"]["report"]["overall"]
+    rows.append(f"change: dE2000 {100 * (b['mean_de2000'] / a['mean_de2000'] - 1):+.0f} %, "
+                f"S-CIELAB {100 * (b['mean_scielab_de2000'] / a['mean_scielab_de2000'] - 1):+.0f}"
+                " %")
+    floor = result["open_loop"]["report"].get("gamut_floor")
+    opt = result["optimiser"]
+    f = opt["figures"]
+    rows.append((f"gamut floor (the inks' best, no light transport): dE2000 "
+                 f"{floor['mean_de2000']:.2f}; " if floor else "")
+                + f"optimised on {len(opt['training_views'])} other cameras, seed "
+                f"{opt['settings']['seed']}: dE2000 {f['before']['mean_de2000']:.2f} -> "
+                f"{f['after']['mean_de2000']:.2f} in {opt['seconds']:.0f} s")
+    return "\n".join(rows)
 
 
 def to_pixmap(rgb: np.ndarray) -> QPixmap:
@@ -161,7 +194,15 @@ class ProofPage(QWidget):
             self.halftone.addItem(h, h)
         self.cells = QSpinBox(minimum=8, maximum=256, value=96)
         self.cells.setToolTip("Medium cells along the print's longest axis")
+        self.comp_iterations = QSpinBox(minimum=1, maximum=20, value=4)
+        self.comp_iterations.setToolTip("Render-compare-update iterations of the compensation "
+                                        "(each renders the print on 3 training cameras)")
         self.render_button = QPushButton("Render proof")
+        self.compensate_button = QPushButton("Compensate appearance")
+        self.compensate_button.setToolTip(
+            "Optimise a correction of the job's colours and densities through the proof "
+            "(3 training cameras, another seed), then render the open-loop and the "
+            "compensated print on this page's cameras (the paper's method; several minutes)")
         self.cancel_button = QPushButton("Cancel", enabled=False)
         self.progress = QProgressBar()
         self.status = QLabel("Render the print as a scattering medium (Mitsuba 3) beside the "
@@ -182,9 +223,11 @@ class ProofPage(QWidget):
         form.addRow("Method", self.method)
         form.addRow("Halftoning", self.halftone)
         form.addRow("Medium cells", self.cells)
+        form.addRow("Compensation iterations", self.comp_iterations)
         side = QVBoxLayout()
         side.addLayout(form)
         side.addWidget(self.render_button)
+        side.addWidget(self.compensate_button)
         side.addWidget(self.cancel_button)
         side.addWidget(self.progress)
         side.addWidget(self.status)
@@ -193,11 +236,10 @@ class ProofPage(QWidget):
 
         pics = QHBoxLayout()
         self.colour_bar = ColourBar(DE_MAP_MAX)
-        for k, (title, lab) in enumerate(zip(
-                ("source (emission-absorption)", "print (Mitsuba volpath)",
-                 "dE2000, source vs print"), self.image_labels, strict=True)):
+        self.titles = [QLabel(t, alignment=Qt.AlignmentFlag.AlignCenter) for t in PROOF_TITLES]
+        for k, (title, lab) in enumerate(zip(self.titles, self.image_labels, strict=True)):
             col = QVBoxLayout()
-            col.addWidget(QLabel(title, alignment=Qt.AlignmentFlag.AlignCenter))
+            col.addWidget(title)
             col.addWidget(lab)
             if k == 2:
                 col.addWidget(self.colour_bar)
@@ -213,7 +255,10 @@ class ProofPage(QWidget):
         top.addLayout(side)
         top.addLayout(right, 1)
         self.render_button.clicked.connect(lambda: self.render())
+        self.compensate_button.clicked.connect(lambda: self.compensate())
         self.cancel_button.clicked.connect(self.cancel)
+        self.comparison: dict | None = None  # the last compensation's result
+        self.compensation_options: dict = {}  # compare_compensation's training settings
 
     def set_job_settings(self, fn: Callable[[], Any]) -> None:
         self._job_settings = fn
@@ -245,15 +290,38 @@ class ProofPage(QWidget):
         if s is None:
             self.status.setText("Open a source first (File > Open).")
             return
+        self._start(Task(generator_job(lambda cancel: render_proof(s, cancel)), "proof"),
+                    self._on_result)
+
+    def compensate(self, settings=None) -> None:
+        """Compensate the job of ``settings`` (default :meth:`proof_settings`) and show the
+        open-loop and the compensated print on this page's cameras (no noise-floor render:
+        two proofs already)."""
+        from dataclasses import replace
+
+        from dreamprint_gui.proof.compensated import compare_compensation
+
+        s = settings if settings is not None else self.proof_settings()
+        if s is None:
+            self.status.setText("Open a source first (File > Open).")
+            return
+        s = replace(s, method="paper", noise_floor=False)
+        n = self.comp_iterations.value()
+        opts = dict(self.compensation_options)
+        self._start(Task(generator_job(lambda cancel: compare_compensation(
+            s, cancel, iterations=n, **opts)), "compensate"), self._on_comparison)
+
+    def _start(self, task: Task, on_result) -> None:
         if self.task is not None:
             return
         self.render_button.setEnabled(False)
+        self.compensate_button.setEnabled(False)
         self.cancel_button.setEnabled(True)
         self.progress.setRange(0, 0)
         self.status.setText("preparing ...")
-        self.task = Task(generator_job(lambda cancel: render_proof(s, cancel)), "proof")
+        self.task = task
         self.task.progress.connect(self._on_progress)
-        self.task.succeeded.connect(self._on_result)
+        self.task.succeeded.connect(on_result)
         self.task.failed.connect(lambda msg, tb: self._end("failed", msg))
         self.task.cancelled.connect(lambda: self._end("cancelled", "cancelled"))
         run_task(self.task)
@@ -263,12 +331,40 @@ class ProofPage(QWidget):
             self.task.cancel()
 
     def _on_progress(self, p) -> None:
+        from dreamprint_gui.gui.export import format_duration
+
+        if hasattr(p, "fraction"):  # a compensation: one bar over all its phases
+            self.progress.setRange(0, 1000)
+            self.progress.setValue(round(1000 * p.fraction))
+            left = "estimating ..." if p.eta_s is None else format_duration(p.eta_s)
+            self.status.setText(f"{p.stage}: {p.message}\nelapsed "
+                                f"{format_duration(p.elapsed_s)}; time left {left}")
+            return
         if p.total:
             self.progress.setRange(0, p.total)
             self.progress.setValue(p.done)
         self.status.setText(f"{p.stage} {p.done}/{p.total}  {p.elapsed_s:.0f} s")
 
+    def _set_mode(self, titles: tuple[str, ...]) -> None:
+        for lab, t in zip(self.titles, titles, strict=True):
+            lab.setText(t)
+        self.colour_bar.setVisible(titles is PROOF_TITLES)
+
+    def _on_comparison(self, result: dict) -> None:
+        self.comparison = result
+        self.result = None
+        self._set_mode(COMPENSATION_TITLES)
+        ol, co = result["open_loop"]["images"], result["compensated"]["images"]
+        self.images = [{"source": a["source"], "open_loop": a["print"], "compensated": b["print"]}
+                       for a, b in zip(ol, co, strict=True)]
+        self.view_pick.setMaximum(len(self.images) - 1)
+        self._show_view(self.view_pick.value())
+        self.figures.setText(compensation_text(result))
+        self._end("succeeded", "done: open loop and compensated on this page's cameras")
+
     def _on_result(self, result: dict) -> None:
+        self.comparison = None
+        self._set_mode(PROOF_TITLES)
         self.result = result["report"]
         self.images = result["images"]
         self.view_pick.setMaximum(len(self.images) - 1)
@@ -292,14 +388,18 @@ class ProofPage(QWidget):
         if not self.images or not 0 <= i < len(self.images):
             return
         im = self.images[i]
-        self.view_rgb = [to_display(im["source"]), to_display(im["print"]),
-                         de_heatmap(im["de2000"])]
+        if "compensated" in im:
+            self.view_rgb = [to_display(im[k]) for k in ("source", "open_loop", "compensated")]
+        else:
+            self.view_rgb = [to_display(im["source"]), to_display(im["print"]),
+                             de_heatmap(im["de2000"])]
         for lab, rgb in zip(self.image_labels, self.view_rgb, strict=True):
             lab.setPixmap(to_pixmap(rgb))
 
     def _end(self, outcome: str, message: str) -> None:
         self.task = None
         self.render_button.setEnabled(True)
+        self.compensate_button.setEnabled(True)
         self.cancel_button.setEnabled(False)
         self.progress.setRange(0, 1)
         self.progress.setValue(1 if outcome == "succeeded" else 0)

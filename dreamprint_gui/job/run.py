@@ -195,7 +195,8 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
         "compensation": (None if ctx.correction is None else
                          {"path": str(Path(s.compensation).absolute()),
                           **ctx.correction.describe(),
-                          "proof_figures": ctx.correction.report.get("figures")}),
+                          "proof_figures": ctx.correction.report.get("figures"),
+                          "optimise_seconds": ctx.correction.report.get("seconds")}),
         "slices": {"folder": "slices", "count": nz, "width": nx if ctx.printer.image_columns
                    == "x" else ny, "height": ny if ctx.printer.image_columns == "x" else nx,
                    "first": "slices/" + _slice(0, nz), "last": "slices/" + _slice(nz - 1, nz),

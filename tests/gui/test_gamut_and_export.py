@@ -349,3 +349,60 @@ def test_export_shows_the_preflight_before_export(qtbot, tmp_path, table_size):
     assert "mostly-clear" in [w.code for w in dlg.preflight.warnings]
     assert "Clear or empty" in dlg.preflight_view.toPlainText()
     assert not (tmp_path / "job").exists()  # nothing written by an estimate
+
+
+TINY_COMPENSATION = {"views": 1, "iterations": 1, "resolution": 24, "spp": 2, "max_cells": 12,
+                     "field_cells": 6}
+
+
+def test_export_compensates_appearance_first(qtbot, tmp_path, table_size):
+    """"Compensate appearance": the correction is optimised, written beside the job and used
+    by it; one progress bar with time left runs over both phases; the summary names it."""
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    dlg.compensation_options = TINY_COMPENSATION
+    dlg.compensate.setChecked(True)
+    seen = []
+    dlg.start()
+    dlg.task.progress.connect(seen.append)
+    with qtbot.waitSignal(dlg.task.done, timeout=600000):
+        pass
+    qtbot.waitUntil(lambda: dlg.manifest is not None or dlg.error.text(), timeout=5000)
+    assert dlg.task.outcome == "succeeded", dlg.error.text()
+    corr = tmp_path / "job.correction.npz"
+    assert corr.is_file() and (tmp_path / "job" / "manifest.json").is_file()
+    comp = dlg.manifest["compensation"]
+    assert comp["path"] == str(corr.absolute())
+    stages = [p.stage for p in seen]
+    assert "compensating" in stages and "converting" in stages
+    assert stages.index("compensating") < stages.index("converting")
+    fractions = [p.fraction for p in seen]
+    assert fractions == sorted(fractions) and dlg.progress.value() == 1000
+    assert any(p.eta_s is not None for p in seen)
+    text = dlg.summary.toPlainText()
+    before = comp["proof_figures"]["before"]["mean_de2000"]
+    assert "Compensation" in text and "job.correction.npz" in text
+    assert f"dE2000 mean {before:.2f}" in text and "optimised in" in text
+
+
+def test_export_compensation_cancel_leaves_nothing(qtbot, tmp_path, table_size):
+    """Cancelled once the correction is written (while converting): job and correction go."""
+    dlg = _dialog(qtbot, tmp_path, table_size, 4.0)
+    dlg.compensation_options = TINY_COMPENSATION
+    dlg.compensate.setChecked(True)
+    cancelled = []
+
+    def on_progress(p):
+        if p.stage == "converting" and not cancelled:
+            # the correction is written; the placement, like every choice, is locked
+            cancelled.append((tmp_path / "job.correction.npz").is_file()
+                             and not dlg.up.isEnabled() and not dlg.compensate.isEnabled())
+            dlg.cancel_button.click()
+
+    dlg.start()
+    dlg.task.progress.connect(on_progress)
+    with qtbot.waitSignal(dlg.task.done, timeout=600000):
+        pass
+    assert cancelled == [True] and dlg.task.outcome == "cancelled", dlg.error.text()
+    qtbot.waitUntil(lambda: "cancelled" in dlg.remaining.text(), timeout=5000)
+    assert list(tmp_path.iterdir()) == []
+    assert dlg.start_button.isEnabled() and dlg.compensate.isEnabled()

@@ -2,8 +2,9 @@
 
 import numpy as np
 
-from dreamprint_gui.gui.proof_view import ProofPage
+from dreamprint_gui.gui.proof_view import COMPENSATION_TITLES, ProofPage
 from dreamprint_gui.job.plan import ConvertSettings
+from dreamprint_gui.proof.compare import to_display
 
 
 def _page(qtbot, table_size):
@@ -109,3 +110,84 @@ def test_proof_images_scale_with_the_page_and_the_de_map_has_a_colour_bar(qtbot)
     page.resize(900, 500)
     qtbot.wait(50)
     assert page.image_labels[0].image_rect().width() < r.width()
+
+
+TINY_TRAINING = {"training_views": 1, "train_resolution": 24, "field_cells": 6}
+
+
+def test_proof_page_compensates_and_shows_both_prints(qtbot, table_size):
+    """Compensate appearance: source | open-loop print | compensated print of the chosen view,
+    the figures of both on the page's cameras; Render proof goes back to the dE map."""
+    page = _page(qtbot, table_size)
+    page.compensation_options = TINY_TRAINING
+    page.comp_iterations.setValue(1)
+    seen = []
+    with qtbot.waitSignal(page.finished, timeout=600_000) as sig:
+        page.compensate_button.click()
+        page.task.progress.connect(seen.append)
+    assert sig.args == ["succeeded"], page.status.text()
+    assert [t.text() for t in page.titles] == list(COMPENSATION_TITLES)
+    src, open_loop, comp = page.view_rgb
+    assert src.shape == open_loop.shape == comp.shape == (32, 32, 3)
+    assert src[0, 0].min() >= 250 and open_loop[0, 0].min() >= 240 and comp[0, 0].min() >= 240
+    mid = slice(12, 20)
+    for im in (src, open_loop, comp):
+        assert im[mid, mid].mean() < 245
+    assert np.abs(open_loop.astype(int) - comp.astype(int)).max() > 0  # the field acted
+    # the images shown are those of the two proofs, the figures theirs
+    res = page.comparison
+    for key, shown in (("open_loop", open_loop), ("compensated", comp)):
+        np.testing.assert_array_equal(shown, to_display(res[key]["images"][0]["print"]))
+    text = page.figures.text()
+    for key in ("open_loop", "compensated"):
+        o = res[key]["report"]["overall"]
+        assert f"dE2000 mean {o['mean_de2000']:.2f}" in text
+        assert f"S-CIELAB {o['mean_scielab_de2000']:.2f}" in text
+        assert f"coverage error {o['coverage_error']:+.3f}" in text
+    assert not page.colour_bar.isVisibleTo(page)
+    assert res["optimiser"]["settings"]["seed"] == 1  # trained on another seed than shown
+    stages = [p.stage for p in seen]
+    assert stages[0] == "compensating" and stages[-1] == "proof (compensated)"
+    assert any(p.eta_s is not None for p in seen)
+    assert page.progress.value() == page.progress.maximum() > 0
+    assert page.render_button.isEnabled() and page.compensate_button.isEnabled()
+
+
+def test_proof_page_compensation_cancel_leaves_nothing(qtbot, table_size, tmp_path,
+                                                       monkeypatch):
+    """Cancelled while the compensated proof renders (its correction in a temporary file):
+    no result, no file left."""
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    page = _page(qtbot, table_size)
+    page.compensation_options = TINY_TRAINING
+    page.comp_iterations.setValue(1)
+    held = []
+
+    def on_progress(p):
+        if p.stage == "proof (compensated)" and not held:
+            held.append([f.name for f in tmp_path.iterdir()])
+            page.cancel_button.click()
+
+    with qtbot.waitSignal(page.finished, timeout=600_000) as sig:
+        page.compensate_button.click()
+        page.task.progress.connect(on_progress)
+    assert sig.args == ["cancelled"]
+    assert held and any(n.startswith("dreamprint-correction-") for n in held[0])
+    assert list(tmp_path.iterdir()) == []
+    assert page.comparison is None and page.render_button.isEnabled()
+    assert page.status.text() == "cancelled"
+
+
+def test_proof_page_reports_a_failed_compensation_in_one_line(qtbot, table_size):
+    """A source that cannot be read: one line in the status, no traceback."""
+    js = ConvertSettings(source="/nonexistent/cloud.vdb", height_mm=3.0, table_size=table_size)
+    page = ProofPage(job_settings=lambda: js)
+    qtbot.addWidget(page)
+    with qtbot.waitSignal(page.finished, timeout=120_000) as sig:
+        page.compensate_button.click()
+    assert sig.args == ["failed"]
+    msg = page.status.text()
+    assert "cloud.vdb" in msg and "Traceback" not in msg and "\n" not in msg
+    assert page.compensate_button.isEnabled()

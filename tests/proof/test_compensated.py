@@ -1,0 +1,117 @@
+"""Compensation inside other work (proof/compensated.py): the phases' clock, the compensated
+export (as ``convert --compensate``) and the open-loop vs compensated proofs."""
+
+import json
+import time
+
+import pytest
+
+from dreamprint_gui.cli import main
+from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.job.plan import ConvertSettings
+from dreamprint_gui.proof.compensated import (
+    PhaseClock,
+    compare_compensation,
+    compensate_settings_for,
+    correction_path_for,
+    run_compensated_conversion,
+)
+from dreamprint_gui.proof.runner import ProofSettings
+
+TINY = {"views": 1, "iterations": 1, "resolution": 24, "spp": 2, "max_cells": 12,
+        "field_cells": 6}
+
+
+def drive(gen):
+    items = []
+    try:
+        while True:
+            items.append(next(gen))
+    except StopIteration as stop:
+        return items, stop.value
+
+
+def test_phase_clock_fractions_and_time_left(monkeypatch):
+    clock = PhaseClock({"a": 3.0, "b": 1.0})
+    assert clock.fraction("a", 0.0) == 0.0
+    assert clock.fraction("a", 0.5) == pytest.approx(0.375)
+    assert clock.fraction("b", 0.0) == pytest.approx(0.75)
+    assert clock.fraction("b", 2.0) == pytest.approx(1.0)   # clipped
+    monkeypatch.setattr(time, "perf_counter", lambda: clock.t0 + 30.0)
+    p = clock.progress("a", 0.5)
+    # 30 s for 0.375 of the work: 50 s for the other 0.625
+    assert p.elapsed_s == pytest.approx(30.0) and p.eta_s == pytest.approx(50.0)
+    assert clock.progress("a", 0.0).eta_s is None
+
+
+def test_compensate_settings_follow_the_job():
+    s = ConvertSettings(source="demo", output="/tmp/x/job", height_mm=7.0, seed=5,
+                        background="empty", density_scale=2.0, halftone="random",
+                        table_size=17, rotate=90, fit="box", source_options={"k": 1})
+    cs = compensate_settings_for(s, "/tmp/x/job.correction.npz", iterations=2)
+    assert (cs.source, cs.height_mm, cs.seed, cs.background, cs.density_scale, cs.halftone,
+            cs.table_size, cs.rotate, cs.fit, cs.iterations) == (
+        "demo", 7.0, 5, "empty", 2.0, "random", 17, 90, "box", 2)
+    assert cs.source_options == (("k", 1),)
+    assert correction_path_for("/tmp/x/job/") == correction_path_for("/tmp/x/job")
+    assert str(correction_path_for("/tmp/x/job")) == "/tmp/x/job.correction.npz"
+
+
+def test_compensated_export_refuses_an_existing_job_before_optimising(tmp_path):
+    (tmp_path / "job").mkdir()
+    s = ConvertSettings(source="demo", output=str(tmp_path / "job"), height_mm=2.0,
+                        table_size=17)
+    gen = run_compensated_conversion(s, **TINY)
+    t0 = time.process_time()
+    with pytest.raises(DreamPrintError, match="already exists"):
+        next(gen)
+    assert time.process_time() - t0 < 5.0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job"]
+
+
+def test_convert_compensate_writes_job_and_correction(tmp_path, capsys):
+    out = tmp_path / "job"
+    code = main(["convert", "demo", "-o", str(out), "--height-mm", "2", "--table-size", "17",
+                 "--compensate", "--json", "-q"])
+    cap = capsys.readouterr()
+    assert code == 0, cap.err
+    manifest = json.loads(cap.out)
+    corr = tmp_path / "job.correction.npz"
+    assert corr.is_file() and manifest["compensation"]["path"] == str(corr.absolute())
+
+
+def test_compare_compensation_trains_apart_and_leaves_no_file(tmp_path, monkeypatch):
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    ps = ProofSettings(source="demo", height_mm=3.0, views=1, resolution=24, spp=2,
+                       max_cells=12, table_size=17, seed=3, noise_floor=False)
+    items, res = drive(compare_compensation(ps, iterations=1, training_views=1,
+                                            train_resolution=24, field_cells=6))
+    assert list(tmp_path.iterdir()) == []
+    assert res["optimiser"]["settings"]["seed"] == 4
+    assert res["open_loop"]["report"]["compensation"] is None
+    comp = res["compensated"]["report"]["compensation"]
+    assert comp is not None and comp["optimiser_figures"] == res["optimiser"]["figures"]
+    # the proofs' cameras are the proof's (elevation 20), not the training ones (35)
+    assert res["compensated"]["report"]["views"][0]["elevation_deg"] == 20.0
+    assert res["optimiser"]["training_views"][0]["elevation_deg"] == 35.0
+    fr = [p.fraction for p in items]
+    assert fr == sorted(fr) and fr[-1] <= 1.0
+
+
+def test_optimiser_progress_only_grows_for_any_iteration_count():
+    """The fraction of the optimiser's phase from its item stream (preparing, then per
+    iteration labels, print 0..4 of 4, iteration k of n + 1) never goes back."""
+    from dreamprint_gui.proof.compensated import _optimise_within
+    from dreamprint_gui.proof.runner import ProofProgress
+
+    for n in (1, 4, 10):
+        state = {"total": n + 1}
+        items = [ProofProgress("preparing", 0, 1, 0.0)]
+        for k in range(n + 1):
+            items.append(ProofProgress(f"labels (iteration {k}/{n})", 1, 2, 0.0))
+            items += [ProofProgress(f"print (iteration {k}/{n})", d, 4, 0.0) for d in range(5)]
+            items.append(ProofProgress("iteration", k + 1, n + 1, 0.0, "iteration"))
+        fr = [_optimise_within(p, state) for p in items]
+        assert fr == sorted(fr) and fr[0] == 0.0 and fr[-1] == 1.0, n
