@@ -278,7 +278,9 @@ def test_preflight_warning_shown_once(window, qtbot):
     """A nearly empty fog (density scale 0.01): the pre-flight's mostly-clear warning shows in
     the preview's Warnings box and nowhere else."""
     p = window.preview
-    with qtbot.waitSignal(p.preflightReady, timeout=120000):
+    # the pre-flight of these settings, not one of the start's still on its way
+    with qtbot.waitSignal(p.preflightReady, timeout=120000,
+                          check_params_cb=lambda pf: pf.density_scale == 0.01):
         p.set_params(density_scale=0.01)
     codes = [wn.code for wn in p.preflight.warnings]
     assert "mostly-clear" in codes, codes
@@ -286,7 +288,8 @@ def test_preflight_warning_shown_once(window, qtbot):
     where = _texts_showing("Clear or empty")
     assert where == ["label in MainWindow"], where
     assert "--density-scale" not in p.warnings.text()  # named as the control is
-    with qtbot.waitSignal(p.preflightReady, timeout=120000):
+    with qtbot.waitSignal(p.preflightReady, timeout=120000,
+                          check_params_cb=lambda pf: pf.density_scale == 1.0):
         p.set_params(density_scale=1.0)
     assert "mostly-clear" not in [wn.code for wn in p.preflight.warnings]
 
