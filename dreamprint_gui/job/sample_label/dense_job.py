@@ -25,7 +25,7 @@ from dreamprint_gui.io.volumes.dense_sampler import (
     RAW,
     dense_layer,
 )
-from dreamprint_gui.io.volumes.srgb_encode import encode_where
+from dreamprint_gui.io.volumes.srgb_encode import AS_IS, ENCODE
 from dreamprint_gui.job.sample_label.layer_kernel import layer_labels
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]
@@ -40,8 +40,9 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
     density, 1-3 premultiplied colour if it has 4 channels, else ``uniform`` sRGB colour (3,)):
     the slab's plan (:class:`..io.volumes.dense_sampler.DenseLayers` ``.args()``), density
     ``scale`` (1/mm per source unit), ``linear`` (the colour channels hold linear values: each
-    voxel the labelling reads is sRGB-encoded, :func:`..io.volumes.srgb_encode.encode_where`,
-    the values :meth:`..io.volumes.dense.DenseSource.sample_slab` gives), one layer's working
+    voxel the labelling reads is sRGB-encoded in its staged block,
+    :func:`..io.volumes.srgb_encode.prepare_staged`, the values
+    :meth:`..io.volumes.dense.DenseSource.sample_slab` gives), one layer's working
     arrays ``rgb`` (ny * nx, 3) and ``dens`` (ny * nx,), then the arguments of
     :func:`.layer_kernel.slab_labels` after ``z0``."""
     colour = vol.shape[3] == 4
@@ -54,14 +55,14 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
         for c in range(3):
             rgb[:, c] = uniform[c]
     rgb_flat = rgb.reshape(-1)
+    op = ENCODE if colour and linear else AS_IS
     for k in range(labels.shape[0]):
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                     srows, planes, planes_nz, plane_layer, row, cpl, rgb_flat, rgb_flat, dens,
                     mode, scale)
-        if colour and linear:
-            encode_where(rgb, dens, threshold, labels.shape[2])
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     op)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -37,6 +37,7 @@ from dreamprint_gui.gamut.alignment import (
     lookup_align_block,
     stage_voxel,
 )
+from dreamprint_gui.io.volumes.srgb_encode import AS_IS, prepare_staged
 from dreamprint_gui.job.halftone import (
     fg_threshold,
     label_rows,
@@ -76,11 +77,16 @@ def block_conc_sums(C, m, acc, sums):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
-                 method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
+                 method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats,
+                 colour_op=AS_IS):
     """``rgb`` (ny*nx, 3) float32 sRGB, ``dens`` (ny*nx,) float32 1/mm of layer ``z`` ->
     ``labels`` (ny, nx) uint8. Accumulates ``counts`` (7,) int64, ``sums`` (7,) float64
     (intended concentrations; background voxels count 1 for ``bg_label``) and ``stats`` (4,)
-    (clamped low, clamped high, worst low shortfall, worst high shortfall)."""
+    (clamped low, clamped high, worst low shortfall, worst high shortfall). ``colour_op``
+    (:mod:`..io.volumes.srgb_encode`): the colours as read are sRGB-encoded (``ENCODE``: ``rgb``
+    holds linear values) or clipped (``CLIP``) first, in the staged block
+    (:func:`..io.volumes.srgb_encode.prepare_staged`): only the foreground voxels', the only
+    colours read (the rest of ``rgb`` may hold anything)."""
     ny, nx = labels.shape
     mz, my, mx = mask.shape
     cols, rows, tiles = tile_layout(0, nx, 0, ny, z, ox, oy, oz, mz, my, mx, seed)
@@ -133,6 +139,7 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
             for k in range(mb):
                 p = idx[k0 + k]
                 stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
+            prepare_staged(col, mb, ROW_STRIDE, colour_op)
             lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tq[k0:], mb, order, bg_label, lab)
             scatter_counts(out, idx, k0, lab, mb, counts)
