@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_convert import PRINTER, jobs_dir  # noqa: E402
 from bench_convert import height_for as demo_height
 
-from dreamprint_gui.io.volumes.dense import _window_kernel  # noqa: E402
+from dreamprint_gui.io.volumes.dense import _window_kernel, window_density  # noqa: E402
 from dreamprint_gui.io.volumes.dense_sampler import (  # noqa: E402
     COLOUR,
     COLOUR_WHERE_DENSE,
@@ -51,7 +51,7 @@ from dreamprint_gui.io.volumes.leaf_grid import (  # noqa: E402
     leaf_grid_values_where,
 )
 from dreamprint_gui.io.volumes.srgb_encode import AS_IS, CLIP, ENCODE  # noqa: E402
-from dreamprint_gui.job.sample_label.layer_kernel import layer_labels  # noqa: E402
+from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels  # noqa: E402
 
 
 @njit(cache=True, nogil=True)
@@ -63,22 +63,38 @@ def _sample_dense(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx
     for k in range(rgb.shape[0]):
         if not colour:
             for c in range(3):
-                rgb[k, :, c] = uniform[c]
+                rgb[k, 0, c] = uniform[c]
         rf = rgb[k].reshape(-1)
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
                     rslot, srows, planes, planes_nz, plane_layer, row, cpl, rf, rf, dens[k],
                     mode, scale)
 
 
+@njit(cache=True)
+def _one_colour(lut):
+    li = lut.view(np.int32)
+    same = True
+    for i in range(lut.shape[0]):
+        for c in range(3):
+            same &= li[i, c] == li[0, c]
+    return same
+
+
 @njit(cache=True, nogil=True)
 def _sample_window(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                    srows, planes, planes_nz, plane_layer, row, cpl, low, inv_width, lut,
                    density, use_outside, outside_z, outside_y, outside_x, values, rgb, dens, nx):
+    one_colour = _one_colour(lut)
     for k in range(rgb.shape[0]):
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
                     rslot, srows, planes, planes_nz, plane_layer, row, cpl, values, values,
                     dens[k], RAW, np.float32(1.0))
-        _window_kernel(values, low, inv_width, lut, density, rgb[k], dens[k])
+        if one_colour:
+            for c in range(3):
+                rgb[k, 0, c] = lut[0, c]
+            window_density(values, low, inv_width, density, dens[k])
+        else:
+            _window_kernel(values, low, inv_width, lut, density, rgb[k], dens[k])
         if use_outside:
             d = dens[k]
             for j in range(d.shape[0] // nx):
@@ -91,7 +107,7 @@ def _sample_window(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
 def _sample_leaf(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, uniform, rgb, dens):
     for k in range(rgb.shape[0]):
         for c in range(3):
-            rgb[k, :, c] = uniform[c]
+            rgb[k, 0, c] = uniform[c]
         leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens[k])
 
 
@@ -117,9 +133,11 @@ def _colour_op(kind: str, plan: tuple) -> int:
     """What the job's labelling does to the sampled colours (the fused kernels' choice)."""
     if kind == "leaf_grid_colour":
         return ENCODE if plan[-1] else CLIP
-    if kind == "dense" and plan[0].shape[3] == 4 and plan[-1]:
-        return ENCODE
-    return AS_IS
+    if kind == "dense":
+        return (ENCODE if plan[-1] else AS_IS) if plan[0].shape[3] == 4 else UNIFORM
+    if kind == "window":
+        return UNIFORM if _one_colour(plan[23]) else AS_IS
+    return UNIFORM
 
 
 def _sample_only(kind: str, plan: tuple, rgb, dens, threshold, ny: int, nx: int) -> None:

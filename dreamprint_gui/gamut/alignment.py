@@ -19,6 +19,9 @@ Defines
 - :func:`lookup_runs`: the same interpolation for a block whose voxels come in runs of one
   colour, once per run and copied along it (the same bits; :func:`lookup_align_block` takes it
   when the runs average :data:`RUN_MIN` voxels or more).
+- :func:`uniform_lanes`: the same lanes for every voxel of a block from one colour (a source
+  of one colour: the lookup is done once per layer, and a block needs only its targets and
+  :func:`align_block`, the alignment half of :func:`lookup_align_block`).
 - :func:`predicted_appearance`: what a voxel will look like after lookup + alignment (GUI).
 
 Lowering (eq. 12): ``C = rho C* + (1 - rho) Cl``. With an ideal Clear (K = S = 0) the mixture's
@@ -61,6 +64,7 @@ __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
            "predicted_appearance", "interpolate_block", "align_rows", "clean_rgb",
            "stage_voxel", "finish_staging", "lookup_align_block", "block_buffers",
            "kernel_table", "interpolate_nodes", "count_runs", "lookup_runs", "RUN_MIN", "LANES",
+           "uniform_lanes", "align_block",
            "ROW_BLOCK", "SOLID_TARGET", "ROW_STRIDE", "K_TARGET", "K_RHOK"]
 
 _I_K = INKS.index("K")
@@ -526,17 +530,32 @@ def lookup_runs(flat, n, col, m, W, off, A, G):
                 row[k] = v
 
 
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def uniform_lanes(flat, n, r, g, b, col, W, off, A, G):
+    """Lanes ``0 .. K_RHOK`` of ``G`` for all :data:`ROW_BLOCK` voxels of a block whose every
+    voxel has the colour ``(r, g, b)`` as read (cleaned here, :func:`clean_rgb`): what
+    :func:`lookup_runs` and :func:`interpolate_block` write for such voxels (lanes are functions
+    of the clean colour alone), written once. :func:`align_rows` does not write them, so they
+    serve every block of a layer: a block then needs only its targets (lane :data:`K_TARGET`)
+    and :func:`align_block`. ``col``, ``W``, ``off``, ``A``: scratch
+    (:func:`block_buffers`)."""
+    RS = ROW_STRIDE
+    col[0] = clean_rgb(np.float32(r))
+    col[RS] = clean_rgb(np.float32(g))
+    col[2 * RS] = clean_rgb(np.float32(b))
+    interpolate_nodes(flat, n, col, 1, W, off, A)
+    for q in range(K_RHOK + 1):
+        v = A[q]
+        row = G[q * RS:q * RS + ROW_BLOCK]
+        for k in range(ROW_BLOCK):
+            row[k] = v
+
+
 @nb.njit(cache=True, nogil=True)
-def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
-    """:func:`finish_staging`, :func:`interpolate_block` (or, for a block of long runs of one
-    colour, :func:`lookup_runs`: the same values) then :func:`align_rows` for ``m`` staged
-    voxels (concentrations into ``C``); adds their clamp report to ``stats`` (clamped low,
-    clamped high, worst low shortfall, worst high shortfall)."""
-    finish_staging(col, m)
-    if count_runs(col, m) * RUN_MIN <= m:
-        lookup_runs(flat, n, col, m, W, off, A, G)
-    else:
-        interpolate_block(flat, n, col, m, W, off, A, G)
+def align_block(sigma_clear, m, G, C, stats):
+    """:func:`align_rows` of ``m`` voxels whose lanes are in ``G`` (concentrations into
+    ``C``); adds their clamp report to ``stats`` (clamped low, clamped high, worst low
+    shortfall, worst high shortfall)."""
     lo, hi = align_rows(G, m, sigma_clear, C)
     stats[0] += lo
     stats[1] += hi
@@ -552,6 +571,19 @@ def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
         for k in range(m):
             w_hi = max(w_hi, np.float64(C[7 * ROW_STRIDE + k]))
         stats[3] = w_hi
+
+
+@nb.njit(cache=True, nogil=True)
+def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
+    """:func:`finish_staging`, :func:`interpolate_block` (or, for a block of long runs of one
+    colour, :func:`lookup_runs`: the same values) then :func:`align_block` for ``m`` staged
+    voxels (concentrations into ``C``; clamp report added to ``stats``)."""
+    finish_staging(col, m)
+    if count_runs(col, m) * RUN_MIN <= m:
+        lookup_runs(flat, n, col, m, W, off, A, G)
+    else:
+        interpolate_block(flat, n, col, m, W, off, A, G)
+    align_block(sigma_clear, m, G, C, stats)
 
 
 @nb.njit(cache=True, nogil=True)

@@ -106,3 +106,38 @@ def test_lookup_align_block_gives_the_per_voxel_concentrations(small_tables, mea
     assert (stats[0], stats[1]) == (lo, hi) and lo > 0
     assert stats[2] == max(0.0, float(ref[5][6 * RS:6 * RS + m].max()))
     assert stats[3] == max(0.0, float(ref[5][7 * RS:7 * RS + m].max()))
+
+
+@pytest.mark.parametrize("colour", [(0.3, 0.8, 0.1), (np.nan, 1.7, -0.0), (1.0, 0.0, 1.0)])
+def test_uniform_lanes_are_the_per_voxel_lanes(small_tables, colour):
+    """A block of one colour: uniform_lanes (written once, every voxel of a block) then
+    align_block give the per-voxel lookup's lanes and concentrations and its clamp report, bit
+    for bit, damaged colours included."""
+    from dreamprint_gui.gamut.alignment import align_block, uniform_lanes
+
+    rng = np.random.default_rng(3)
+    flat = kernel_table(small_tables)
+    n = small_tables.packed.shape[0]
+    sc = np.float32(small_tables.sigma_clear)
+    m = ROW_BLOCK - 9
+    raw = np.tile(np.asarray(colour, np.float32)[:, None], (1, m))
+    dens = rng.uniform(0, 60, m).astype(np.float32)
+    dens[::11] = np.float32(1e30)
+    dens[::13] = np.nan
+    dens[::17] = np.float32(0.1 * sc)
+    col, W, off, A, G, C = _stage(raw, dens)
+    ref = [a.copy() for a in (col, W, off, A, G, C)]
+    finish_staging(ref[0], m)
+    interpolate_block(flat, n, ref[0], m, ref[1], ref[2], ref[3], ref[4])
+    lo, hi = align_rows(ref[4], m, sc, ref[5])
+    G[:K_TARGET * RS] = np.nan                          # whatever the lanes held before
+    uniform_lanes(flat, n, *np.asarray(colour, np.float32), col, W, off, A, G)
+    stats = np.zeros(4)
+    align_block(sc, m, G, C, stats)
+    for q in range(K_RHOK + 1):
+        np.testing.assert_array_equal(_bits(G[q * RS:q * RS + m]),
+                                      _bits(ref[4][q * RS:q * RS + m]), err_msg=f"lane {q}")
+    for q in range(8):
+        np.testing.assert_array_equal(_bits(C[q * RS:q * RS + m]),
+                                      _bits(ref[5][q * RS:q * RS + m]), err_msg=f"row {q}")
+    assert (stats[0], stats[1]) == (lo, hi) and lo > 0

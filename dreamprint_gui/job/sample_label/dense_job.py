@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.io.volumes.dense import _window_kernel
+from dreamprint_gui.io.volumes.dense import _window_kernel, window_density
 from dreamprint_gui.io.volumes.dense_sampler import (
     COLOUR,
     COLOUR_WHERE_DENSE,
@@ -26,7 +26,7 @@ from dreamprint_gui.io.volumes.dense_sampler import (
     dense_layer,
 )
 from dreamprint_gui.io.volumes.srgb_encode import AS_IS, ENCODE
-from dreamprint_gui.job.sample_label.layer_kernel import layer_labels
+from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]
 
@@ -44,7 +44,8 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
     :func:`..io.volumes.srgb_encode.prepare_staged`, the values
     :meth:`..io.volumes.dense.DenseSource.sample_slab` gives), one layer's working
     arrays ``rgb`` (ny * nx, 3) and ``dens`` (ny * nx,), then the arguments of
-    :func:`.layer_kernel.slab_labels` after ``z0``."""
+    :func:`.layer_kernel.slab_labels` after ``z0``. A grid without colour channels is looked
+    up once per layer (:data:`.layer_kernel.UNIFORM`)."""
     colour = vol.shape[3] == 4
     if colour:
         # The kernel reads colour only where the density reaches a positive threshold: rows
@@ -53,9 +54,9 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
     else:
         mode = DENSITY
         for c in range(3):
-            rgb[:, c] = uniform[c]
+            rgb[0, c] = uniform[c]
     rgb_flat = rgb.reshape(-1)
-    op = ENCODE if colour and linear else AS_IS
+    op = (ENCODE if linear else AS_IS) if colour else UNIFORM
     for k in range(labels.shape[0]):
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                     srows, planes, planes_nz, plane_layer, row, cpl, rgb_flat, rgb_flat, dens,
@@ -78,17 +79,33 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
     paper's sec. 4.1 maps a scalar field to extinction and albedo), density 0 at voxels outside
     the image (``outside_z[k] | outside_y[j] | outside_x[i]``, if ``use_outside``: a window
     below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.layer_labels`.
-    The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s."""
+    The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s. A table of one colour
+    (every entry the same bits: no colour map) gives only the density
+    (:func:`..io.volumes.dense.window_density`) and is looked up once per layer
+    (:data:`.layer_kernel.UNIFORM`)."""
     ny, nx = labels.shape[1:]
+    li = lut.view(np.int32)
+    one_colour = True
+    for i in range(1, lut.shape[0]):
+        for c in range(3):
+            one_colour &= li[i, c] == li[0, c]
+    if one_colour:
+        for c in range(3):
+            rgb[0, c] = lut[0, c]
+    op = UNIFORM if one_colour else AS_IS
     for k in range(labels.shape[0]):
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                     srows, planes, planes_nz, plane_layer, row, cpl, values, values, dens, RAW,
                     np.float32(1.0))
-        _window_kernel(values, low, inv_width, lut, density, rgb, dens)
+        if one_colour:
+            window_density(values, low, inv_width, density, dens)
+        else:
+            _window_kernel(values, low, inv_width, lut, density, rgb, dens)
         if use_outside:
             for j in range(ny):
                 for i in range(nx):
                     if outside_z[k] or outside_y[j] or outside_x[i]:
                         dens[j * nx + i] = 0.0
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     op)

@@ -16,7 +16,7 @@ from numba import njit
 
 from dreamprint_gui.io.volumes.leaf_grid import leaf_grid_layer, leaf_grid_values_where
 from dreamprint_gui.io.volumes.srgb_encode import CLIP, ENCODE
-from dreamprint_gui.job.sample_label.layer_kernel import layer_labels
+from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels
 
 __all__ = ["leaf_grid_slab_labels", "leaf_grid_colour_slab_labels"]
 
@@ -29,13 +29,15 @@ def leaf_grid_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, 
     plan (``dense, rows_nz, k0, wk`` per layer, ``j0, wj, i0, wi``, ``plane`` scratch, density
     ``scale`` (1/mm per source unit), ``uniform`` colour (3,)), one layer's working arrays
     ``rgb`` (ny * nx, 3) and ``dens`` (ny * nx,), then the arguments of
-    :func:`.layer_kernel.slab_labels` after ``z0``."""
+    :func:`.layer_kernel.slab_labels` after ``z0``. The one colour is looked up once per
+    layer (:data:`.layer_kernel.UNIFORM`: only ``rgb[0]`` is read)."""
     for c in range(3):
-        rgb[:, c] = uniform[c]
+        rgb[0, c] = uniform[c]
     for k in range(labels.shape[0]):
         leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens)
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     UNIFORM)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
