@@ -222,6 +222,9 @@ K_GREY = K_SIG + len(CLEAR_KNOTS)  # 11: sigma with 10 % grey (1/mm)
 K_RHOK = K_GREY + 1  # 12: rho_K of the K/W grey of the node's brightness (eq. 11)
 # A padding lane, free in the table, carries the voxel's target to align_rows.
 K_TARGET = K_RHOK + 1  # 13: the voxel's target sigma (1/mm)
+# Two more, align_rows' scratch: 1 where a voxel is clamped low / high, else 0.
+K_LOW = K_TARGET + 1   # 14
+K_HIGH = K_LOW + 1     # 15
 ROW_BLOCK = 1024       # voxels per call of align_rows
 # A target at or above this (1/mm) means "solid": the node's own undiluted mixture (rho = 1,
 # no Clear, no grey; job.content.SOLID_SIGMA). No medium is this dense.
@@ -369,15 +372,17 @@ def align_rows(F, m, sigma_clear, out):
     ``F`` (LANES * ROW_STRIDE,) float32, lane ``q`` of voxel ``k`` at ``q * ROW_STRIDE + k``: the
     kernel-table lanes (:func:`interpolate_block`; the rho_K of the voxel's grey in lane
     :data:`K_RHOK`) and the target sigma (1/mm; NaN or negative -> 0) in lane
-    :data:`K_TARGET`. Writes ``out`` (8 * ROW_STRIDE,) float32 the same way: rows 0-5 the
-    concentrations (INKS order), rows 6 and 7 the shortfall (1/mm) of a voxel clamped low /
-    high, else 0. ``m <= ROW_BLOCK``. Returns the numbers of voxels clamped low and high.
+    :data:`K_TARGET`; lanes :data:`K_LOW` and :data:`K_HIGH` are overwritten (scratch). Writes
+    ``out`` (8 * ROW_STRIDE,) float32 the same way: rows 0-5 the concentrations (INKS order),
+    rows 6 and 7 the shortfall (1/mm) of a voxel clamped low / high, else 0.
+    ``m <= ROW_BLOCK``. Returns the numbers of voxels clamped low and high.
 
-    Written for LLVM's loop vectoriser, which then runs 8-16 voxels per instruction: one row
+    Written for LLVM's loop vectoriser, which then runs 8 voxels per instruction (16 where it
+    takes 512-bit vectors; no 64-bit value in the loop, or it would run 4): one row
     per lane with constant strides (so it can rule out overlaps with a single check), every
     voxel through both branches with selects keeping one (no data-dependent jumps or loads),
     the knot search unrolled by hand, log2 / exp2 from :mod:`..vector_math`, all in float32
-    (16 voxels per AVX-512 instruction; float64 took 1.5-2 ns more per voxel for
+    (twice the voxels per instruction of float64, which took 1.5-2 ns more per voxel for
     concentrations that agree to ~1e-7). Each voxel's result depends on its own inputs only.
     """
     zero = np.float32(0.0)
@@ -387,8 +392,6 @@ def align_rows(F, m, sigma_clear, out):
     rl = np.float32(2.0 ** _LK[_NK - 1])
     solid = np.float32(SOLID_TARGET)
     RS = ROW_STRIDE
-    n_low = 0
-    n_high = 0
     for k in range(m):
         s0 = F[(K_SIG + 0) * RS + k]
         t = F[K_TARGET * RS + k]
@@ -441,10 +444,20 @@ def align_rows(F, m, sigma_clear, out):
         out[_I_CL * RS + k] = one - rho if clear else zero
         lo = clear & (t < sc)
         hi = (not clear) & (useless | over)
-        n_low += 1 if lo else 0
-        n_high += 1 if hi else 0
         out[6 * RS + k] = sc - t if lo else zero
         out[7 * RS + k] = (t - (s0 if useless else sg)) if hi else zero
+        F[K_LOW * RS + k] = one if lo else zero
+        F[K_HIGH * RS + k] = one if hi else zero
+    # Counted apart, from flags in F's scratch lanes: a 64-bit counter in the loop above (numba
+    # widens integer sums to 64 bits) makes LLVM vectorise all of it 4 voxels wide instead of 8
+    # (the widest type sets the width): 6.5 -> 3.9 ns per voxel with exp2_f32's 32-bit
+    # exponent. (The shortfalls cannot say it: a voxel whose target equals sg can be clamped
+    # high, graw rounding just above gmax, with a shortfall of 0.)
+    n_low = 0
+    n_high = 0
+    for k in range(m):
+        n_low += 1 if F[K_LOW * RS + k] != zero else 0
+        n_high += 1 if F[K_HIGH * RS + k] != zero else 0
     return n_low, n_high
 
 

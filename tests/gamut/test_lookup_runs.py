@@ -141,3 +141,43 @@ def test_uniform_lanes_are_the_per_voxel_lanes(small_tables, colour):
         np.testing.assert_array_equal(_bits(C[q * RS:q * RS + m]),
                                       _bits(ref[5][q * RS:q * RS + m]), err_msg=f"row {q}")
     assert (stats[0], stats[1]) == (lo, hi) and lo > 0
+
+
+def test_align_rows_counts_the_clamped_voxels(small_tables):
+    """align_rows' clamp counts (taken apart from its vectorised loop, from flags) are the
+    voxels that meet the clamp conditions, written out here in float32: low where
+    t <= s0 and t < sigma_clear, high where t > s0 and the grey is useless (sg <= s0) or
+    needed beyond 10 % (gmax (t - s0) / (sg - s0) > gmax); targets on and next to the limits."""
+    from dreamprint_gui.gamut.alignment import K_GREY, K_SIG
+    from dreamprint_gui.gamut.tables import GREY_MAX
+
+    rng = np.random.default_rng(9)
+    flat = kernel_table(small_tables)
+    n = small_tables.packed.shape[0]
+    sc = np.float32(small_tables.sigma_clear)
+    m = ROW_BLOCK
+    raw = rng.random((3, m)).astype(np.float32)
+    raw[:, ::7] = 1.0                                   # white: the grey is useless
+    col, W, off, A, G, C = _stage(raw, np.zeros(m, np.float32))
+    finish_staging(col, m)
+    interpolate_block(flat, n, col, m, W, off, A, G)
+    s0 = G[K_SIG * RS:K_SIG * RS + m].copy()
+    sg = G[K_GREY * RS:K_GREY * RS + m].copy()
+    pick = rng.integers(0, 6, m)
+    t = np.choose(pick, [sg, np.nextafter(sg, np.float32(0)), np.nextafter(sg, np.float32(1e9)),
+                         s0, np.full(m, sc), rng.uniform(0, 2, m).astype(np.float32) * sg])
+    t = t.astype(np.float32)
+    t[::13] = np.nextafter(sc, np.float32(0))
+    G[K_TARGET * RS:K_TARGET * RS + m] = t
+    lo, hi = align_rows(G, m, sc, C)
+    clear = t <= s0
+    useless = sg <= s0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        graw = np.float32(GREY_MAX) * (t - s0) / (sg - s0)
+    want_lo = clear & (t < sc)
+    want_hi = ~clear & (useless | (graw > np.float32(GREY_MAX)))
+    assert (lo, hi) == (int(want_lo.sum()), int(want_hi.sum()))
+    assert 0 < lo < m and 0 < hi < m
+    np.testing.assert_array_equal(C[6 * RS:6 * RS + m] > 0, want_lo)
+    # clamped high with a shortfall of 0: the target equals sg and graw rounds above gmax
+    assert (want_hi & (C[7 * RS:7 * RS + m] == 0)).any()
