@@ -167,6 +167,30 @@ def leaf_grid_values(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, out):
                         o[ii, c] = zero
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _x_lerp3(plane, a_lo, ni, ia, wa, o):
+    """The x interpolation of :func:`leaf_grid_values_where` for three channels, unrolled."""
+    zero = np.float32(0.0)
+    for ii in range(ia.shape[0]):
+        a = ia[ii]
+        w = wa[ii]
+        if 0 <= a and a + 1 < ni:
+            q = (a - a_lo) * 3
+            va = plane[q]
+            vb = plane[q + 3]
+            o[3 * ii] = va + (vb - va) * w
+            va = plane[q + 1]
+            vb = plane[q + 4]
+            o[3 * ii + 1] = va + (vb - va) * w
+            va = plane[q + 2]
+            vb = plane[q + 5]
+            o[3 * ii + 2] = va + (vb - va) * w
+        else:
+            o[3 * ii] = zero
+            o[3 * ii + 1] = zero
+            o[3 * ii + 2] = zero
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def leaf_grid_values_where(dense, rows_nz, k, wk_, j0, wj, i0, wi, plane, out, dens, threshold):
     """:func:`leaf_grid_values` of one output layer (corner ``k``, weight ``wk_``) into ``out``
@@ -225,6 +249,9 @@ def leaf_grid_values_where(dense, rows_nz, k, wk_, j0, wj, i0, wi, plane, out, d
                 y0 = r00[t] * (1 - wj_) + r10[t] * wj_
                 y1 = r01[t] * (1 - wj_) + r11[t] * wj_
                 p[t] = y0 * (1 - wk_) + y1 * wk_
+        if nc == 3:
+            _x_lerp3(plane, a_lo, ni, i0[lo:hi + 1], wi[lo:hi + 1], o)
+            continue
         for ii in range(hi + 1 - lo):
             a = i0[lo + ii]
             w = wi[lo + ii]
