@@ -38,13 +38,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_convert import PRINTER, jobs_dir  # noqa: E402
 from bench_convert import height_for as demo_height
 
-from dreamprint_gui.io.volumes.dense import _window_kernel, window_density  # noqa: E402
+from dreamprint_gui.io.volumes.dense import _window_kernel  # noqa: E402
 from dreamprint_gui.io.volumes.dense_sampler import (  # noqa: E402
     COLOUR,
     COLOUR_WHERE_DENSE,
     DENSITY,
     RAW,
     dense_layer,
+    dense_window_layer,
 )
 from dreamprint_gui.io.volumes.leaf_grid import (  # noqa: E402
     leaf_grid_layer,
@@ -86,14 +87,16 @@ def _sample_window(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
                    density, use_outside, outside_z, outside_y, outside_x, values, rgb, dens, nx):
     one_colour = _one_colour(lut)
     for k in range(rgb.shape[0]):
-        dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
-                    rslot, srows, planes, planes_nz, plane_layer, row, cpl, values, values,
-                    dens[k], RAW, np.float32(1.0))
         if one_colour:
             for c in range(3):
                 rgb[k, 0, c] = lut[0, c]
-            window_density(values, low, inv_width, density, dens[k])
+            dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1,
+                               wx, vx, rslot, srows, planes, planes_nz, plane_layer, row, low,
+                               inv_width, density, dens[k])
         else:
+            dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
+                        rslot, srows, planes, planes_nz, plane_layer, row, cpl, values, values,
+                        dens[k], RAW, np.float32(1.0))
             _window_kernel(values, low, inv_width, lut, density, rgb[k], dens[k])
         if use_outside:
             d = dens[k]

@@ -28,7 +28,7 @@ from dreamprint_gui.io.volumes.dense_sampler import (
 )
 
 __all__ = ["DenseVolume", "DenseSource", "DenseLayers", "colormap_lut", "check_claimed_size",
-           "apply_window", "window_density", "bounds_list"]
+           "apply_window", "bounds_list"]
 
 # zlib/gzip cannot expand data by more than ~1032:1; allow headroom for the other codecs.
 MAX_EXPANSION = 1100
@@ -122,18 +122,6 @@ def _window_kernel(v, lo, inv_width, lut, dens, rgb, sigma):
         fr[q, 0] = lut[i, 0]
         fr[q, 1] = lut[i, 1]
         fr[q, 2] = lut[i, 2]
-
-
-@njit(cache=True, nogil=True)
-def window_density(v, lo, inv_width, dens, sigma):
-    """The density half of :func:`_window_kernel` (``t * dens``, the same expressions, so the
-    same bits): for a colour table of one colour, whose colour needs no per-voxel work."""
-    flat_v = v.reshape(-1)
-    fs = sigma.reshape(-1)
-    for q in range(flat_v.shape[0]):
-        t = (flat_v[q] - lo) * inv_width
-        t = min(max(t, 0.0), 1.0)
-        fs[q] = t * dens
 
 
 def apply_window(v: np.ndarray, low: float, high: float, lut: np.ndarray, density: float):

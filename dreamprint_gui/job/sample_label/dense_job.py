@@ -17,13 +17,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.io.volumes.dense import _window_kernel, window_density
+from dreamprint_gui.io.volumes.dense import _window_kernel
 from dreamprint_gui.io.volumes.dense_sampler import (
     COLOUR,
     COLOUR_WHERE_DENSE,
     DENSITY,
     RAW,
     dense_layer,
+    dense_window_layer,
 )
 from dreamprint_gui.io.volumes.srgb_encode import AS_IS, ENCODE
 from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels
@@ -80,9 +81,9 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
     the image (``outside_z[k] | outside_y[j] | outside_x[i]``, if ``use_outside``: a window
     below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.layer_labels`.
     The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s. A table of one colour
-    (every entry the same bits: no colour map) gives only the density
-    (:func:`..io.volumes.dense.window_density`) and is looked up once per layer
-    (:data:`.layer_kernel.UNIFORM`)."""
+    (every entry the same bits: no colour map) gives only the density, windowed in the
+    sampler's row pass (:func:`..io.volumes.dense_sampler.dense_window_layer`), and is looked
+    up once per layer (:data:`.layer_kernel.UNIFORM`)."""
     ny, nx = labels.shape[1:]
     li = lut.view(np.int32)
     one_colour = True
@@ -94,12 +95,14 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
             rgb[0, c] = lut[0, c]
     op = UNIFORM if one_colour else AS_IS
     for k in range(labels.shape[0]):
-        dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
-                    srows, planes, planes_nz, plane_layer, row, cpl, values, values, dens, RAW,
-                    np.float32(1.0))
         if one_colour:
-            window_density(values, low, inv_width, density, dens)
+            dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1,
+                               wx, vx, rslot, srows, planes, planes_nz, plane_layer, row, low,
+                               inv_width, density, dens)
         else:
+            dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
+                        rslot, srows, planes, planes_nz, plane_layer, row, cpl, values, values,
+                        dens, RAW, np.float32(1.0))
             _window_kernel(values, low, inv_width, lut, density, rgb, dens)
         if use_outside:
             for j in range(ny):
