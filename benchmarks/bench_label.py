@@ -4,8 +4,10 @@ labelling alone allows.
 For each kind (:mod:`bench_sources`) a job of about ``--voxels`` voxels is planned as
 ``dreamprint convert`` plans it; ``--slabs`` slabs of ``--layers`` layers spread evenly over
 its height are sampled (the source's ``sample_slab``, the general path) and labelled
-(:func:`dreamprint_gui.job.sample_label.layer_kernel.slab_labels`: background test, table
-lookup, density alignment, halftone), each timed on one thread, best of ``--repeat``. Printed
+(:func:`dreamprint_gui.job.sample_label.layer_kernel.layer_labels`: background test, table
+lookup, density alignment, halftone; for a source of one colour with the job's ``UNIFORM``
+colour op, one lookup per layer, as its fused path labels it: :func:`job_colour_op`), each
+timed on one thread, best of ``--repeat``. Printed
 per kind: the foreground share (voxels at or above the background threshold, the only ones the
 lookup and alignment run on), ns per voxel of sampling and of labelling, labelling's ns per
 foreground voxel (all of labelling's time, the background voxels' share included, over the
@@ -35,11 +37,42 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_sources import KINDS, source_path  # noqa: E402
 from job_hashes import height_for  # noqa: E402
+from numba import njit  # noqa: E402
+
+from dreamprint_gui.io.volumes.srgb_encode import AS_IS  # noqa: E402
+from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels  # noqa: E402
+
+
+@njit(cache=True, nogil=True)
+def _slab_labels_op(rgb, dens, z0, threshold, bg_label, flat, n, sigma_clear, method, mask, ox,
+                    oy, oz, seed, order, labels, counts, sums, stats, op):
+    """``slab_labels`` with a ``colour_op`` (``layer_labels``)."""
+    for k in range(labels.shape[0]):
+        layer_labels(rgb[k], dens[k], z0 + k, threshold, bg_label, flat, n, sigma_clear,
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     op)
+
+
+def job_colour_op(source) -> int:
+    """The ``colour_op`` the job's fused path labels this source with: ``UNIFORM`` (one lookup
+    per layer) for a source of one colour (a scalar image without a colour map, a dense grid
+    without colour channels, a fog volume without a colour grid), else ``AS_IS`` (the general
+    path's colours are already sRGB)."""
+    kind = getattr(source, "layer_kind", None)
+    if kind == "leaf_grid" and not getattr(source, "is_level_set", False):
+        return UNIFORM
+    if kind == "window":
+        lut = source.lut.view(np.int32)
+        return UNIFORM if bool((lut == lut[:1]).all()) else AS_IS
+    vol = getattr(getattr(source, "volume", None), "data", None)
+    if hasattr(source, "layer_plan") and vol is not None and vol.shape[3] == 1 \
+            and kind in (None, "dense"):
+        return UNIFORM
+    return AS_IS
 
 
 def measure(kind: str, n_voxels: float, slabs: int, layers: int, repeat: int) -> dict:
     from dreamprint_gui.job.plan import ConvertSettings, prepare_job
-    from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
 
     src = source_path(kind)
     ctx = prepare_job(ConvertSettings(source=src, output="unused",
@@ -47,6 +80,7 @@ def measure(kind: str, n_voxels: float, slabs: int, layers: int, repeat: int) ->
     nx, ny, nz = ctx.shape_xyz
     args = ctx.kernel_args()
     threshold = float(args[0])
+    op = job_colour_op(ctx.source)
     t_sample = t_label = 0.0
     voxels = fg = 0
     for z0 in np.linspace(0, max(0, nz - layers), slabs).astype(int):
@@ -61,8 +95,8 @@ def measure(kind: str, n_voxels: float, slabs: int, layers: int, repeat: int) ->
             dens = np.ascontiguousarray(dens.reshape(n, -1), np.float32)
             labels = np.empty((n, ny, nx), np.uint8)
             t = time.thread_time()
-            slab_labels(rgb, dens, int(z0), *args, labels, np.zeros(7, np.int64),
-                        np.zeros((n, 7)), np.zeros(4))
+            _slab_labels_op(rgb, dens, int(z0), *args, labels, np.zeros(7, np.int64),
+                            np.zeros((n, 7)), np.zeros(4), op)
             best_l = min(best_l, time.thread_time() - t)
         t_sample += best_s
         t_label += best_l

@@ -6,10 +6,12 @@ the passes themselves are the library's functions): (0) background test and comp
 (1) + staging of the foreground voxels (colour, target, halftone threshold), (2) + the table
 lookup (clean colours, runs, interpolation), (3) + density alignment, (4) + the halftone's
 label rule, (5) + the scatter of labels and their counts, (6) + the sums of intended
-concentrations (the whole kernel). Each pass's cost is the difference between two consecutive
-columns, in ns per foreground voxel (all of a layer's time over its foreground voxels, as
-``bench_label.py`` counts), thread CPU time, best of ``--repeat``, over ``--slabs`` slabs of
-``--layers`` layers of a job of ``--voxels``.
+concentrations (the whole kernel). A source of one colour is labelled as the job labels it
+(``UNIFORM``, ``bench_label.job_colour_op``): one lookup per layer, before the passes; its
+staging is the targets only and its lookup column is then ~0. Each pass's cost is the
+difference between two consecutive columns, in ns per foreground voxel (all of a layer's
+time over its foreground voxels, as ``bench_label.py`` counts), thread CPU time, best of
+``--repeat``, over ``--slabs`` slabs of ``--layers`` layers of a job of ``--voxels``.
 
     PYTHONPATH=. python benchmarks/bench_label_passes.py --kinds demo,metaimage --voxels 1e9
 """
@@ -26,10 +28,12 @@ from numba import njit
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from bench_label import job_colour_op  # noqa: E402
 from bench_sources import KINDS, source_path  # noqa: E402
 from job_hashes import height_for  # noqa: E402
 
 from dreamprint_gui.gamut.alignment import (  # noqa: E402
+    K_TARGET,
     ROW_BLOCK,
     ROW_STRIDE,
     RUN_MIN,
@@ -40,6 +44,7 @@ from dreamprint_gui.gamut.alignment import (  # noqa: E402
     interpolate_block,
     lookup_runs,
     stage_voxel,
+    uniform_lanes,
 )
 from dreamprint_gui.job.halftone import (  # noqa: E402
     fg_threshold,
@@ -48,7 +53,11 @@ from dreamprint_gui.job.halftone import (  # noqa: E402
     threshold_row,
     tile_layout,
 )
-from dreamprint_gui.job.sample_label.layer_kernel import DENSE_ROW, block_conc_sums  # noqa: E402
+from dreamprint_gui.job.sample_label.layer_kernel import (  # noqa: E402
+    DENSE_ROW,
+    UNIFORM,
+    block_conc_sums,
+)
 
 PASSES = ("background + compaction", "+ staging", "+ lookup", "+ alignment", "+ label rule",
           "+ scatter and counts", "+ concentration sums")
@@ -56,7 +65,7 @@ PASSES = ("background + compaction", "+ staging", "+ lookup", "+ alignment", "+ 
 
 @njit(cache=False, nogil=True, error_model="numpy")
 def _layer(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear, method, mask, ox, oy,
-           oz, seed, order, labels, counts, sums, stats, upto):
+           oz, seed, order, labels, counts, sums, stats, upto, uniform):
     ny, nx = labels.shape
     mz, my, mx = mask.shape
     cols, rows, tiles = tile_layout(0, nx, 0, ny, z, ox, oy, oz, mz, my, mx, seed)
@@ -72,6 +81,8 @@ def _layer(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear, method, mask
     out = labels.reshape(-1)
     n_bg = 0
     m = 0
+    if uniform and upto >= 2:  # the job's UNIFORM colour op: one lookup per layer
+        uniform_lanes(flat, n, rgb[0, 0], rgb[0, 1], rgb[0, 2], col, W, off, A, G)
     for j in range(ny):
         base = j * nx
         out[base:base + nx] = bg_label
@@ -105,11 +116,14 @@ def _layer(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear, method, mask
         k0 = 0
         while k0 < m and (m - k0 >= RB or j == ny - 1):
             mb = min(RB, m - k0)
-            if upto >= 1:
+            if upto >= 1 and uniform:
+                for k in range(mb):
+                    G[K_TARGET * ROW_STRIDE + k] = dens[idx[k0 + k]]
+            elif upto >= 1:
                 for k in range(mb):
                     p = idx[k0 + k]
                     stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
-            if upto >= 2:
+            if upto >= 2 and not uniform:
                 finish_staging(col, mb)
                 if count_runs(col, mb) * RUN_MIN <= mb:
                     lookup_runs(flat, n, col, mb, W, off, A, G)
@@ -150,6 +164,7 @@ def measure(kind: str, n_voxels: float, slabs: int, layers: int, repeat: int) ->
     nx, ny, nz = ctx.shape_xyz
     args = ctx.kernel_args()
     threshold = float(args[0])
+    uniform = job_colour_op(ctx.source) == UNIFORM
     best = np.zeros(len(PASSES))
     fg = 0
     for z0 in np.linspace(0, max(0, nz - layers), slabs).astype(int):
@@ -166,7 +181,7 @@ def measure(kind: str, n_voxels: float, slabs: int, layers: int, repeat: int) ->
                 t = time.thread_time()
                 for k in range(n):
                     _layer(rgb[k], dens[k], int(z0) + k, *args, labels, np.zeros(7, np.int64),
-                           np.zeros(7), np.zeros(4), upto)
+                           np.zeros(7), np.zeros(4), upto, uniform)
                 b = min(b, time.thread_time() - t)
             best[upto] += b
     return {"kind": kind, "grid": (nx, ny, nz), "fg": fg, "cum_ns_fg": best / max(fg, 1) * 1e9}

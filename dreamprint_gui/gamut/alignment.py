@@ -19,6 +19,9 @@ Defines
 - :func:`lookup_runs`: the same interpolation for a block whose voxels come in runs of one
   colour, once per run and copied along it (the same bits; :func:`lookup_align_block` takes it
   when the runs average :data:`RUN_MIN` voxels or more).
+- :func:`uniform_lanes`: the same lanes for every voxel of a block from one colour (a source
+  of one colour: the lookup is done once per layer, and a block needs only its targets and
+  :func:`align_block`, the alignment half of :func:`lookup_align_block`).
 - :func:`predicted_appearance`: what a voxel will look like after lookup + alignment (GUI).
 
 Lowering (eq. 12): ``C = rho C* + (1 - rho) Cl``. With an ideal Clear (K = S = 0) the mixture's
@@ -61,6 +64,7 @@ __all__ = ["Alignment", "AlignCounts", "align_density", "lookup_and_align_into",
            "predicted_appearance", "interpolate_block", "align_rows", "clean_rgb",
            "stage_voxel", "finish_staging", "lookup_align_block", "block_buffers",
            "kernel_table", "interpolate_nodes", "count_runs", "lookup_runs", "RUN_MIN", "LANES",
+           "uniform_lanes", "align_block",
            "ROW_BLOCK", "SOLID_TARGET", "ROW_STRIDE", "K_TARGET", "K_RHOK"]
 
 _I_K = INKS.index("K")
@@ -218,6 +222,9 @@ K_GREY = K_SIG + len(CLEAR_KNOTS)  # 11: sigma with 10 % grey (1/mm)
 K_RHOK = K_GREY + 1  # 12: rho_K of the K/W grey of the node's brightness (eq. 11)
 # A padding lane, free in the table, carries the voxel's target to align_rows.
 K_TARGET = K_RHOK + 1  # 13: the voxel's target sigma (1/mm)
+# Two more, align_rows' scratch: 1 where a voxel is clamped low / high, else 0.
+K_LOW = K_TARGET + 1   # 14
+K_HIGH = K_LOW + 1     # 15
 ROW_BLOCK = 1024       # voxels per call of align_rows
 # A target at or above this (1/mm) means "solid": the node's own undiluted mixture (rho = 1,
 # no Clear, no grey; job.content.SOLID_SIGMA). No medium is this dense.
@@ -365,15 +372,17 @@ def align_rows(F, m, sigma_clear, out):
     ``F`` (LANES * ROW_STRIDE,) float32, lane ``q`` of voxel ``k`` at ``q * ROW_STRIDE + k``: the
     kernel-table lanes (:func:`interpolate_block`; the rho_K of the voxel's grey in lane
     :data:`K_RHOK`) and the target sigma (1/mm; NaN or negative -> 0) in lane
-    :data:`K_TARGET`. Writes ``out`` (8 * ROW_STRIDE,) float32 the same way: rows 0-5 the
-    concentrations (INKS order), rows 6 and 7 the shortfall (1/mm) of a voxel clamped low /
-    high, else 0. ``m <= ROW_BLOCK``. Returns the numbers of voxels clamped low and high.
+    :data:`K_TARGET`; lanes :data:`K_LOW` and :data:`K_HIGH` are overwritten (scratch). Writes
+    ``out`` (8 * ROW_STRIDE,) float32 the same way: rows 0-5 the concentrations (INKS order),
+    rows 6 and 7 the shortfall (1/mm) of a voxel clamped low / high, else 0.
+    ``m <= ROW_BLOCK``. Returns the numbers of voxels clamped low and high.
 
-    Written for LLVM's loop vectoriser, which then runs 8-16 voxels per instruction: one row
+    Written for LLVM's loop vectoriser, which then runs 8 voxels per instruction (16 where it
+    takes 512-bit vectors; no 64-bit value in the loop, or it would run 4): one row
     per lane with constant strides (so it can rule out overlaps with a single check), every
     voxel through both branches with selects keeping one (no data-dependent jumps or loads),
     the knot search unrolled by hand, log2 / exp2 from :mod:`..vector_math`, all in float32
-    (16 voxels per AVX-512 instruction; float64 took 1.5-2 ns more per voxel for
+    (twice the voxels per instruction of float64, which took 1.5-2 ns more per voxel for
     concentrations that agree to ~1e-7). Each voxel's result depends on its own inputs only.
     """
     zero = np.float32(0.0)
@@ -383,8 +392,6 @@ def align_rows(F, m, sigma_clear, out):
     rl = np.float32(2.0 ** _LK[_NK - 1])
     solid = np.float32(SOLID_TARGET)
     RS = ROW_STRIDE
-    n_low = 0
-    n_high = 0
     for k in range(m):
         s0 = F[(K_SIG + 0) * RS + k]
         t = F[K_TARGET * RS + k]
@@ -437,10 +444,20 @@ def align_rows(F, m, sigma_clear, out):
         out[_I_CL * RS + k] = one - rho if clear else zero
         lo = clear & (t < sc)
         hi = (not clear) & (useless | over)
-        n_low += 1 if lo else 0
-        n_high += 1 if hi else 0
         out[6 * RS + k] = sc - t if lo else zero
         out[7 * RS + k] = (t - (s0 if useless else sg)) if hi else zero
+        F[K_LOW * RS + k] = one if lo else zero
+        F[K_HIGH * RS + k] = one if hi else zero
+    # Counted apart, from flags in F's scratch lanes: a 64-bit counter in the loop above (numba
+    # widens integer sums to 64 bits) makes LLVM vectorise all of it 4 voxels wide instead of 8
+    # (the widest type sets the width): 6.5 -> 3.9 ns per voxel with exp2_f32's 32-bit
+    # exponent. (The shortfalls cannot say it: a voxel whose target equals sg can be clamped
+    # high, graw rounding just above gmax, with a shortfall of 0.)
+    n_low = 0
+    n_high = 0
+    for k in range(m):
+        n_low += 1 if F[K_LOW * RS + k] != zero else 0
+        n_high += 1 if F[K_HIGH * RS + k] != zero else 0
     return n_low, n_high
 
 
@@ -526,17 +543,32 @@ def lookup_runs(flat, n, col, m, W, off, A, G):
                 row[k] = v
 
 
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def uniform_lanes(flat, n, r, g, b, col, W, off, A, G):
+    """Lanes ``0 .. K_RHOK`` of ``G`` for all :data:`ROW_BLOCK` voxels of a block whose every
+    voxel has the colour ``(r, g, b)`` as read (cleaned here, :func:`clean_rgb`): what
+    :func:`lookup_runs` and :func:`interpolate_block` write for such voxels (lanes are functions
+    of the clean colour alone), written once. :func:`align_rows` does not write them, so they
+    serve every block of a layer: a block then needs only its targets (lane :data:`K_TARGET`)
+    and :func:`align_block`. ``col``, ``W``, ``off``, ``A``: scratch
+    (:func:`block_buffers`)."""
+    RS = ROW_STRIDE
+    col[0] = clean_rgb(np.float32(r))
+    col[RS] = clean_rgb(np.float32(g))
+    col[2 * RS] = clean_rgb(np.float32(b))
+    interpolate_nodes(flat, n, col, 1, W, off, A)
+    for q in range(K_RHOK + 1):
+        v = A[q]
+        row = G[q * RS:q * RS + ROW_BLOCK]
+        for k in range(ROW_BLOCK):
+            row[k] = v
+
+
 @nb.njit(cache=True, nogil=True)
-def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
-    """:func:`finish_staging`, :func:`interpolate_block` (or, for a block of long runs of one
-    colour, :func:`lookup_runs`: the same values) then :func:`align_rows` for ``m`` staged
-    voxels (concentrations into ``C``); adds their clamp report to ``stats`` (clamped low,
-    clamped high, worst low shortfall, worst high shortfall)."""
-    finish_staging(col, m)
-    if count_runs(col, m) * RUN_MIN <= m:
-        lookup_runs(flat, n, col, m, W, off, A, G)
-    else:
-        interpolate_block(flat, n, col, m, W, off, A, G)
+def align_block(sigma_clear, m, G, C, stats):
+    """:func:`align_rows` of ``m`` voxels whose lanes are in ``G`` (concentrations into
+    ``C``); adds their clamp report to ``stats`` (clamped low, clamped high, worst low
+    shortfall, worst high shortfall)."""
     lo, hi = align_rows(G, m, sigma_clear, C)
     stats[0] += lo
     stats[1] += hi
@@ -552,6 +584,19 @@ def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
         for k in range(m):
             w_hi = max(w_hi, np.float64(C[7 * ROW_STRIDE + k]))
         stats[3] = w_hi
+
+
+@nb.njit(cache=True, nogil=True)
+def lookup_align_block(flat, n, sigma_clear, col, m, W, off, A, G, C, stats):
+    """:func:`finish_staging`, :func:`interpolate_block` (or, for a block of long runs of one
+    colour, :func:`lookup_runs`: the same values) then :func:`align_block` for ``m`` staged
+    voxels (concentrations into ``C``; clamp report added to ``stats``)."""
+    finish_staging(col, m)
+    if count_runs(col, m) * RUN_MIN <= m:
+        lookup_runs(flat, n, col, m, W, off, A, G)
+    else:
+        interpolate_block(flat, n, col, m, W, off, A, G)
+    align_block(sigma_clear, m, G, C, stats)
 
 
 @nb.njit(cache=True, nogil=True)

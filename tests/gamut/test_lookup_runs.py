@@ -106,3 +106,78 @@ def test_lookup_align_block_gives_the_per_voxel_concentrations(small_tables, mea
     assert (stats[0], stats[1]) == (lo, hi) and lo > 0
     assert stats[2] == max(0.0, float(ref[5][6 * RS:6 * RS + m].max()))
     assert stats[3] == max(0.0, float(ref[5][7 * RS:7 * RS + m].max()))
+
+
+@pytest.mark.parametrize("colour", [(0.3, 0.8, 0.1), (np.nan, 1.7, -0.0), (1.0, 0.0, 1.0)])
+def test_uniform_lanes_are_the_per_voxel_lanes(small_tables, colour):
+    """A block of one colour: uniform_lanes (written once, every voxel of a block) then
+    align_block give the per-voxel lookup's lanes and concentrations and its clamp report, bit
+    for bit, damaged colours included."""
+    from dreamprint_gui.gamut.alignment import align_block, uniform_lanes
+
+    rng = np.random.default_rng(3)
+    flat = kernel_table(small_tables)
+    n = small_tables.packed.shape[0]
+    sc = np.float32(small_tables.sigma_clear)
+    m = ROW_BLOCK - 9
+    raw = np.tile(np.asarray(colour, np.float32)[:, None], (1, m))
+    dens = rng.uniform(0, 60, m).astype(np.float32)
+    dens[::11] = np.float32(1e30)
+    dens[::13] = np.nan
+    dens[::17] = np.float32(0.1 * sc)
+    col, W, off, A, G, C = _stage(raw, dens)
+    ref = [a.copy() for a in (col, W, off, A, G, C)]
+    finish_staging(ref[0], m)
+    interpolate_block(flat, n, ref[0], m, ref[1], ref[2], ref[3], ref[4])
+    lo, hi = align_rows(ref[4], m, sc, ref[5])
+    G[:K_TARGET * RS] = np.nan                          # whatever the lanes held before
+    uniform_lanes(flat, n, *np.asarray(colour, np.float32), col, W, off, A, G)
+    stats = np.zeros(4)
+    align_block(sc, m, G, C, stats)
+    for q in range(K_RHOK + 1):
+        np.testing.assert_array_equal(_bits(G[q * RS:q * RS + m]),
+                                      _bits(ref[4][q * RS:q * RS + m]), err_msg=f"lane {q}")
+    for q in range(8):
+        np.testing.assert_array_equal(_bits(C[q * RS:q * RS + m]),
+                                      _bits(ref[5][q * RS:q * RS + m]), err_msg=f"row {q}")
+    assert (stats[0], stats[1]) == (lo, hi) and lo > 0
+
+
+def test_align_rows_counts_the_clamped_voxels(small_tables):
+    """align_rows' clamp counts (taken apart from its vectorised loop, from flags) are the
+    voxels that meet the clamp conditions, written out here in float32: low where
+    t <= s0 and t < sigma_clear, high where t > s0 and the grey is useless (sg <= s0) or
+    needed beyond 10 % (gmax (t - s0) / (sg - s0) > gmax); targets on and next to the limits."""
+    from dreamprint_gui.gamut.alignment import K_GREY, K_SIG
+    from dreamprint_gui.gamut.tables import GREY_MAX
+
+    rng = np.random.default_rng(9)
+    flat = kernel_table(small_tables)
+    n = small_tables.packed.shape[0]
+    sc = np.float32(small_tables.sigma_clear)
+    m = ROW_BLOCK
+    raw = rng.random((3, m)).astype(np.float32)
+    raw[:, ::7] = 1.0                                   # white: the grey is useless
+    col, W, off, A, G, C = _stage(raw, np.zeros(m, np.float32))
+    finish_staging(col, m)
+    interpolate_block(flat, n, col, m, W, off, A, G)
+    s0 = G[K_SIG * RS:K_SIG * RS + m].copy()
+    sg = G[K_GREY * RS:K_GREY * RS + m].copy()
+    pick = rng.integers(0, 6, m)
+    t = np.choose(pick, [sg, np.nextafter(sg, np.float32(0)), np.nextafter(sg, np.float32(1e9)),
+                         s0, np.full(m, sc), rng.uniform(0, 2, m).astype(np.float32) * sg])
+    t = t.astype(np.float32)
+    t[::13] = np.nextafter(sc, np.float32(0))
+    G[K_TARGET * RS:K_TARGET * RS + m] = t
+    lo, hi = align_rows(G, m, sc, C)
+    clear = t <= s0
+    useless = sg <= s0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        graw = np.float32(GREY_MAX) * (t - s0) / (sg - s0)
+    want_lo = clear & (t < sc)
+    want_hi = ~clear & (useless | (graw > np.float32(GREY_MAX)))
+    assert (lo, hi) == (int(want_lo.sum()), int(want_hi.sum()))
+    assert 0 < lo < m and 0 < hi < m
+    np.testing.assert_array_equal(C[6 * RS:6 * RS + m] > 0, want_lo)
+    # clamped high with a shortfall of 0: the target equals sg and graw rounds above gmax
+    assert (want_hi & (C[7 * RS:7 * RS + m] == 0)).any()

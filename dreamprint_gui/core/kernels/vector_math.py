@@ -134,7 +134,9 @@ def exp2_f32(y):
     p = _E32[2] + f * p
     p = _E32[1] + f * p
     p = _E32[0] + f * p
-    return p * _from_bits32((np.int64(n) + np.int64(127)) << np.int64(23))
+    # 32-bit integers (n + 127 is in [1, 254]): a 64-bit one here halves the vector width
+    # of a loop that calls this (align_rows: 4.9 -> 4.0 ns per voxel)
+    return p * _from_bits32((np.int32(n) + np.int32(127)) << np.int32(23))
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")

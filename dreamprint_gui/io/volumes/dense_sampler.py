@@ -30,8 +30,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["axis_map", "rows_with_data", "DenseLayers", "dense_layer", "sample_dense",
-           "sample_dense_density"]
+__all__ = ["axis_map", "rows_with_data", "DenseLayers", "dense_layer", "dense_window_layer",
+           "sample_dense", "sample_dense_density"]
 
 # Modes of dense_layer: 0 all channels into ``out`` (C per voxel); 1 density into ``sigma``;
 # 2 also colour (channels 1-3 / channel 0) into ``rgb``; 3 as 2 but the colour of a row
@@ -251,6 +251,56 @@ def dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
             sigma[j * nxo + i] = max(row[i] * scale, zero)
         if mode >= COLOUR:
             _colour_row(row, nxo, rgb[j * nxo * 3:(j + 1) * nxo * 3], cpl)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
+                       rslot, srows, planes, planes_nz, plane_layer, row, low, inv_width,
+                       density, sigma):
+    """Output layer ``k`` of a one-channel grid through a window: ``sigma`` (ny * nx) =
+    ``clip((v - low) * inv_width, 0, 1) * density`` of the trilinear sample ``v``, in the row
+    pass (a scalar image without a colour map: the paper's sec. 4.1 scalar field ->
+    extinction). The bits of :func:`dense_layer` (mode ``RAW``) followed by
+    :func:`.dense._window_kernel`'s density (the same expressions and types, 0 outside the
+    grid), without
+    the layer of samples in between (a 1e9-voxel job's layer is 2 MB, as large as L2)."""
+    nyo = iy0.shape[0]
+    nxo = ix0.shape[0]
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    if not vz[k]:
+        for j in range(nyo):
+            _window_row(row, nxo, zero, True, low, inv_width, density, sigma, j * nxo)
+        return
+    sp, sq = _planes_for(vol, rows_nz, iz0[k], iz1[k], srows, ix0, ix1, wx, vx, planes,
+                         planes_nz, plane_layer)
+    fz = wz[k]
+    gz = one - fz
+    for j in range(nyo):
+        if not vy[j]:
+            _window_row(row, nxo, zero, True, low, inv_width, density, sigma, j * nxo)
+            continue
+        fy = wy[j]
+        gy = one - fy
+        r00 = planes[sp, rslot[iy0[j]]]
+        r01 = planes[sq, rslot[iy0[j]]]
+        r10 = planes[sp, rslot[iy1[j]]]
+        r11 = planes[sq, rslot[iy1[j]]]
+        for t in range(nxo):
+            v = (r00[t] * gz + r01[t] * fz) * gy + (r10[t] * gz + r11[t] * fz) * fy
+            row[t] = v
+        _window_row(row, nxo, zero, False, low, inv_width, density, sigma, j * nxo)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _window_row(row, nxo, fill, filled, lo, inv_width, dens, sigma, base):
+    """The window of one output row (``row``, or ``fill`` everywhere) into ``sigma``."""
+    out = sigma[base:base + nxo]
+    for q in range(nxo):
+        v = fill if filled else row[q]
+        t = (v - lo) * inv_width
+        t = min(max(t, 0.0), 1.0)
+        out[q] = t * dens
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -32,7 +32,7 @@ from dreamprint_gui.io.volumes.base import voxel_centres
 from dreamprint_gui.io.volumes.dense_sampler import rows_with_data
 
 __all__ = ["MAX_DENSE_VOXELS", "densify", "index_axis", "leaf_grid_layer", "leaf_grid_values",
-           "LeafGridPlan"]
+           "leaf_grid_values_where", "LeafGridPlan"]
 
 # 64 Mi voxels (256 MB of float32) per densified grid; larger ones keep the sparse sampler.
 MAX_DENSE_VOXELS = 1 << 26
@@ -165,6 +165,105 @@ def leaf_grid_values(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, out):
                 else:
                     for c in range(nc):
                         o[ii, c] = zero
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _x_lerp3(plane, a_lo, ni, ia, wa, o):
+    """The x interpolation of :func:`leaf_grid_values_where` for three channels, unrolled."""
+    zero = np.float32(0.0)
+    for ii in range(ia.shape[0]):
+        a = ia[ii]
+        w = wa[ii]
+        if 0 <= a and a + 1 < ni:
+            q = (a - a_lo) * 3
+            va = plane[q]
+            vb = plane[q + 3]
+            o[3 * ii] = va + (vb - va) * w
+            va = plane[q + 1]
+            vb = plane[q + 4]
+            o[3 * ii + 1] = va + (vb - va) * w
+            va = plane[q + 2]
+            vb = plane[q + 5]
+            o[3 * ii + 2] = va + (vb - va) * w
+        else:
+            o[3 * ii] = zero
+            o[3 * ii + 1] = zero
+            o[3 * ii + 2] = zero
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def leaf_grid_values_where(dense, rows_nz, k, wk_, j0, wj, i0, wi, plane, out, dens, threshold):
+    """:func:`leaf_grid_values` of one output layer (corner ``k``, weight ``wk_``) into ``out``
+    (ny * nx * C, voxel-major), at the voxels whose ``dens`` (ny * nx,) reaches ``threshold``
+    (NaN does not): a layer's colour for a consumer that reads it at those voxels only
+    (:func:`...job.sample_label.layer_kernel.layer_labels`). Written: each row's span from its
+    first to its last such voxel, with :func:`leaf_grid_values`' values bit for bit (the same
+    expressions and types); the rest of ``out`` keeps what it held. ``plane`` (>= ni * C,)
+    float32 scratch.
+
+    Per output row: the span [lo, hi] of its foreground voxels; no work for a row without one
+    (the benchmark's smoke cloud: 41 % of the voxels lie in such rows); else the (y, z)
+    interpolated source row over the source columns that span reads, all channels in one
+    contiguous pass (the channel-interleaved row as one vector loop; one channel at a time read
+    every third value), then the x interpolation over the span. A cloud's row holds its
+    foreground in one run (spans: 35.8 % of that cloud's voxels, foreground 35.6 %), so the
+    span is not compacted further."""
+    nk, nj, ni, nc = dense.shape
+    nyo = j0.shape[0]
+    nxo = i0.shape[0]
+    zero = np.float32(0.0)
+    k_ok = 0 <= k and k + 1 < nk
+    for jj in range(nyo):
+        base = jj * nxo
+        lo = nxo
+        hi = -1
+        for ii in range(nxo):           # vectorised: the row's foreground span
+            f = dens[base + ii] >= threshold
+            lo = min(lo, ii if f else nxo)
+            hi = max(hi, ii if f else -1)
+        if hi < 0:
+            continue
+        o = out[nc * (base + lo):nc * (base + hi + 1)]
+        b = j0[jj]
+        if not (k_ok and 0 <= b and b + 1 < nj and (rows_nz[k, b] or rows_nz[k, b + 1]
+                                                 or rows_nz[k + 1, b]
+                                                 or rows_nz[k + 1, b + 1])):
+            o[:] = zero
+            continue
+        # the source columns the span reads: a and a + 1 of every in-grid corner a
+        a_lo = ni
+        a_hi = -1
+        for ii in range(lo, hi + 1):
+            a = i0[ii]
+            ok = 0 <= a and a + 1 < ni
+            a_lo = min(a_lo, a if ok else ni)
+            a_hi = max(a_hi, a + 1 if ok else -1)
+        if a_hi >= 0:
+            wj_ = wj[jj]
+            r00 = dense[k, b].reshape(-1)[a_lo * nc:(a_hi + 1) * nc]
+            r10 = dense[k, b + 1].reshape(-1)[a_lo * nc:(a_hi + 1) * nc]
+            r01 = dense[k + 1, b].reshape(-1)[a_lo * nc:(a_hi + 1) * nc]
+            r11 = dense[k + 1, b + 1].reshape(-1)[a_lo * nc:(a_hi + 1) * nc]
+            p = plane[:(a_hi + 1 - a_lo) * nc]
+            for t in range(p.shape[0]):    # leaf_grid_values' plane, every channel at once
+                y0 = r00[t] * (1 - wj_) + r10[t] * wj_
+                y1 = r01[t] * (1 - wj_) + r11[t] * wj_
+                p[t] = y0 * (1 - wk_) + y1 * wk_
+        if nc == 3:
+            _x_lerp3(plane, a_lo, ni, i0[lo:hi + 1], wi[lo:hi + 1], o)
+            continue
+        for ii in range(hi + 1 - lo):
+            a = i0[lo + ii]
+            w = wi[lo + ii]
+            if 0 <= a and a + 1 < ni:
+                q = (a - a_lo) * nc
+                for c in range(nc):
+                    va = plane[q + c]
+                    vb = plane[q + nc + c]
+                    o[ii * nc + c] = va + (vb - va) * w
+            else:
+                for c in range(nc):
+                    o[ii * nc + c] = zero
 
 
 class LeafGridPlan:

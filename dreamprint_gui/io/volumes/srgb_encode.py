@@ -1,9 +1,10 @@
 """Linear -> sRGB encoding of colour samples: compiled, vectorisable, the same bits on every CPU.
 
 Defines :func:`srgb_encode32` (one value, inlined into compiled loops), :func:`encode_where`
-(a layer's colour rows in place where its density reaches a threshold: the fused job paths),
-:func:`clip_where` (the same for colour stored sRGB-encoded: clipped only) and
-:func:`encode_inplace` (a whole array).
+(a layer's colour rows in place where its density reaches a threshold), :func:`clip_where`
+(the same for colour stored sRGB-encoded: clipped only), :func:`prepare_staged` (either, on the
+staged colours of a block of foreground voxels: the fused job paths, :data:`AS_IS`,
+:data:`CLIP`, :data:`ENCODE`) and :func:`encode_inplace` (a whole array).
 
 The encoding is IEC 61966-2-1's: ``12.92 x`` for ``x <= 0.0031308``, else
 ``1.055 x^(1/2.4) - 0.055``, after clipping ``x`` to [0, 1] (NaN stays NaN), in float32 steps
@@ -30,7 +31,11 @@ from numba import njit
 
 from dreamprint_gui.core.kernels.vector_math import exp2_f64, log2_f64
 
-__all__ = ["srgb_encode32", "encode_where", "clip_where", "encode_inplace"]
+__all__ = ["srgb_encode32", "encode_where", "clip_where", "prepare_staged", "encode_inplace",
+           "AS_IS", "CLIP", "ENCODE"]
+
+# What :func:`prepare_staged` does to a colour: nothing, clip to [0, 1], sRGB-encode.
+AS_IS, CLIP, ENCODE = 0, 1, 2
 
 _E = float(np.float32(1 / 2.4))
 _LOW = np.float32(0.0031308)
@@ -88,6 +93,34 @@ def clip_where(rgb, dens, threshold, nx):
                 y = x if x > zero else zero
                 y = y if y < one else one
                 row[t] = x if x != x else y
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _clip32(x):
+    """``x`` clipped to [0, 1], NaN kept (``np.clip``)."""
+    y = x if x > np.float32(0.0) else np.float32(0.0)
+    y = y if y < np.float32(1.0) else np.float32(1.0)
+    return x if x != x else y
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def prepare_staged(col, m, stride, op):
+    """The colours of ``m`` staged voxels (``col`` float32, channel ``c`` of voxel ``k`` at
+    ``c * stride + k``) in place: sRGB-encoded (``op`` :data:`ENCODE`, :func:`srgb_encode32`),
+    clipped (:data:`CLIP`, as :func:`clip_where`) or left (:data:`AS_IS`). The voxels the
+    labelling reads and no others, each channel one contiguous run (vectorised): encoding the
+    whole rows that hold foreground (:func:`encode_where`) converted 1.7x as many values on a
+    smoke cloud's layers. The same values as the row variants give those voxels."""
+    if op == AS_IS:
+        return
+    for c in range(3):
+        row = col[c * stride:c * stride + m]  # a view from 0: the loop vectorises
+        if op == ENCODE:
+            for t in range(m):
+                row[t] = srgb_encode32(row[t])
+        else:
+            for t in range(m):
+                row[t] = _clip32(row[t])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

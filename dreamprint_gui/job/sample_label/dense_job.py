@@ -24,9 +24,10 @@ from dreamprint_gui.io.volumes.dense_sampler import (
     DENSITY,
     RAW,
     dense_layer,
+    dense_window_layer,
 )
-from dreamprint_gui.io.volumes.srgb_encode import encode_where
-from dreamprint_gui.job.sample_label.layer_kernel import layer_labels
+from dreamprint_gui.io.volumes.srgb_encode import AS_IS, ENCODE
+from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]
 
@@ -40,10 +41,12 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
     density, 1-3 premultiplied colour if it has 4 channels, else ``uniform`` sRGB colour (3,)):
     the slab's plan (:class:`..io.volumes.dense_sampler.DenseLayers` ``.args()``), density
     ``scale`` (1/mm per source unit), ``linear`` (the colour channels hold linear values: each
-    voxel the labelling reads is sRGB-encoded, :func:`..io.volumes.srgb_encode.encode_where`,
-    the values :meth:`..io.volumes.dense.DenseSource.sample_slab` gives), one layer's working
+    voxel the labelling reads is sRGB-encoded in its staged block,
+    :func:`..io.volumes.srgb_encode.prepare_staged`, the values
+    :meth:`..io.volumes.dense.DenseSource.sample_slab` gives), one layer's working
     arrays ``rgb`` (ny * nx, 3) and ``dens`` (ny * nx,), then the arguments of
-    :func:`.layer_kernel.slab_labels` after ``z0``."""
+    :func:`.layer_kernel.slab_labels` after ``z0``. A grid without colour channels is looked
+    up once per layer (:data:`.layer_kernel.UNIFORM`)."""
     colour = vol.shape[3] == 4
     if colour:
         # The kernel reads colour only where the density reaches a positive threshold: rows
@@ -52,16 +55,16 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
     else:
         mode = DENSITY
         for c in range(3):
-            rgb[:, c] = uniform[c]
+            rgb[0, c] = uniform[c]
     rgb_flat = rgb.reshape(-1)
+    op = (ENCODE if linear else AS_IS) if colour else UNIFORM
     for k in range(labels.shape[0]):
         dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                     srows, planes, planes_nz, plane_layer, row, cpl, rgb_flat, rgb_flat, dens,
                     mode, scale)
-        if colour and linear:
-            encode_where(rgb, dens, threshold, labels.shape[2])
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     op)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -77,17 +80,35 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
     paper's sec. 4.1 maps a scalar field to extinction and albedo), density 0 at voxels outside
     the image (``outside_z[k] | outside_y[j] | outside_x[i]``, if ``use_outside``: a window
     below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.layer_labels`.
-    The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s."""
+    The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s. A table of one colour
+    (every entry the same bits: no colour map) gives only the density, windowed in the
+    sampler's row pass (:func:`..io.volumes.dense_sampler.dense_window_layer`), and is looked
+    up once per layer (:data:`.layer_kernel.UNIFORM`)."""
     ny, nx = labels.shape[1:]
+    li = lut.view(np.int32)
+    one_colour = True
+    for i in range(1, lut.shape[0]):
+        for c in range(3):
+            one_colour &= li[i, c] == li[0, c]
+    if one_colour:
+        for c in range(3):
+            rgb[0, c] = lut[0, c]
+    op = UNIFORM if one_colour else AS_IS
     for k in range(labels.shape[0]):
-        dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
-                    srows, planes, planes_nz, plane_layer, row, cpl, values, values, dens, RAW,
-                    np.float32(1.0))
-        _window_kernel(values, low, inv_width, lut, density, rgb, dens)
+        if one_colour:
+            dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1,
+                               wx, vx, rslot, srows, planes, planes_nz, plane_layer, row, low,
+                               inv_width, density, dens)
+        else:
+            dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
+                        rslot, srows, planes, planes_nz, plane_layer, row, cpl, values, values,
+                        dens, RAW, np.float32(1.0))
+            _window_kernel(values, low, inv_width, lut, density, rgb, dens)
         if use_outside:
             for j in range(ny):
                 for i in range(nx):
                     if outside_z[k] or outside_y[j] or outside_x[i]:
                         dens[j * nx + i] = 0.0
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     op)

@@ -15,7 +15,8 @@ the voxels whose density reaches the background threshold with their halftone th
 across rows until a block of ``ROW_BLOCK`` voxels is full (a narrow row alone would feed the
 vector passes a few voxels at a time), then stage their colour and target; (2)
 trilinear lookup of the table node fields (:func:`gamut.alignment.interpolate_block`, or once
-per run of one colour: :func:`gamut.alignment.lookup_runs`); (3)
+per run of one colour: :func:`gamut.alignment.lookup_runs`; for a source of one colour, once per
+layer, and only the targets are staged: :data:`UNIFORM`); (3)
 density alignment (:func:`gamut.alignment.align_rows`); (4) halftone
 (:func:`halftone.label_rows`), then the labels are scattered into the layer
 (:func:`halftone.scatter_counts`) and their intended concentrations summed
@@ -31,12 +32,16 @@ from numba import njit
 
 from dreamprint_gui.core.kernels.vec16 import accumulate8
 from dreamprint_gui.gamut.alignment import (
+    K_TARGET,
     ROW_BLOCK,
     ROW_STRIDE,
+    align_block,
     block_buffers,
     lookup_align_block,
     stage_voxel,
+    uniform_lanes,
 )
+from dreamprint_gui.io.volumes.srgb_encode import AS_IS, prepare_staged
 from dreamprint_gui.job.halftone import (
     fg_threshold,
     label_rows,
@@ -45,7 +50,13 @@ from dreamprint_gui.job.halftone import (
     tile_layout,
 )
 
-__all__ = ["layer_labels", "slab_labels", "block_conc_sums", "DENSE_ROW"]
+__all__ = ["layer_labels", "slab_labels", "block_conc_sums", "DENSE_ROW", "UNIFORM"]
+
+# A ``colour_op`` of :func:`layer_labels` besides those of :mod:`..io.volumes.srgb_encode`:
+# every voxel's colour is ``rgb[0]``'s (sRGB): a source of one colour (a scalar image without a
+# colour map, a density-only VDB). The lookup is done once per layer
+# (:func:`..gamut.alignment.uniform_lanes`) and only ``rgb[0]`` is read.
+UNIFORM = 3
 
 # A row with at least 1/DENSE_ROW of its voxels in the foreground gets its halftone thresholds
 # for the whole row (:func:`.halftone.threshold_row`) and a branch-free compaction; a sparser
@@ -76,11 +87,17 @@ def block_conc_sums(C, m, acc, sums):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
-                 method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats):
+                 method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats,
+                 colour_op=AS_IS):
     """``rgb`` (ny*nx, 3) float32 sRGB, ``dens`` (ny*nx,) float32 1/mm of layer ``z`` ->
     ``labels`` (ny, nx) uint8. Accumulates ``counts`` (7,) int64, ``sums`` (7,) float64
     (intended concentrations; background voxels count 1 for ``bg_label``) and ``stats`` (4,)
-    (clamped low, clamped high, worst low shortfall, worst high shortfall)."""
+    (clamped low, clamped high, worst low shortfall, worst high shortfall). ``colour_op``
+    (:mod:`..io.volumes.srgb_encode`): the colours as read are sRGB-encoded (``ENCODE``: ``rgb``
+    holds linear values) or clipped (``CLIP``) first, in the staged block
+    (:func:`..io.volumes.srgb_encode.prepare_staged`): only the foreground voxels', the only
+    colours read (the rest of ``rgb`` may hold anything); ``UNIFORM``: every voxel has
+    ``rgb[0]``'s colour, the only one read (the same labels, looked up once)."""
     ny, nx = labels.shape
     mz, my, mx = mask.shape
     cols, rows, tiles = tile_layout(0, nx, 0, ny, z, ox, oy, oz, mz, my, mx, seed)
@@ -95,6 +112,9 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
     lab = np.empty(RB, np.uint8)
     acc = np.empty(48)
     out = labels.reshape(-1)
+    uniform = colour_op == UNIFORM
+    if uniform:  # G's lookup lanes, once for every block of the layer
+        uniform_lanes(flat, n, rgb[0, 0], rgb[0, 1], rgb[0, 2], col, W, off, A, G)
     n_bg = 0
     m = 0
     for j in range(ny):
@@ -130,10 +150,17 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
         k0 = 0
         while k0 < m and (m - k0 >= RB or j == ny - 1):
             mb = min(RB, m - k0)
-            for k in range(mb):
-                p = idx[k0 + k]
-                stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
-            lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
+            if uniform:
+                tg = G[K_TARGET * ROW_STRIDE:]
+                for k in range(mb):
+                    tg[k] = dens[idx[k0 + k]]
+                align_block(sigma_clear, mb, G, C, stats)
+            else:
+                for k in range(mb):
+                    p = idx[k0 + k]
+                    stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
+                prepare_staged(col, mb, ROW_STRIDE, colour_op)
+                lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tq[k0:], mb, order, bg_label, lab)
             scatter_counts(out, idx, k0, lab, mb, counts)
             block_conc_sums(C, mb, acc, sums)

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from numba import njit
 
-from dreamprint_gui.io.volumes.leaf_grid import leaf_grid_layer, leaf_grid_values
-from dreamprint_gui.io.volumes.srgb_encode import clip_where, encode_where
-from dreamprint_gui.job.sample_label.layer_kernel import layer_labels
+from dreamprint_gui.io.volumes.leaf_grid import leaf_grid_layer, leaf_grid_values_where
+from dreamprint_gui.io.volumes.srgb_encode import CLIP, ENCODE
+from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels
 
 __all__ = ["leaf_grid_slab_labels", "leaf_grid_colour_slab_labels"]
 
@@ -29,13 +29,15 @@ def leaf_grid_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, 
     plan (``dense, rows_nz, k0, wk`` per layer, ``j0, wj, i0, wi``, ``plane`` scratch, density
     ``scale`` (1/mm per source unit), ``uniform`` colour (3,)), one layer's working arrays
     ``rgb`` (ny * nx, 3) and ``dens`` (ny * nx,), then the arguments of
-    :func:`.layer_kernel.slab_labels` after ``z0``."""
+    :func:`.layer_kernel.slab_labels` after ``z0``. The one colour is looked up once per
+    layer (:data:`.layer_kernel.UNIFORM`: only ``rgb[0]`` is read)."""
     for c in range(3):
-        rgb[:, c] = uniform[c]
+        rgb[0, c] = uniform[c]
     for k in range(labels.shape[0]):
         leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens)
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     UNIFORM)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -46,19 +48,18 @@ def leaf_grid_colour_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, 
                                  stats):
     """As :func:`leaf_grid_slab_labels`, the colour sampled per layer from a densified vec3
     grid ``cdense`` (nk, nj, ni, 3) with its own corners and weights (``ck0``, ``cwk`` per
-    layer, ``cj0``/``cwj``, ``ci0``/``cwi``; ``cplane`` (3, ni) scratch;
-    :func:`..io.volumes.leaf_grid.leaf_grid_values`), then sRGB-encoded if ``linear`` (else
-    clipped to [0, 1]) where the labelling reads it: the values of
-    :meth:`..io.volumes.openvdb.VdbSource.sample_slab`, a layer at a time."""
-    ny, nx = labels.shape[1:]
-    out = rgb.reshape((1, ny, nx, 3))
+    layer, ``cj0``/``cwj``, ``ci0``/``cwi``; ``cplane`` (3, ni) scratch), at the voxels the
+    labelling reads only (:func:`..io.volumes.leaf_grid.leaf_grid_values_where`), then
+    sRGB-encoded if ``linear`` (else clipped to [0, 1]) in the labelling's staged blocks
+    (``colour_op``): the values of :meth:`..io.volumes.openvdb.VdbSource.sample_slab` where
+    the labels read them, a layer at a time."""
+    rgb_flat = rgb.reshape(-1)
+    cplane_flat = cplane.reshape(-1)
+    op = ENCODE if linear else CLIP
     for k in range(labels.shape[0]):
         leaf_grid_layer(dense, rows_nz, k0[k], wk[k], j0, wj, i0, wi, plane, scale, dens)
-        leaf_grid_values(cdense, crows_nz, ck0[k:k + 1], cwk[k:k + 1], cj0, cwj, ci0, cwi,
-                         cplane, out)
-        if linear:
-            encode_where(rgb, dens, threshold, nx)
-        else:
-            clip_where(rgb, dens, threshold, nx)
+        leaf_grid_values_where(cdense, crows_nz, ck0[k], cwk[k], cj0, cwj, ci0, cwi,
+                               cplane_flat, rgb_flat, dens, threshold)
         layer_labels(rgb, dens, z0 + k, threshold, bg_label, flat, n, sigma_clear,
-                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats)
+                     method, mask, ox, oy, oz, seed, order, labels[k], counts, sums[k], stats,
+                     op)

@@ -179,6 +179,55 @@ def test_densified_values_equal_the_sparse_sampler(channels):
     np.testing.assert_array_equal(got.view(np.uint32), want.view(np.uint32))
 
 
+@pytest.mark.parametrize("threshold", [0.0, 0.6])
+def test_colour_where_labelled_equals_every_value(threshold):
+    """leaf_grid_values_where gives leaf_grid_values' bits over each row's span of voxels whose
+    density reaches the threshold (rows with and without source data, columns outside the
+    grid, NaN and -0.0 among the values) and leaves every other voxel as it was."""
+    from dreamprint_gui.io.volumes.base import voxel_centres
+    from dreamprint_gui.io.volumes.leaf_grid import (
+        index_axis,
+        leaf_grid_values,
+        leaf_grid_values_where,
+    )
+
+    b1 = _random_blocks(seed=13)
+    blocks = SparseBlocks(b1.origins, np.concatenate([b1.values, -b1.values, b1.values * 3],
+                                                     axis=-1), np.zeros(3, np.float32))
+    dense, lo, rows = densify(blocks.origins, blocks.values, blocks.background, channels=True)
+    src = _Blocks(blocks)
+    grid = grid_for_source(src, (0.21, 0.13, 0.17), size_mm=(15, 15, 15))
+    # the print's box reaches past the grid's on every side: corners outside it
+    u = [(voxel_centres(grid, a) - 0.3) / 0.5 * 1.2 - 2.0 for a in range(3)]
+    k0, wk = index_axis(u[2], lo[2])
+    j0, wj = index_axis(u[1], lo[1])
+    i0, wi = index_axis(u[0], lo[0])
+    nz, ny, nx = len(k0), len(j0), len(i0)
+    want = np.empty((nz, ny, nx, 3), np.float32)
+    leaf_grid_values(dense, rows, k0, wk, j0, wj, i0, wi,
+                     np.empty((3, dense.shape[2]), np.float32), want)
+    rng = np.random.default_rng(4)
+    dens = rng.uniform(0.0, 1.0, (nz, ny, nx)).astype(np.float32)
+    dens[rng.random(dens.shape) < 0.5] = 0.0
+    dens[:, ::3] = np.nan                                   # rows without foreground
+    dens.reshape(-1)[rng.integers(0, dens.size, 500)] = np.nan
+    plane = np.empty(3 * dense.shape[2], np.float32)
+    gaps = 0
+    for k in range(nz):
+        got = np.full((ny, nx, 3), 7.0, np.float32)
+        leaf_grid_values_where(dense, rows, k0[k], wk[k], j0, wj, i0, wi, plane,
+                               got.reshape(-1), dens[k].reshape(-1), np.float32(threshold))
+        fg = dens[k] >= threshold
+        # each row from its first to its last foreground voxel
+        span = np.maximum.accumulate(fg, axis=1) & np.maximum.accumulate(fg[:, ::-1],
+                                                                         axis=1)[:, ::-1]
+        np.testing.assert_array_equal(got[span].view(np.uint32), want[k][span].view(np.uint32))
+        assert (got[~span] == 7.0).all() and (~span).any()
+        gaps += np.count_nonzero(span & ~fg)
+    assert gaps > 0                                         # spans hold background voxels
+    assert (want != 0).any() and np.isnan(want).any()
+
+
 def test_coloured_vdb_samples_the_same_through_dense_copies(vdbs, monkeypatch):
     """A VDB with a colour grid samples the same with its grids densified as from the leaves."""
     from dreamprint_gui.io.volumes import openvdb

@@ -128,3 +128,40 @@ def test_a_layer_is_the_same_whatever_else_the_call_samples(nz):
         c1, s1 = sample_dense_density(vol, uz[k:k + 1], uy, ux, 0.5, 1.5)
         np.testing.assert_array_equal(sigma[k:k + 1].view(np.uint32), s1.view(np.uint32))
         np.testing.assert_array_equal(rgb[k:k + 1].view(np.uint32), c1.view(np.uint32))
+
+
+@pytest.mark.parametrize("low", [2.0, -3.0])
+def test_window_layer_equals_samples_then_window(low):
+    """dense_window_layer (a scalar image's window in the sampler's row pass) gives the bits of
+    sampling the layer (dense_layer, RAW) and then windowing it (dense._window_kernel's
+    density), layers and rows outside the grid, empty source rows and NaN included."""
+    from dreamprint_gui.io.volumes.dense import _window_kernel
+    from dreamprint_gui.io.volumes.dense_sampler import (
+        RAW,
+        DenseLayers,
+        dense_layer,
+        dense_window_layer,
+        rows_with_data,
+    )
+
+    rng = np.random.default_rng(6)
+    vol = rng.uniform(-5.0, 40.0, (6, 8, 9, 1)).astype(np.float32)
+    vol[:, 3] = 0.0                                        # an empty source row per layer
+    vol.reshape(-1)[rng.integers(0, vol.size, 3)] = np.nan
+    uz = np.linspace(-1.0, 6.2, 15)                         # layers beyond the grid
+    uy = np.linspace(-0.7, 7.9, 23)
+    ux = np.linspace(-0.4, 8.6, 31)
+    rows = rows_with_data(vol)
+    lo, inv_w, dens = np.float32(low), np.float32(1 / 25.0), np.float32(0.37)
+    a, b = DenseLayers(vol, uz, uy, ux, 0.5), DenseLayers(vol, uz, uy, ux, 0.5)
+    nv = len(uy) * len(ux)
+    for k in range(len(uz)):
+        values = np.full(nv, 5.0, np.float32)
+        want = np.full(nv, 9.0, np.float32)
+        dense_layer(vol, rows, k, *a.args(), values, values, want, RAW, np.float32(1.0))
+        _window_kernel(values, lo, inv_w, np.ones((4, 3), np.float32), dens,
+                       np.empty((nv, 3), np.float32), want)
+        args = b.args()
+        got = np.full(nv, 9.0, np.float32)
+        dense_window_layer(vol, rows, k, *args[:-1], lo, inv_w, dens, got)
+        np.testing.assert_array_equal(got.view(np.uint32), want.view(np.uint32))

@@ -5,7 +5,14 @@ import numpy as np
 import pytest
 
 from dreamprint_gui.io.volumes.base import linear_to_srgb, linear_to_srgb_inplace
-from dreamprint_gui.io.volumes.srgb_encode import clip_where, encode_where
+from dreamprint_gui.io.volumes.srgb_encode import (
+    AS_IS,
+    CLIP,
+    ENCODE,
+    clip_where,
+    encode_where,
+    prepare_staged,
+)
 
 
 def _reference(x: np.ndarray) -> np.ndarray:
@@ -61,3 +68,24 @@ def test_in_place_and_row_variants_agree(rows, nx):
         np.testing.assert_array_equal(y[~hit].view(np.uint32), x[~hit].view(np.uint32))
     with pytest.raises(ValueError):
         linear_to_srgb_inplace(np.zeros((4, 4), np.float32)[:, ::2])
+
+
+@pytest.mark.parametrize("m", [0, 1, 5, 16, 1000])
+def test_staged_block_variant_agrees(m):
+    """prepare_staged converts the first ``m`` values of each channel row of a staged block
+    (stride ``m + 13``) with linear_to_srgb's bits (ENCODE) or clip_where's (CLIP: np.clip's,
+    NaN kept, but -0.0 -> +0.0), and nothing else; AS_IS leaves the block."""
+    stride = m + 13
+    rng = np.random.default_rng(m)
+    col = rng.uniform(-0.2, 1.3, 3 * stride).astype(np.float32)
+    col[rng.integers(0, col.size, 3)] = np.nan
+    col[rng.integers(0, col.size, 3)] = -0.0
+    staged = np.zeros(3 * stride, bool)
+    for c in range(3):
+        staged[c * stride:c * stride + m] = True
+    clipped = np.clip(col, 0, 1) + np.float32(0.0)              # -0.0 + 0.0 = +0.0
+    for op, ref in ((ENCODE, linear_to_srgb(col)), (CLIP, clipped), (AS_IS, col)):
+        y = col.copy()
+        prepare_staged(y, m, stride, op)
+        np.testing.assert_array_equal(y[staged].view(np.uint32), ref[staged].view(np.uint32))
+        np.testing.assert_array_equal(y[~staged].view(np.uint32), col[~staged].view(np.uint32))
