@@ -528,7 +528,7 @@ class IngpSource:
         self._first_a = np.ascontiguousarray(first[:, :dw], np.float32)
         self._occ = model.occupancy if self.occupancy else np.zeros((1, 1, 1, 1), np.uint8)
 
-    def _kernel_args(self, sigma_factor: float):
+    def _kernel_args(self, sigma_factor: float, colour_cut: float = 0.0):
         m = self.model
         g = m.grid
         return (self._A, self._t, np.asarray(m.aabb[0], float), np.asarray(m.aabb[1], float),
@@ -541,7 +541,7 @@ class IngpSource:
                 ACT[_lower(m.density.output_activation)],
                 m.colour.mats, m.colour.shapes, ACT[_lower(m.colour.activation)],
                 ACT[_lower(m.colour.output_activation)], self._first_a, self._dir_consts,
-                1 if m.is_hdr else 0, float(sigma_factor))
+                1 if m.is_hdr else 0, float(sigma_factor), np.float32(colour_cut))
 
     def evaluate(self, xs, ys, zs, sigma_factor: float = 1.0, threads: int = 1):
         """(rgb (nz, ny, nx, 3) as the network gives it, density (nz, ny, nx) in instant-ngp's
@@ -552,8 +552,8 @@ class IngpSource:
         self._run(xs, ys, zs, sigma_factor, sigma, rgb, threads)
         return rgb, sigma
 
-    def _run(self, xs, ys, zs, sigma_factor, sigma, rgb, threads):
-        args = self._kernel_args(sigma_factor)
+    def _run(self, xs, ys, zs, sigma_factor, sigma, rgb, threads, colour_cut=0.0):
+        args = self._kernel_args(sigma_factor, colour_cut)
         rows = zs.size * ys.size
         n = max(1, min(int(threads), rows))
         if n == 1:
@@ -591,7 +591,10 @@ class IngpSource:
             sigma = np.empty(shape, np.float32)
             rgb = np.empty(shape + (3,), np.float32)
         factor = abs(self.model.scale) * density_scale / grid.mm_per_unit
-        self._run(xs, ys, zs, factor, sigma, rgb, self._threads())
+        # a consumer that reads colour only where the density reaches its threshold: the
+        # colour network runs only there (SlabBuffers.colour_threshold)
+        cut = out.colour_threshold if out is not None and out.colour_where_dense else 0.0
+        self._run(xs, ys, zs, factor, sigma, rgb, self._threads(), cut)
         if self.colour_encoding == "linear":
             rgb = linear_to_srgb(rgb)
         else:

@@ -197,20 +197,32 @@ def mlp_forward(mats, shapes, act_hidden, act_out, n_out_used, x, buf_a, buf_b, 
 
 
 @njit(cache=True, nogil=True, fastmath=True)
-def _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc,
+def _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                 d_mats, d_shapes, d_act, d_out_act,
                 r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                rgb_act, sigma_factor, fs, fr):
+                rgb_act, sigma_factor, colour_cut, fs, fr):
     """Steps 3-4 of the module docstring for the ``nb`` encoded voxels in ``enc`` (columns);
-    results written to the flat outputs at ``where``."""
+    results written to the flat outputs at ``where``.  The colour network runs only for the
+    voxels whose density (float32, the caller's units) reaches ``colour_cut`` when it is
+    positive (the others keep colour 0); ``sel`` (batch) int64 work space."""
     n_d_out = d_shapes[d_shapes.shape[0] - 1, 0]
     r_w = r_shapes[0, 0]
     n_r = r_shapes.shape[0]
     n_dirs = dir_consts.shape[0]
     out = mlp_forward(d_mats, d_shapes, d_act, d_out_act, n_d_out, enc, buf_a, buf_b, nb)
+    n_c = 0
+    for b in range(nb):
+        sg = np.float32(math.exp(out[0, b]) * sigma_factor)
+        fs[where[b]] = sg
+        if colour_cut <= 0.0 or sg >= colour_cut:
+            sel[n_c] = b
+            n_c += 1
+    if n_c == 0:
+        return
     for o in range(n_d_out):
-        for b in range(nb):
-            dens[o, b] = out[o, b]
+        for j in range(n_c):
+            dens[o, j] = out[o, sel[j]]
+    nb = n_c
     _matmul(r_first_a, dens, pre, r_w, n_d_out, nb)
     for c in range(3):
         for b in range(nb):
@@ -241,8 +253,7 @@ def _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc,
                 acc[c, b] += v
     inv_dirs = np.float32(1.0 / n_dirs)
     for b in range(nb):
-        flat = where[b]
-        fs[flat] = np.float32(math.exp(dens[0, b]) * sigma_factor)
+        flat = where[sel[b]]
         fr[flat, 0] = acc[0, b] * inv_dirs
         fr[flat, 1] = acc[1, b] * inv_dirs
         fr[flat, 2] = acc[2, b] * inv_dirs
@@ -270,11 +281,13 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
                 table, n_feat, offsets, scales, res, hashed, interp, enc_width,
                 d_mats, d_shapes, d_act, d_out_act,
                 r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                rgb_act, sigma_factor, sigma, rgb):
+                rgb_act, sigma_factor, colour_cut, sigma, rgb):
     """Evaluate rows ``r0..r1-1`` of a slab (row r = layer r // ny, y r % ny) into ``sigma``
     (nz, ny, nx) and ``rgb`` (nz, ny, nx, 3): steps 1-4 of the module docstring; voxels left
     out by step 1 get density 0 and colour 0.  ``sigma_factor`` turns instant-ngp's density
-    (per its unit) into the caller's units; ``rgb_act``: 0 sigmoid, 1 exp(clamp(., -10, 10)).
+    (per its unit) into the caller's units; ``rgb_act``: 0 sigmoid, 1 exp(clamp(., -10, 10));
+    ``colour_cut`` (float32, > 0): colour only where the density reaches it (a print job's
+    background threshold: it reads no colour below), the rest colour 0.
 
     Rows along which one instant-ngp axis varies (every placement the reader makes) take the
     row path: the voxels inside the boxes as one interval and the occupancy grid tested a block
@@ -296,6 +309,7 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     pre = np.empty((r_w, BATCH), np.float32)
     h1 = np.empty((r_w, BATCH), np.float32)
     acc = np.empty((3, BATCH), np.float32)
+    sel = np.empty(BATCH, np.int64)
     u = np.empty((3, BATCH), np.float32)
     where = np.empty(BATCH, np.int64)
     line = np.empty((n_feat, nx + 4), np.float32)
@@ -383,16 +397,16 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
                 encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table,
                              n_feat, offsets, scales, res, hashed, interp, enc, scratch, line,
                              gcol, wcol)
-                _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc,
+                _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                             d_mats, d_shapes, d_act, d_out_act,
                             r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                            rgb_act, sigma_factor, fs, fr)
+                            rgb_act, sigma_factor, colour_cut, fs, fr)
                 nb = 0
                 n_seg = 0
     if nb:
         encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table, n_feat,
                      offsets, scales, res, hashed, interp, enc, scratch, line, gcol, wcol)
-        _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc,
+        _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                     d_mats, d_shapes, d_act, d_out_act,
                     r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                    rgb_act, sigma_factor, fs, fr)
+                    rgb_act, sigma_factor, colour_cut, fs, fr)

@@ -132,3 +132,61 @@ def test_row_path_identical_with_any_threads_and_slab(tmp_path, interpolation):
     rgb_l, sig_l = one.evaluate(xs, ys[5:9], zs[6:7])
     np.testing.assert_array_equal(sig_l, sig1[6:7, 5:9])
     np.testing.assert_array_equal(rgb_l, rgb1[6:7, 5:9])
+
+
+def test_colour_only_above_the_consumers_threshold(tmp_path):
+    """With SlabBuffers.colour_threshold the colour network runs only where the density
+    reaches it: the density is unchanged, the colour too where it is read, 0 elsewhere."""
+    from dreamprint_gui.io.volumes import grid_for_source
+    from dreamprint_gui.io.volumes.base import SlabBuffers
+
+    p, *_ = _snapshot(tmp_path, 13)
+    src = open_source(p, threads=1)
+    grid = grid_for_source(src, (0.2, 0.2, 0.1), height_mm=4.0)
+    z0, z1 = grid.shape_xyz[2] // 2 - 2, grid.shape_xyz[2] // 2 + 2
+    rgb, sig = src.sample_slab(grid, z0, z1)
+    fg = sig[sig > 0]
+    cut = np.float32(np.median(fg))
+    out = SlabBuffers(colour_where_dense=True, colour_threshold=cut)
+    rgb_c, sig_c = src.sample_slab(grid, z0, z1, out=out)
+    np.testing.assert_array_equal(sig_c, sig)
+    read = sig >= cut
+    assert 0.3 < read.sum() / fg.size < 0.7
+    np.testing.assert_array_equal(rgb_c[read], rgb[read])
+    assert np.all(rgb_c[~read] == 0)
+    # a consumer that reads colour wherever the density is positive gets all of it
+    rgb_a, _ = src.sample_slab(grid, z0, z1, out=SlabBuffers(colour_where_dense=True))
+    np.testing.assert_array_equal(rgb_a, rgb)
+
+
+def test_job_labels_unchanged_by_the_colour_cut(tmp_path, monkeypatch):
+    """A print job's slices are the same bytes whether or not the snapshot's colour network is
+    skipped below the job's background threshold (also through --content solid)."""
+    from dreamprint_gui.cli import main
+    from dreamprint_gui.io.volumes.ingp import IngpSource
+
+    p, *_ = _snapshot(tmp_path, 14)
+    # the density straddles the job's threshold: a scale that puts its median there
+    args = ["--height-mm", "1.5", "--table-size", "17", "--workers", "2", "--slab-layers",
+            "4", "--fit", "box", "--density-scale", "0.04"]
+
+    def slices(name, extra=()):
+        out = tmp_path / name
+        assert main(["convert", str(p), "-o", str(out), *args, *extra]) == 0
+        return {f.name: f.read_bytes() for f in sorted((out / "slices").iterdir())}
+
+    cut = slices("CUT")
+    solid = slices("SOLID_CUT", ["--content", "solid"])
+    run = IngpSource._run
+    calls = []
+
+    def no_cut(self, xs, ys, zs, factor, sigma, rgb, threads, colour_cut=0.0):
+        run(self, xs, ys, zs, factor, sigma, rgb, threads, 0.0)
+        dense = sigma[sigma > 0]
+        if colour_cut > 0 and dense.size:
+            calls.append(float(np.mean(dense < colour_cut)))   # voxels the cut skips
+
+    monkeypatch.setattr(IngpSource, "_run", no_cut)
+    assert slices("FULL") == cut
+    assert slices("SOLID_FULL", ["--content", "solid"]) == solid
+    assert calls and 0.1 < np.mean(calls) < 0.9
