@@ -552,18 +552,36 @@ class IngpSource:
         self._run(xs, ys, zs, sigma_factor, sigma, rgb, threads)
         return rgb, sigma
 
+    def _line_axis(self, xs, ys) -> int:
+        """The source axis (0 x, 1 y) the kernel runs its lines along: of those along which
+        one instant-ngp coordinate varies over increasing voxel centres, the one with the
+        finer step in the encoding's coordinate (more coarse levels a line at a time, longer
+        lines); x on a tie.  Depends on the grid alone: every thread makes the same choice."""
+        ext = np.asarray(self.model.aabb[1], float) - np.asarray(self.model.aabb[0], float)
+        best, best_du = 0, math.inf
+        for la, c in ((0, xs), (1, ys)):
+            col = self._A[:, la]
+            nz = np.flatnonzero(col)
+            if nz.size != 1 or c.size < 2 or not np.all(np.diff(c) > 0):
+                continue
+            du = abs(col[nz[0]]) * float(np.max(np.diff(c))) / ext[nz[0]]
+            if du < best_du:
+                best, best_du = la, du
+        return best
+
     def _run(self, xs, ys, zs, sigma_factor, sigma, rgb, threads, colour_cut=0.0):
         args = self._kernel_args(sigma_factor, colour_cut)
-        rows = zs.size * ys.size
+        la = self._line_axis(xs, ys)
+        rows = zs.size * (ys.size if la == 0 else xs.size)
         n = max(1, min(int(threads), rows))
         if n == 1:
-            sample_rows(0, rows, xs, ys, zs, *args, sigma, rgb)
+            sample_rows(0, rows, la, xs, ys, zs, *args, sigma, rgb)
             return
         # interleaved chunks of rows: occupied regions spread over the threads
         chunk = max(1, min(64, rows // (8 * n)))
         starts = list(range(0, rows, chunk))
         with ThreadPoolExecutor(n) as ex:
-            futs = [ex.submit(sample_rows, s, min(rows, s + chunk), xs, ys, zs, *args, sigma,
+            futs = [ex.submit(sample_rows, s, min(rows, s + chunk), la, xs, ys, zs, *args, sigma,
                               rgb) for s in starts]
             for f in futs:
                 f.result()

@@ -64,8 +64,8 @@ def level_direct(u, c0, c1, lvl, table, n_feat, offsets, scales, res, hashed, in
     ``z r^2`` (dense), then the 8 corners (x the lowest bit) blended.  ``interp``: 0 linear,
     1 smoothstep, 2 nearest (the lower corner alone).  A plain loop: the per-corner vector
     loops it replaces did not vectorise with a batch length known only at run time (~35 ns
-    per level and voxel against ~19 here, ~10 for the row form's voxel-by-voxel levels).  ``scratch`` is unused (kept for the callers'
-    signature)."""
+    per level and voxel against ~19 here, ~10 for the row form's voxel-by-voxel levels).
+    ``scratch`` is unused (kept for the callers' signature)."""
     s = scales[lvl]
     size_i = offsets[lvl + 1] - offsets[lvl]
     size = np.uint32(size_i)

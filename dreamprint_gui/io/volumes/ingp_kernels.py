@@ -268,12 +268,13 @@ def _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
 
 
 @njit(cache=True, nogil=True)
-def _row_axis(A, xs):
-    """The one instant-ngp axis that varies along a printer row (``A[:, 0]`` has a single
-    non-zero), if the row's voxel centres ``xs`` also increase; else -1 (the general path)."""
+def _row_axis(A, xs, la=0):
+    """The one instant-ngp axis that varies along a printer line along source axis ``la``
+    (``A[:, la]`` has a single non-zero), if the line's voxel centres ``xs`` also increase;
+    else -1 (the general path)."""
     ax = -1
     for d in range(3):
-        if A[d, 0] != 0.0:
+        if A[d, la] != 0.0:
             if ax >= 0:
                 return -1
             ax = d
@@ -284,16 +285,18 @@ def _row_axis(A, xs):
 
 
 @njit(cache=True, nogil=True)
-def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_hi,
+def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_hi,
                 occ, use_occ, max_cascade,
                 table, n_feat, offsets, scales, res, hashed, interp, enc_width,
                 d_mats, d_shapes, d_act, d_out_act,
                 r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
                 rgb_act, sigma_factor, colour_cut, sigma, rgb):
-    """Evaluate rows ``r0..r1-1`` of a slab (row r = layer r // ny, y r % ny) into ``sigma``
-    (nz, ny, nx) and ``rgb`` (nz, ny, nx, 3): steps 1-4 of the module docstring; voxels left
-    out by step 1 get density 0 and colour 0.  ``sigma_factor`` turns instant-ngp's density
-    (per its unit) into the caller's units; ``rgb_act``: 0 sigmoid, 1 exp(clamp(., -10, 10));
+    """Evaluate lines ``r0..r1-1`` of a slab into ``sigma`` (nz, ny, nx) and ``rgb``
+    (nz, ny, nx, 3), lines along source x (``la`` 0: rows, line r = layer r // ny, y r % ny)
+    or along source y (``la`` 1: columns, line r = layer r // nx, x r % nx): steps 1-4 of the
+    module docstring; voxels left out by step 1 get density 0 and colour 0.  ``sigma_factor``
+    turns instant-ngp's density (per its unit) into the caller's units; ``rgb_act``: 0
+    sigmoid, 1 exp(clamp(., -10, 10));
     ``colour_cut`` (float32, > 0): colour only where the density reaches it (a print job's
     background threshold: it reads no colour below), the rest colour 0.
 
@@ -304,6 +307,13 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     a row's voxels fill the columns of batches of :data:`BATCH` for the networks."""
     ny = ys.shape[0]
     nx = xs.shape[0]
+    # the line's coordinates, the layer's other coordinate, and where a line's voxels lie
+    lc = xs if la == 0 else ys
+    oc = ys if la == 0 else xs
+    ob = 1 if la == 0 else 0
+    n_line = lc.shape[0]
+    n_oth = oc.shape[0]
+    stride = 1 if la == 0 else nx
     n_levels = scales.shape[0]
     d_w = d_shapes[0, 0]
     n_d_out = d_shapes[d_shapes.shape[0] - 1, 0]
@@ -320,10 +330,10 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     sel = np.empty(BATCH, np.int64)
     u = np.empty((3, BATCH), np.float32)
     where = np.empty(BATCH, np.int64)
-    line = np.empty((n_feat, nx + 4), np.float32)
+    line = np.empty((n_feat, n_line + 4), np.float32)
     gcol = np.empty(BATCH, np.int32)
     wcol = np.empty(BATCH, np.float32)
-    vox = np.empty(nx, np.int64)
+    vox = np.empty(n_line, np.int64)
     row_form = np.zeros(n_levels, np.bool_)
     seg_c0 = np.empty(BATCH, np.int64)
     seg_c1 = np.empty(BATCH, np.int64)
@@ -334,17 +344,17 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     bx = np.empty(3, np.float64)
     a = np.empty(3, np.float64)
     inv_ext = 1.0 / (aabb_hi - aabb_lo)
-    # the box test R q = R (qrow + A[:, 0] x): per-row base plus a per-voxel step
+    # the box test R q = R (qrow + A[:, la] x): per-line base plus a per-voxel step
     for d in range(3):
-        a[d] = A[d, 0]
-        bx[d] = box_R[d, 0] * A[0, 0] + box_R[d, 1] * A[1, 0] + box_R[d, 2] * A[2, 0]
-    ax = _row_axis(A, xs)
+        a[d] = A[d, la]
+        bx[d] = box_R[d, 0] * A[0, la] + box_R[d, 1] * A[1, la] + box_R[d, 2] * A[2, la]
+    ax = _row_axis(A, lc, la)
     if ax >= 0:
         # the largest step between neighbouring voxels: a line never outgrows its voxels
         step = 0.0
-        for i in range(1, nx):
-            step = max(step, xs[i] - xs[i - 1])
-        du = abs(A[ax, 0]) * step * inv_ext[ax]
+        for i in range(1, n_line):
+            step = max(step, lc[i] - lc[i - 1])
+        du = abs(A[ax, la]) * step * inv_ext[ax]
         row_form_levels(scales, interp, du, row_form)
     n_seg = 0
     fs = sigma.reshape(-1)
@@ -352,28 +362,36 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     fr3 = rgb.reshape(-1)
     nb = 0
     for row in range(r0, r1):
-        lz = row // ny
-        j = row % ny
-        base = row * nx
+        lz = row // n_oth
+        j = row % n_oth
+        base = lz * ny * nx + (j * nx if la == 0 else j)
         for d in range(3):
-            qrow[d] = A[d, 1] * ys[j] + A[d, 2] * zs[lz] + t[d]
+            qrow[d] = A[d, ob] * oc[j] + A[d, 2] * zs[lz] + t[d]
         for d in range(3):
             brow[d] = box_R[d, 0] * qrow[0] + box_R[d, 1] * qrow[1] + box_R[d, 2] * qrow[2]
-        for i in range(nx):
-            fs[base + i] = 0.0
-        for i in range(3 * base, 3 * (base + nx)):
-            fr3[i] = 0.0
+        if la == 0:
+            for i in range(nx):
+                fs[base + i] = 0.0
+            for i in range(3 * base, 3 * (base + nx)):
+                fr3[i] = 0.0
+        else:
+            for i in range(n_line):
+                e = base + i * stride
+                fs[e] = 0.0
+                fr3[3 * e] = 0.0
+                fr3[3 * e + 1] = 0.0
+                fr3[3 * e + 2] = 0.0
         # step 1: the row's voxels to evaluate
         if ax >= 0:
-            i0, i1 = row_span(xs, qrow, a, brow, bx, aabb_lo, aabb_hi, box_lo, box_hi)
-            k = row_voxels(xs, i0, i1, qrow, a, ax, occ, use_occ, max_cascade, q, vox)
+            i0, i1 = row_span(lc, qrow, a, brow, bx, aabb_lo, aabb_hi, box_lo, box_hi)
+            k = row_voxels(lc, i0, i1, qrow, a, ax, occ, use_occ, max_cascade, q, vox)
         else:
             k = 0
-            for i in range(nx):
-                x = xs[i]
+            for i in range(n_line):
+                x = lc[i]
                 inside = True
                 for d in range(3):
-                    q[d] = qrow[d] + A[d, 0] * x
+                    q[d] = qrow[d] + A[d, la] * x
                     if q[d] < aabb_lo[d] or q[d] > aabb_hi[d]:
                         inside = False
                     v = brow[d] + bx[d] * x
@@ -390,10 +408,10 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
             m = min(k - j0, BATCH - nb)
             for jj in range(m):
                 i = vox[j0 + jj]
-                x = xs[i]
+                x = lc[i]
                 for d in range(3):
-                    u[d, nb + jj] = np.float32((qrow[d] + A[d, 0] * x - aabb_lo[d]) * inv_ext[d])
-                where[nb + jj] = base + i
+                    u[d, nb + jj] = np.float32((qrow[d] + A[d, la] * x - aabb_lo[d]) * inv_ext[d])
+                where[nb + jj] = base + i * stride
             for d in range(3):
                 seg_ufix[n_seg, d] = np.float32((qrow[d] - aabb_lo[d]) * inv_ext[d])
             seg_c0[n_seg] = nb

@@ -7,7 +7,7 @@ import pytest
 from test_volumes_ingp import f16, make_config, param_shapes, ref_field, write_snapshot
 
 from dreamprint_gui.io.volumes import open_source
-from dreamprint_gui.io.volumes.ingp_kernels import _row_axis
+from dreamprint_gui.io.volumes.ingp_kernels import _row_axis, sample_rows
 from dreamprint_gui.io.volumes.ingp_occupancy import occupied, row_span, row_voxels
 
 
@@ -115,13 +115,42 @@ def test_row_path_matches_numpy_reference(tmp_path):
     np.testing.assert_allclose(rgb, rgb_v[..., ::-1, :], rtol=0, atol=3e-6)
 
 
+def test_column_path_matches_numpy_reference(tmp_path):
+    """Finer voxels along source y than x: lines run along y (instant-ngp x)."""
+    p, dmats, rmats, table, levels = _snapshot(tmp_path, 15)
+    src = open_source(p, view="down", threads=1)
+    xs = (np.linspace(0.05, 0.95, 7) - 0.5) / 0.8
+    ys = (np.linspace(0.0, 1.0, 190) - 0.4) / 0.8
+    zs = (np.linspace(0.2, 0.8, 4) - 0.3) / 0.8
+    assert src._line_axis(xs, ys) == 1 and src._line_axis(ys, xs) == 0
+    rgb, sig = src.evaluate(xs, ys, zs)
+    Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
+    q = np.stack([Y * 0.8 + 0.4, Z * 0.8 + 0.3, X * 0.8 + 0.5], -1).reshape(-1, 3)
+    keep = np.array([bool(np.all(v >= 0) and np.all(v <= 1) and
+                          occupied(v, src.model.occupancy, 0)) for v in q])
+    np.testing.assert_array_equal(sig.reshape(-1) > 0, keep)
+    want_s, want_c = ref_field(q[keep], dmats, rmats, table, levels, 2,
+                               [np.array([0, -1.0, 0])])
+    np.testing.assert_allclose(sig.reshape(-1)[keep], want_s, rtol=1e-4)
+    np.testing.assert_allclose(rgb.reshape(-1, 3)[keep], want_c, atol=5e-4)
+    # the same kernel along rows (la = 0): float32 rounding apart
+    sig0 = np.empty_like(sig)
+    rgb0 = np.empty_like(rgb)
+    sample_rows(0, zs.size * ys.size, 0, xs, ys, zs, *src._kernel_args(1.0), sig0, rgb0)
+    np.testing.assert_array_equal(sig0 > 0, sig > 0)
+    np.testing.assert_allclose(sig, sig0, rtol=3e-6, atol=0)
+    np.testing.assert_allclose(rgb, rgb0, rtol=0, atol=3e-6)
+
+
 @pytest.mark.parametrize("interpolation", ["Linear", "Smoothstep"])
-def test_row_path_identical_with_any_threads_and_slab(tmp_path, interpolation):
+@pytest.mark.parametrize("n_x, n_y", [(150, 23), (23, 150)])
+def test_row_path_identical_with_any_threads_and_slab(tmp_path, interpolation, n_x, n_y):
     p, *_ = _snapshot(tmp_path, 12, interpolation)
-    xs = np.linspace(-0.6, 0.6, 150)
-    ys = np.linspace(-0.5, 0.7, 23)
+    xs = np.linspace(-0.6, 0.6, n_x)
+    ys = np.linspace(-0.5, 0.7, n_y)
     zs = np.linspace(-0.4, 0.9, 13)
     one = open_source(p, threads=1)
+    assert one._line_axis(xs, ys) == (0 if n_x > n_y else 1)
     rgb1, sig1 = one.evaluate(xs, ys, zs)
     assert np.count_nonzero(sig1) > 1000
     for n in (2, 3):
@@ -129,9 +158,9 @@ def test_row_path_identical_with_any_threads_and_slab(tmp_path, interpolation):
         np.testing.assert_array_equal(sig_n, sig1)
         np.testing.assert_array_equal(rgb_n, rgb1)
     # one layer and a few rows alone: other batches, the same bits
-    rgb_l, sig_l = one.evaluate(xs, ys[5:9], zs[6:7])
-    np.testing.assert_array_equal(sig_l, sig1[6:7, 5:9])
-    np.testing.assert_array_equal(rgb_l, rgb1[6:7, 5:9])
+    rgb_l, sig_l = one.evaluate(xs, ys, zs[6:7])
+    np.testing.assert_array_equal(sig_l, sig1[6:7])
+    np.testing.assert_array_equal(rgb_l, rgb1[6:7])
 
 
 def test_colour_only_above_the_consumers_threshold(tmp_path):
