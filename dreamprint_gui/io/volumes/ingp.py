@@ -573,6 +573,9 @@ class IngpSource:
         args = self._kernel_args(sigma_factor, colour_cut)
         la = self._line_axis(xs, ys)
         rows = zs.size * (ys.size if la == 0 else xs.size)
+        if la == 1:             # one contiguous pass, not a column's voxels a row apart
+            sigma.fill(0.0)
+            rgb.fill(0.0)
         n = max(1, min(int(threads), rows))
         if n == 1:
             sample_rows(0, rows, la, xs, ys, zs, *args, sigma, rgb)

@@ -293,7 +293,8 @@ def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, b
                 rgb_act, sigma_factor, colour_cut, sigma, rgb):
     """Evaluate lines ``r0..r1-1`` of a slab into ``sigma`` (nz, ny, nx) and ``rgb``
     (nz, ny, nx, 3), lines along source x (``la`` 0: rows, line r = layer r // ny, y r % ny)
-    or along source y (``la`` 1: columns, line r = layer r // nx, x r % nx): steps 1-4 of the
+    or along source y (``la`` 1: columns, line r = layer r // nx, x r % nx; the outputs must
+    then be zero beforehand: a column's voxels lie a row apart): steps 1-4 of the
     module docstring; voxels left out by step 1 get density 0 and colour 0.  ``sigma_factor``
     turns instant-ngp's density (per its unit) into the caller's units; ``rgb_act``: 0
     sigmoid, 1 exp(clamp(., -10, 10));
@@ -369,18 +370,11 @@ def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, b
             qrow[d] = A[d, ob] * oc[j] + A[d, 2] * zs[lz] + t[d]
         for d in range(3):
             brow[d] = box_R[d, 0] * qrow[0] + box_R[d, 1] * qrow[1] + box_R[d, 2] * qrow[2]
-        if la == 0:
+        if la == 0:                         # (columns: the caller zeroes the outputs at once)
             for i in range(nx):
                 fs[base + i] = 0.0
             for i in range(3 * base, 3 * (base + nx)):
                 fr3[i] = 0.0
-        else:
-            for i in range(n_line):
-                e = base + i * stride
-                fs[e] = 0.0
-                fr3[3 * e] = 0.0
-                fr3[3 * e + 1] = 0.0
-                fr3[3 * e + 2] = 0.0
         # step 1: the row's voxels to evaluate
         if ax >= 0:
             i0, i1 = row_span(lc, qrow, a, brow, bx, aabb_lo, aabb_hi, box_lo, box_hi)
