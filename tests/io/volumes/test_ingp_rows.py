@@ -106,13 +106,14 @@ def test_row_path_matches_numpy_reference(tmp_path):
     np.testing.assert_allclose(sig.reshape(-1)[keep], want_s, rtol=1e-4)
     np.testing.assert_allclose(rgb.reshape(-1, 3)[keep], want_c, atol=2e-4)
     assert np.all(rgb.reshape(-1, 3)[~keep] == 0)
-    # against the voxel-by-voxel path (decreasing x takes it): the same float32 positions,
-    # the trilinear sums in another order only
-    assert _row_axis(src._A, xs[::-1]) == -1
-    rgb_v, sig_v = src.evaluate(xs[::-1], ys, zs)
-    np.testing.assert_array_equal(sig_v[..., ::-1] > 0, sig > 0)
-    np.testing.assert_allclose(sig, sig_v[..., ::-1], rtol=3e-6, atol=0)
-    np.testing.assert_allclose(rgb, rgb_v[..., ::-1, :], rtol=0, atol=3e-6)
+    # against the voxel-by-voxel path (decreasing x and y take it): the same float32
+    # positions, the trilinear sums in another order only
+    assert _row_axis(src._A, xs[::-1]) == -1 and _row_axis(src._A, ys[::-1], 1) == -1
+    rgb_v, sig_v = src.evaluate(xs[::-1], ys[::-1], zs)
+    sig_v, rgb_v = sig_v[:, ::-1, ::-1], rgb_v[:, ::-1, ::-1]
+    np.testing.assert_array_equal(sig_v > 0, sig > 0)
+    np.testing.assert_allclose(sig, sig_v, rtol=3e-6, atol=0)
+    np.testing.assert_allclose(rgb, rgb_v, rtol=0, atol=3e-6)
 
 
 def test_column_path_matches_numpy_reference(tmp_path):
