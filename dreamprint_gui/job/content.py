@@ -174,12 +174,21 @@ class SolidSource:
 
     def sample_slab(self, grid, z0: int, z1: int, *, density_scale: float = 1.0, out=None):
         if self.level is not None:
-            rgb, sigma = self.inner.sample_slab(grid, z0, z1, density_scale=1.0, out=out)
             cut = np.float32(self.level / grid.mm_per_unit)
+            scale = 1.0
         else:
-            rgb, sigma = self.inner.sample_slab(grid, z0, z1, density_scale=density_scale,
-                                                out=out)
             cut = np.float32(self.threshold)
+            scale = density_scale
+        # the job reads the colour of the occupied voxels (inner density >= cut): the inner
+        # source may skip colour below the cut, not below the job's own threshold
+        keep = getattr(out, "colour_threshold", None)
+        if keep is not None:
+            out.colour_threshold = np.float32(max(cut, 0.0))
+        try:
+            rgb, sigma = self.inner.sample_slab(grid, z0, z1, density_scale=scale, out=out)
+        finally:
+            if keep is not None:
+                out.colour_threshold = keep
         occupied = sigma >= cut
         if cut <= 0:
             occupied &= sigma > 0

@@ -94,7 +94,11 @@ def _slab_into(ctx: JobContext, grid: Any, z0: int, z1: int, labels: np.ndarray,
         return {"sample_lookup_halftone": time.perf_counter() - t0}
     # The kernel reads colour only where the density reaches a positive threshold: the
     # sampler may then leave the colour of empty rows stale instead of zeroing it.
-    _WORKSPACE.samples.colour_where_dense = bool(ctx.kernel_args()[0] > 0)
+    threshold = ctx.kernel_args()[0]
+    _WORKSPACE.samples.colour_where_dense = bool(threshold > 0)
+    # ... and not below the background threshold, unless a correction changes the density
+    # between sampling and labelling
+    _WORKSPACE.samples.colour_threshold = np.float32(threshold if corr is None else 0.0)
     rgb, dens = source.sample_slab(grid, z0, z1, density_scale=scale, out=_WORKSPACE.samples)
     if corr is not None:
         rgb = np.ascontiguousarray(rgb, np.float32)

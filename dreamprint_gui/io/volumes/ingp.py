@@ -528,7 +528,7 @@ class IngpSource:
         self._first_a = np.ascontiguousarray(first[:, :dw], np.float32)
         self._occ = model.occupancy if self.occupancy else np.zeros((1, 1, 1, 1), np.uint8)
 
-    def _kernel_args(self, sigma_factor: float):
+    def _kernel_args(self, sigma_factor: float, colour_cut: float = 0.0):
         m = self.model
         g = m.grid
         return (self._A, self._t, np.asarray(m.aabb[0], float), np.asarray(m.aabb[1], float),
@@ -541,7 +541,7 @@ class IngpSource:
                 ACT[_lower(m.density.output_activation)],
                 m.colour.mats, m.colour.shapes, ACT[_lower(m.colour.activation)],
                 ACT[_lower(m.colour.output_activation)], self._first_a, self._dir_consts,
-                1 if m.is_hdr else 0, float(sigma_factor))
+                1 if m.is_hdr else 0, float(sigma_factor), np.float32(colour_cut))
 
     def evaluate(self, xs, ys, zs, sigma_factor: float = 1.0, threads: int = 1):
         """(rgb (nz, ny, nx, 3) as the network gives it, density (nz, ny, nx) in instant-ngp's
@@ -552,18 +552,39 @@ class IngpSource:
         self._run(xs, ys, zs, sigma_factor, sigma, rgb, threads)
         return rgb, sigma
 
-    def _run(self, xs, ys, zs, sigma_factor, sigma, rgb, threads):
-        args = self._kernel_args(sigma_factor)
-        rows = zs.size * ys.size
+    def _line_axis(self, xs, ys) -> int:
+        """The source axis (0 x, 1 y) the kernel runs its lines along: of those along which
+        one instant-ngp coordinate varies over increasing voxel centres, the one with the
+        finer step in the encoding's coordinate (more coarse levels a line at a time, longer
+        lines); x on a tie.  Depends on the grid alone: every thread makes the same choice."""
+        ext = np.asarray(self.model.aabb[1], float) - np.asarray(self.model.aabb[0], float)
+        best, best_du = 0, math.inf
+        for la, c in ((0, xs), (1, ys)):
+            col = self._A[:, la]
+            nz = np.flatnonzero(col)
+            if nz.size != 1 or c.size < 2 or not np.all(np.diff(c) > 0):
+                continue
+            du = abs(col[nz[0]]) * float(np.max(np.diff(c))) / ext[nz[0]]
+            if du < best_du:
+                best, best_du = la, du
+        return best
+
+    def _run(self, xs, ys, zs, sigma_factor, sigma, rgb, threads, colour_cut=0.0):
+        args = self._kernel_args(sigma_factor, colour_cut)
+        la = self._line_axis(xs, ys)
+        rows = zs.size * (ys.size if la == 0 else xs.size)
+        if la == 1:             # one contiguous pass, not a column's voxels a row apart
+            sigma.fill(0.0)
+            rgb.fill(0.0)
         n = max(1, min(int(threads), rows))
         if n == 1:
-            sample_rows(0, rows, xs, ys, zs, *args, sigma, rgb)
+            sample_rows(0, rows, la, xs, ys, zs, *args, sigma, rgb)
             return
         # interleaved chunks of rows: occupied regions spread over the threads
         chunk = max(1, min(64, rows // (8 * n)))
         starts = list(range(0, rows, chunk))
         with ThreadPoolExecutor(n) as ex:
-            futs = [ex.submit(sample_rows, s, min(rows, s + chunk), xs, ys, zs, *args, sigma,
+            futs = [ex.submit(sample_rows, s, min(rows, s + chunk), la, xs, ys, zs, *args, sigma,
                               rgb) for s in starts]
             for f in futs:
                 f.result()
@@ -591,7 +612,10 @@ class IngpSource:
             sigma = np.empty(shape, np.float32)
             rgb = np.empty(shape + (3,), np.float32)
         factor = abs(self.model.scale) * density_scale / grid.mm_per_unit
-        self._run(xs, ys, zs, factor, sigma, rgb, self._threads())
+        # a consumer that reads colour only where the density reaches its threshold: the
+        # colour network runs only there (SlabBuffers.colour_threshold)
+        cut = out.colour_threshold if out is not None and out.colour_where_dense else 0.0
+        self._run(xs, ys, zs, factor, sigma, rgb, self._threads(), cut)
         if self.colour_encoding == "linear":
             rgb = linear_to_srgb(rgb)
         else:

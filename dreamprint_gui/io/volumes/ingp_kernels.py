@@ -25,6 +25,14 @@ activation codes :data:`ACT`.  The layout it evaluates is the one
    ``rgb = sigmoid(out_0..2)`` (LDR) or ``exp(clamp(out, -10, 10))`` (HDR), averaged over the
    chosen directions.
 All in float32 (instant-ngp runs the networks in float16: expect ~1e-3 relative differences).
+
+Where the time goes (issue 25).  Along a printer row only one instant-ngp coordinate varies
+(every placement the reader makes), so step 1 takes the row's voxels inside the boxes as one
+interval and the occupancy grid a block of voxels at a time (:mod:`.ingp_occupancy`; the
+same voxels as the per-voxel test), and step 2 blends the coarse levels a row at a time
+(:mod:`.ingp_encode`).  The networks (steps 3-4, ~8400 multiply-adds per voxel) run near the
+float32 FMA peak of an AVX2 core (~37 of ~42 per ns); the colour network runs only where a
+print job reads colour (``colour_cut``).
 """
 
 from __future__ import annotations
@@ -34,14 +42,17 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["ACT", "sample_rows", "encode_batch", "mlp_forward"]
+from dreamprint_gui.io.volumes.ingp_encode import encode_batch, row_form_levels
+from dreamprint_gui.io.volumes.ingp_occupancy import occupied, row_span, row_voxels
+
+_occupied = occupied            # the per-point test, as tests and older callers name it
+
+__all__ = ["ACT", "sample_rows", "mlp_forward"]
 
 # hidden/output activation codes (tiny-cuda-nn names)
 ACT = {"none": 0, "relu": 1, "leakyrelu": 2, "exponential": 3, "sigmoid": 4, "tanh": 5}
 
 BATCH = 256
-HASH_P1 = np.uint32(2654435761)
-HASH_P2 = np.uint32(805459861)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -194,139 +205,32 @@ def mlp_forward(mats, shapes, act_hidden, act_out, n_out_used, x, buf_a, buf_b, 
 
 
 @njit(cache=True, nogil=True, fastmath=True)
-def encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc, scratch):
-    """Multiresolution hash encoding of relative positions ``u`` (3, nb) into ``enc``
-    (levels * n_feat (+ zero padding), nb): step 2 of the module docstring.
-    ``interp``: 0 linear, 1 smoothstep, 2 nearest.  Each level runs as simple loops over the
-    batch (compiled to vector instructions): corner cells and weights; the per-axis index terms
-    ``x``, ``y P1``, ``z P2`` (hashed) or ``x``, ``y r``, ``z r^2`` (dense), uint32, for both
-    corners along each axis; then per corner the combined index reduced to the level's table
-    and the weighted gather.  ``scratch``: (>= 16, nb) float32 work space."""
-    n_levels = scales.shape[0]
-    w1 = scratch[0:3]                       # weight of the upper corner per axis
-    w0 = scratch[3:6]                       # weight of the lower corner
-    term = scratch[6:12].view(np.uint32)    # [axis * 2 + corner] index terms
-    idx = scratch[12].view(np.uint32)
-    wt = scratch[13]
-    one = np.uint32(1)
-    for lvl in range(n_levels):
-        s = scales[lvl]
-        r = np.uint32(res[lvl])
-        size_i = offsets[lvl + 1] - offsets[lvl]
-        size = np.uint32(size_i)
-        pow2 = (size_i & (size_i - 1)) == 0
-        mask = np.uint32(size_i - 1)
-        tab = table[offsets[lvl]:offsets[lvl + 1]]
-        hsh = hashed[lvl] != 0
-        row = lvl * n_feat
-        if hsh:
-            mult = (np.uint32(1), HASH_P1, HASH_P2)
-        else:
-            mult = (np.uint32(1), r, np.uint32(r * r))
-        for d in range(3):
-            ud = u[d]
-            a1 = w1[d]
-            a0 = w0[d]
-            t0 = term[2 * d]
-            t1 = term[2 * d + 1]
-            m = mult[d]
-            for b in range(nb):
-                p = s * ud[b] + np.float32(0.5)
-                fl = np.floor(p)
-                v = p - fl
-                if interp == 1:
-                    v = v * v * (np.float32(3.0) - np.float32(2.0) * v)
-                a1[b] = v
-                a0[b] = np.float32(1.0) - v
-                gi = np.uint32(np.int32(fl))
-                t0[b] = np.uint32(gi * m)
-                t1[b] = np.uint32((gi + one) * m)
-        for f in range(n_feat):
-            ef = enc[row + f]
-            for b in range(nb):
-                ef[b] = 0.0
-        n_corners = 1 if interp == 2 else 8
-        for c in range(n_corners):
-            tx = term[c & 1]
-            ty = term[2 + ((c >> 1) & 1)]
-            tz = term[4 + ((c >> 2) & 1)]
-            if hsh and pow2:
-                for b in range(nb):
-                    idx[b] = (tx[b] ^ ty[b] ^ tz[b]) & mask
-            elif hsh:
-                for b in range(nb):
-                    idx[b] = np.uint32((tx[b] ^ ty[b] ^ tz[b]) % size)
-            else:
-                for b in range(nb):
-                    h = np.uint32(tx[b] + ty[b] + tz[b])
-                    idx[b] = h if h < size else np.uint32(h % size)
-            if interp == 2:
-                for b in range(nb):
-                    wt[b] = 1.0
-            else:
-                wx = w1[0] if c & 1 else w0[0]
-                wy = w1[1] if (c >> 1) & 1 else w0[1]
-                wz = w1[2] if (c >> 2) & 1 else w0[2]
-                for b in range(nb):
-                    wt[b] = wx[b] * wy[b] * wz[b]
-            if n_feat == 2:
-                e0 = enc[row]
-                e1 = enc[row + 1]
-                for b in range(nb):
-                    k = idx[b]
-                    e0[b] += wt[b] * tab[k, 0]
-                    e1[b] += wt[b] * tab[k, 1]
-            else:
-                for f in range(n_feat):
-                    ef = enc[row + f]
-                    for b in range(nb):
-                        ef[b] += wt[b] * tab[idx[b], f]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _occupied(q, occ, max_cascade):
-    """Step 1's occupancy test (instant-ngp ``mip_from_pos`` and ``cascaded_grid_idx_at``)."""
-    m = 0.0
-    for d in range(3):
-        a = abs(q[d] - 0.5)
-        if a > m:
-            m = a
-    # mip = clamp(e + 1, 0, max_cascade) with m = f 2^e, f in [0.5, 1) (frexp; e = 0 for m = 0)
-    mip = 0
-    if m == 0.0:
-        mip = min(1, max_cascade)
-    else:
-        lim = 0.5
-        while mip < max_cascade and m >= lim:
-            mip += 1
-            lim *= 2.0
-    sc = 1.0 / (1 << mip)
-    n = occ.shape[1]
-    ix = int(((q[0] - 0.5) * sc + 0.5) * n)
-    iy = int(((q[1] - 0.5) * sc + 0.5) * n)
-    iz = int(((q[2] - 0.5) * sc + 0.5) * n)
-    if ix < 0 or iy < 0 or iz < 0 or ix >= n or iy >= n or iz >= n:
-        return False
-    return occ[mip, iz, iy, ix] != 0
-
-
-@njit(cache=True, nogil=True, fastmath=True)
-def _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
-                table, n_feat, offsets, scales, res, hashed, interp,
+def _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                 d_mats, d_shapes, d_act, d_out_act,
                 r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                rgb_act, sigma_factor, fs, fr):
-    """Steps 2-4 of the module docstring for the ``nb`` positions in ``u``; results written to
-    the flat outputs at ``where``."""
+                rgb_act, sigma_factor, colour_cut, fs, fr):
+    """Steps 3-4 of the module docstring for the ``nb`` encoded voxels in ``enc`` (columns);
+    results written to the flat outputs at ``where``.  The colour network runs only for the
+    voxels whose density (float32, the caller's units) reaches ``colour_cut`` when it is
+    positive (the others keep colour 0); ``sel`` (batch) int64 work space."""
     n_d_out = d_shapes[d_shapes.shape[0] - 1, 0]
     r_w = r_shapes[0, 0]
     n_r = r_shapes.shape[0]
     n_dirs = dir_consts.shape[0]
-    encode_batch(u, nb, table, n_feat, offsets, scales, res, hashed, interp, enc, scratch)
     out = mlp_forward(d_mats, d_shapes, d_act, d_out_act, n_d_out, enc, buf_a, buf_b, nb)
+    n_c = 0
+    for b in range(nb):
+        sg = np.float32(math.exp(out[0, b]) * sigma_factor)
+        fs[where[b]] = sg
+        if colour_cut <= 0.0 or sg >= colour_cut:
+            sel[n_c] = b
+            n_c += 1
+    if n_c == 0:
+        return
     for o in range(n_d_out):
-        for b in range(nb):
-            dens[o, b] = out[o, b]
+        for j in range(n_c):
+            dens[o, j] = out[o, sel[j]]
+    nb = n_c
     _matmul(r_first_a, dens, pre, r_w, n_d_out, nb)
     for c in range(3):
         for b in range(nb):
@@ -357,26 +261,61 @@ def _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
                 acc[c, b] += v
     inv_dirs = np.float32(1.0 / n_dirs)
     for b in range(nb):
-        flat = where[b]
-        fs[flat] = np.float32(math.exp(dens[0, b]) * sigma_factor)
+        flat = where[sel[b]]
         fr[flat, 0] = acc[0, b] * inv_dirs
         fr[flat, 1] = acc[1, b] * inv_dirs
         fr[flat, 2] = acc[2, b] * inv_dirs
 
 
 @njit(cache=True, nogil=True)
-def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_hi,
+def _row_axis(A, xs, la=0):
+    """The one instant-ngp axis that varies along a printer line along source axis ``la``
+    (``A[:, la]`` has a single non-zero), if the line's voxel centres ``xs`` also increase;
+    else -1 (the general path)."""
+    ax = -1
+    for d in range(3):
+        if A[d, la] != 0.0:
+            if ax >= 0:
+                return -1
+            ax = d
+    for i in range(1, xs.shape[0]):
+        if not xs[i] > xs[i - 1]:
+            return -1
+    return ax
+
+
+@njit(cache=True, nogil=True)
+def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_hi,
                 occ, use_occ, max_cascade,
                 table, n_feat, offsets, scales, res, hashed, interp, enc_width,
                 d_mats, d_shapes, d_act, d_out_act,
                 r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                rgb_act, sigma_factor, sigma, rgb):
-    """Evaluate rows ``r0..r1-1`` of a slab (row r = layer r // ny, y r % ny) into ``sigma``
-    (nz, ny, nx) and ``rgb`` (nz, ny, nx, 3): steps 1-4 of the module docstring; voxels left
-    out by step 1 get density 0 and colour 0.  ``sigma_factor`` turns instant-ngp's density
-    (per its unit) into the caller's units; ``rgb_act``: 0 sigmoid, 1 exp(clamp(., -10, 10))."""
+                rgb_act, sigma_factor, colour_cut, sigma, rgb):
+    """Evaluate lines ``r0..r1-1`` of a slab into ``sigma`` (nz, ny, nx) and ``rgb``
+    (nz, ny, nx, 3), lines along source x (``la`` 0: rows, line r = layer r // ny, y r % ny)
+    or along source y (``la`` 1: columns, line r = layer r // nx, x r % nx; the outputs must
+    then be zero beforehand: a column's voxels lie a row apart): steps 1-4 of the
+    module docstring; voxels left out by step 1 get density 0 and colour 0.  ``sigma_factor``
+    turns instant-ngp's density (per its unit) into the caller's units; ``rgb_act``: 0
+    sigmoid, 1 exp(clamp(., -10, 10));
+    ``colour_cut`` (float32, > 0): colour only where the density reaches it (a print job's
+    background threshold: it reads no colour below), the rest colour 0.
+
+    Rows along which one instant-ngp axis varies (every placement the reader makes) take the
+    row path: the voxels inside the boxes as one interval and the occupancy grid tested a block
+    of voxels at a time (:mod:`.ingp_occupancy`), the coarse levels of the encoding a row at a
+    time (:mod:`.ingp_encode`); other rows are tested and encoded voxel by voxel.  Either way
+    a row's voxels fill the columns of batches of :data:`BATCH` for the networks."""
     ny = ys.shape[0]
     nx = xs.shape[0]
+    # the line's coordinates, the layer's other coordinate, and where a line's voxels lie
+    lc = xs if la == 0 else ys
+    oc = ys if la == 0 else xs
+    ob = 1 if la == 0 else 0
+    n_line = lc.shape[0]
+    n_oth = oc.shape[0]
+    stride = 1 if la == 0 else nx
+    n_levels = scales.shape[0]
     d_w = d_shapes[0, 0]
     n_d_out = d_shapes[d_shapes.shape[0] - 1, 0]
     r_w = r_shapes[0, 0]
@@ -389,61 +328,105 @@ def sample_rows(r0, r1, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, box_h
     pre = np.empty((r_w, BATCH), np.float32)
     h1 = np.empty((r_w, BATCH), np.float32)
     acc = np.empty((3, BATCH), np.float32)
+    sel = np.empty(BATCH, np.int64)
     u = np.empty((3, BATCH), np.float32)
     where = np.empty(BATCH, np.int64)
+    line = np.empty((n_feat, n_line + 4), np.float32)
+    gcol = np.empty(BATCH, np.int32)
+    wcol = np.empty(BATCH, np.float32)
+    vox = np.empty(n_line, np.int64)
+    row_form = np.zeros(n_levels, np.bool_)
+    seg_c0 = np.empty(BATCH, np.int64)
+    seg_c1 = np.empty(BATCH, np.int64)
+    seg_ufix = np.empty((BATCH, 3), np.float32)
     q = np.empty(3, np.float64)
     qrow = np.empty(3, np.float64)
     brow = np.empty(3, np.float64)
     bx = np.empty(3, np.float64)
+    a = np.empty(3, np.float64)
     inv_ext = 1.0 / (aabb_hi - aabb_lo)
-    # the box test R q = R (qrow + A[:, 0] x): per-row base plus a per-voxel step
+    # the box test R q = R (qrow + A[:, la] x): per-line base plus a per-voxel step
     for d in range(3):
-        bx[d] = box_R[d, 0] * A[0, 0] + box_R[d, 1] * A[1, 0] + box_R[d, 2] * A[2, 0]
+        a[d] = A[d, la]
+        bx[d] = box_R[d, 0] * A[0, la] + box_R[d, 1] * A[1, la] + box_R[d, 2] * A[2, la]
+    ax = _row_axis(A, lc, la)
+    if ax >= 0:
+        # the largest step between neighbouring voxels: a line never outgrows its voxels
+        step = 0.0
+        for i in range(1, n_line):
+            step = max(step, lc[i] - lc[i - 1])
+        du = abs(A[ax, la]) * step * inv_ext[ax]
+        row_form_levels(scales, interp, du, row_form)
+    n_seg = 0
     fs = sigma.reshape(-1)
     fr = rgb.reshape(-1, 3)
     fr3 = rgb.reshape(-1)
     nb = 0
     for row in range(r0, r1):
-        lz = row // ny
-        j = row % ny
-        base = row * nx
+        lz = row // n_oth
+        j = row % n_oth
+        base = lz * ny * nx + (j * nx if la == 0 else j)
         for d in range(3):
-            qrow[d] = A[d, 1] * ys[j] + A[d, 2] * zs[lz] + t[d]
+            qrow[d] = A[d, ob] * oc[j] + A[d, 2] * zs[lz] + t[d]
         for d in range(3):
             brow[d] = box_R[d, 0] * qrow[0] + box_R[d, 1] * qrow[1] + box_R[d, 2] * qrow[2]
-        for i in range(nx):
-            fs[base + i] = 0.0
-        for i in range(3 * base, 3 * (base + nx)):
-            fr3[i] = 0.0
-        for i in range(nx):
-            flat = base + i
-            x = xs[i]
-            inside = True
+        if la == 0:                         # (columns: the caller zeroes the outputs at once)
+            for i in range(nx):
+                fs[base + i] = 0.0
+            for i in range(3 * base, 3 * (base + nx)):
+                fr3[i] = 0.0
+        # step 1: the row's voxels to evaluate
+        if ax >= 0:
+            i0, i1 = row_span(lc, qrow, a, brow, bx, aabb_lo, aabb_hi, box_lo, box_hi)
+            k = row_voxels(lc, i0, i1, qrow, a, ax, occ, use_occ, max_cascade, q, vox)
+        else:
+            k = 0
+            for i in range(n_line):
+                x = lc[i]
+                inside = True
+                for d in range(3):
+                    q[d] = qrow[d] + A[d, la] * x
+                    if q[d] < aabb_lo[d] or q[d] > aabb_hi[d]:
+                        inside = False
+                    v = brow[d] + bx[d] * x
+                    if v < box_lo[d] or v > box_hi[d]:
+                        inside = False
+                if inside and (not use_occ or occupied(q, occ, max_cascade)):
+                    vox[k] = i
+                    k += 1
+        if k == 0:
+            continue
+        # the row's voxels into batch columns, a piece (segment) at a time
+        j0 = 0
+        while j0 < k:
+            m = min(k - j0, BATCH - nb)
+            for jj in range(m):
+                i = vox[j0 + jj]
+                x = lc[i]
+                for d in range(3):
+                    u[d, nb + jj] = np.float32((qrow[d] + A[d, la] * x - aabb_lo[d]) * inv_ext[d])
+                where[nb + jj] = base + i * stride
             for d in range(3):
-                q[d] = qrow[d] + A[d, 0] * x
-                if q[d] < aabb_lo[d] or q[d] > aabb_hi[d]:
-                    inside = False
-                v = brow[d] + bx[d] * x
-                if v < box_lo[d] or v > box_hi[d]:
-                    inside = False
-            if not inside:
-                continue
-            if use_occ and not _occupied(q, occ, max_cascade):
-                continue
-            for d in range(3):
-                u[d, nb] = np.float32((q[d] - aabb_lo[d]) * inv_ext[d])
-            where[nb] = flat
-            nb += 1
+                seg_ufix[n_seg, d] = np.float32((qrow[d] - aabb_lo[d]) * inv_ext[d])
+            seg_c0[n_seg] = nb
+            seg_c1[n_seg] = nb + m
+            n_seg += 1
+            nb += m
+            j0 += m
             if nb == BATCH:
-                _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
-                            table, n_feat, offsets, scales, res, hashed, interp,
+                encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table,
+                             n_feat, offsets, scales, res, hashed, interp, enc, scratch, line,
+                             gcol, wcol)
+                _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                             d_mats, d_shapes, d_act, d_out_act,
                             r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                            rgb_act, sigma_factor, fs, fr)
+                            rgb_act, sigma_factor, colour_cut, fs, fr)
                 nb = 0
+                n_seg = 0
     if nb:
-        _eval_batch(nb, u, where, enc, scratch, buf_a, buf_b, dens, pre, h1, acc,
-                    table, n_feat, offsets, scales, res, hashed, interp,
+        encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table, n_feat,
+                     offsets, scales, res, hashed, interp, enc, scratch, line, gcol, wcol)
+        _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                     d_mats, d_shapes, d_act, d_out_act,
                     r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
-                    rgb_act, sigma_factor, fs, fr)
+                    rgb_act, sigma_factor, colour_cut, fs, fr)
