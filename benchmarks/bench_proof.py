@@ -7,7 +7,8 @@ and p95 per-pixel dE2000 and S-CIELAB dE2000 (at the proof's viewing distance) b
 over the object, and the wall and CPU seconds of one render of the view. Targets: floor <= 0.5
 mean S-CIELAB dE2000, <= 60 s per view on CPU. ``--spp 16,64 --thick-spp 0,48 --samplers
 independent,multijitter`` sweeps (the measurement behind the defaults); ``--thick-spp``: more
-samples on the tiles where the print is optically thick (``runner.THICK_T``).
+samples on the tiles where the print is optically thick (``runner.THICK_T``);
+``--faint-pass both``: the faint last pass at a quarter of the spp and at all of it.
 
 ``--block-error``: a small job (demo, 3 mm) whose print is rendered from the full-resolution
 labels (one cell per printer voxel) and from blocks of the default 40 mm job's size (4 x 11 x 22
@@ -35,12 +36,13 @@ def _medium(lab, block, layers_per_block):
 
 
 def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None,
-               thick_spp=0):
+               thick_spp=0, faint=True):
     """The print of one view rendered at each of ``seeds``: (XYZ per seed, coverage, wall s,
     render info with ``cpu_s``), the thick tiles rendered ``thick_spp`` more."""
     from dreamprint_gui.proof.medium import medium_coefficients
     from dreamprint_gui.proof.print_render import (
         DEFAULT_SAMPLER,
+        pass_spp,
         render_print_seeds,
         thick_tiles,
     )
@@ -53,7 +55,8 @@ def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
     extra = [(0, r) for r in thick_tiles(T @ y_w, THICK_T)]
     t0, c0 = time.perf_counter(), time.process_time()
-    imgs, info = render_print_seeds(st, al, lo, hi, [view], res, spp, tuple(seeds),
+    per_pass = pass_spp(bands.xyz_weights, spp) if faint else spp
+    imgs, info = render_print_seeds(st, al, lo, hi, [view], res, per_pass, tuple(seeds),
                                     sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth,
                                     extra=extra, extra_spp=thick_spp)
     t = time.perf_counter() - t0
@@ -86,6 +89,7 @@ def speed(args) -> None:
     samplers = (args.samplers or DEFAULT_SAMPLER).split(",")
     rrs = [None] if args.rr_depths is None else [int(x) for x in args.rr_depths.split(",")]
     thicks = [int(x) for x in (args.thick_spp or str(DEFAULT_THICK_SPP)).split(",")]
+    faints = [False, True] if args.faint_pass == "both" else [args.faint_pass == "quarter"]
     s = ProofSettings(source="demo", height_mm=args.height_mm, resolution=args.resolution)
     print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {spps}, "
           f"samplers {samplers}, {os.cpu_count()} cores, load average "
@@ -110,17 +114,17 @@ def speed(args) -> None:
     spd = samples_per_degree(2 * view.half_mm / args.resolution, s.viewing_distance_mm)
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
     print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'thick':>5s} {'s/view':>7s} {'CPU s':>6s} "
-          f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}")
+          f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}  spp per pass")
     for sampler, rr in [(a, b) for a in samplers for b in rrs]:
         _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr)  # JIT warm-up
-        for spp, thick in [(a, b) for a in spps for b in thicks]:
+        for spp, thick, faint in [(a, b, c) for a in spps for b in thicks for c in faints]:
             (a, b), alpha, t, info = _print_xyz(med, bands, view, args.resolution, spp, (1, 2),
-                                                sampler, rr, thick)
+                                                sampler, rr, thick, faint)
             f = noise_floor(a, b, alpha, bands.observer, spd)
             print(f"{sampler:12s} {info['rr_depth']:4d} {spp:5d} {thick:5d} {t / 2:7.1f} "
                   f"{info['cpu_s'] / 2:6.1f} {f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
-                  f"{f['p95_scielab_de2000']:6.2f}", flush=True)
+                  f"{f['p95_scielab_de2000']:6.2f}  {info['pass_spp']}", flush=True)
     share = info["extra_pixels"] / args.resolution ** 2
     print(f"({info['variant']}, {info['passes']} Mitsuba passes per render; thick tiles "
           f"(direct transmittance < {THICK_T}) {share:.0%} of the frame; s/view and CPU s are "
@@ -174,6 +178,9 @@ def main() -> None:
                     "or a comma-separated list (default: the proof's)")
     ap.add_argument("--rr-depths", default=None, help="Mitsuba's rr_depth (Russian roulette "
                     "from this bounce on), comma-separated (default: the proof's)")
+    ap.add_argument("--faint-pass", choices=("quarter", "full", "both"), default="quarter",
+                    help="the faint 650-730 nm pass at a quarter of the spp (the proof's, "
+                    "print_render.pass_spp), at the full spp, or both rows")
     ap.add_argument("--samplers", default=None, help="Mitsuba samplers, comma-separated "
                     "(default: the proof's)")
     ap.add_argument("--block-error", action="store_true")

@@ -47,6 +47,7 @@ from dreamprint_gui.proof.optics import resolve_optics
 from dreamprint_gui.proof.print_render import (
     SAMPLERS,
     hides_direct,
+    pass_spp,
     render_print_seeds,
     thick_tiles,
 )
@@ -243,7 +244,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     def work_print() -> None:
         try:
             box["m"] = render_print_seeds(
-                sigma_t, albedo, lo, hi, views, s.resolution, s.spp, seeds, s.max_depth,
+                sigma_t, albedo, lo, hi, views, s.resolution,
+                pass_spp(bands.xyz_weights, s.spp), seeds, s.max_depth,
                 s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
                 cancelled=is_cancelled, sampler=s.sampler, optics=optics, extra=extra,
                 extra_spp=s.thick_spp)

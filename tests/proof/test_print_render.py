@@ -277,3 +277,33 @@ def test_hg_phase_needs_its_own_conversion(tmp_path, monkeypatch):
         labs[name] = b.observer.XYZ_to_Lab(xyz[c, c].reshape(-1, 3).mean(axis=0))
     assert labs["raw"][0] < labs["iso"][0] - 2
     assert labs["raw"][0] < labs["hg"][0] - 2 and delta_E2000(labs["iso"], labs["hg"]) < 15
+
+
+def test_the_faint_pass_gets_a_quarter_of_the_samples():
+    """12 bands: the 650-730 nm pass weighs about a tenth of the others in colour (its bands'
+    XYZ weights under D65), so a quarter of the spp; passes of like weight keep all of it."""
+    b = spectral_bands(default_profile(), 12)
+    assert pr.pass_spp(b.xyz_weights, 32) == [32, 32, 32, 8]
+    assert pr.pass_spp(b.xyz_weights, 2) == [2, 2, 2, 1]
+    assert pr.pass_spp(np.ones((6, 3)), 16) == [16, 16]
+
+
+def test_samples_per_pass_set_each_pass_noise():
+    """Two passes rendered at 16 and 4 spp: reported as such, repeatable bit for bit; the
+    4-spp pass differs between seeds about twice as much as at 16, the 16-spp one as at 16."""
+    p = default_profile()
+    b = spectral_bands(p, 6)
+    frac = np.zeros((8, 8, 8, 7), np.float32)
+    frac[..., INKS.index("W")] = 0.3
+    frac[..., 6] = 0.7
+    st, al = medium_coefficients(frac, b.K, b.S)
+    lo = -np.full(3, 2.0)
+    views = orbit_views((4.0,) * 3, 1)
+    (x, y), info = pr.render_print_seeds(st, al, lo, -lo, views, RES, [16, 4], (1, 2))
+    (x2, _), _ = pr.render_print_seeds(st, al, lo, -lo, views, RES, [16, 4], (1, 2))
+    (u, v), _ = pr.render_print_seeds(st, al, lo, -lo, views, RES, 16, (1, 2))
+    assert info["pass_spp"] == [16, 4] and info["spp"] == 16
+    np.testing.assert_array_equal(x, x2)
+    np.testing.assert_array_equal(x[..., :3], u[..., :3])    # the same seeds, the same spp
+    ratio = (x - y)[..., 3:].std() / (u - v)[..., 3:].std()
+    assert 1.5 < ratio < 2.7
