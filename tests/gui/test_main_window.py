@@ -147,11 +147,13 @@ def test_classify_path():
 def _texts_showing(fragment: str) -> list[str]:
     """Every place on screen that shows ``fragment``: visible labels (message boxes included),
     status bars, and window titles."""
-    from PySide6.QtWidgets import QApplication, QLabel, QMainWindow
+    from PySide6.QtWidgets import QApplication, QLabel, QMainWindow, QWidget
 
     found = []
     for w in QApplication.allWidgets():
-        if not w.isVisible():
+        # PySide can hand back a wrapper of another type for a widget being deleted (seen once:
+        # a QOffscreenSurface, with no isVisible): not on screen
+        if not isinstance(w, QWidget) or not w.isVisible():
             continue
         if isinstance(w, QLabel) and fragment in w.text():
             found.append(f"label in {type(w.window()).__name__}")
