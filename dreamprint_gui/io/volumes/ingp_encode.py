@@ -36,6 +36,16 @@ def _mults(hsh, r):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _level_table(lvl, table, n_feat, offsets, hashed):
+    """Level ``lvl``'s table slice and its indexing: (slice, size, size is a power of two,
+    size - 1, hashed, the level's first row of ``enc``)."""
+    size_i = offsets[lvl + 1] - offsets[lvl]
+    return (table[offsets[lvl]:offsets[lvl + 1]], np.uint32(size_i),
+            (size_i & (size_i - 1)) == 0, np.uint32(size_i - 1), hashed[lvl] != 0,
+            lvl * n_feat)
+
+
+@njit(cache=True, nogil=True, inline="always")
 def corner_index(tx, ty, tz, hsh, pow2, mask, size):
     """A corner's table entry from its per-axis index terms (module docstring of
     :mod:`.ingp_kernels`, step 2): hashed ``x ^ y P1 ^ z P2``, dense ``x + y r + z r^2``,
@@ -56,24 +66,16 @@ def _weight(v, interp):
 
 
 @njit(cache=True, nogil=True, fastmath=True)
-def level_direct(u, c0, c1, lvl, table, n_feat, offsets, scales, res, hashed, interp, enc,
-                 scratch):
+def level_direct(u, c0, c1, lvl, table, n_feat, offsets, scales, res, hashed, interp, enc):
     """Level ``lvl`` of the encoding of positions ``u[:, c0:c1]`` (3, batch) into
     ``enc[lvl F .. lvl F + F - 1, c0:c1]``, voxel by voxel: per axis the lower lattice index
     and weight, the index terms ``x``, ``y P1``, ``z P2`` (hashed) or ``x``, ``y r``,
     ``z r^2`` (dense), then the 8 corners (x the lowest bit) blended.  ``interp``: 0 linear,
     1 smoothstep, 2 nearest (the lower corner alone).  A plain loop: the per-corner vector
     loops it replaces did not vectorise with a batch length known only at run time (~35 ns
-    per level and voxel against ~19 here, ~10 for the row form's voxel-by-voxel levels).
-    ``scratch`` is unused (kept for the callers' signature)."""
+    per level and voxel against ~19 here, ~10 for the row form's voxel-by-voxel levels)."""
     s = scales[lvl]
-    size_i = offsets[lvl + 1] - offsets[lvl]
-    size = np.uint32(size_i)
-    pow2 = (size_i & (size_i - 1)) == 0
-    mask = np.uint32(size_i - 1)
-    tab = table[offsets[lvl]:offsets[lvl + 1]]
-    hsh = hashed[lvl] != 0
-    row = lvl * n_feat
+    tab, size, pow2, mask, hsh, row = _level_table(lvl, table, n_feat, offsets, hashed)
     mx, my, mz = _mults(hsh, res[lvl])
     one = np.uint32(1)
     f1 = np.float32(1.0)
@@ -128,7 +130,7 @@ def row_form_levels(scales, interp, du, out):
 
 @njit(cache=True, nogil=True)
 def encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table, n_feat, offsets,
-                 scales, res, hashed, interp, enc, scratch, line, gcol, wcol):
+                 scales, res, hashed, interp, enc, line, gcol, wcol):
     """All levels of the encoding of the ``nb`` columns of a batch into ``enc``: levels with
     ``row_form`` a row segment at a time (:func:`level_row`; segment ``k`` is columns
     ``seg_c0[k] .. seg_c1[k] - 1`` of one row, fixed coordinates ``seg_ufix[k]``), the others
@@ -140,7 +142,7 @@ def encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table, n_
                           n_feat, offsets, scales, res, hashed, interp, enc, line, gcol, wcol)
         else:
             level_direct(u, 0, nb, lvl, table, n_feat, offsets, scales, res, hashed, interp,
-                         enc, scratch)
+                         enc)
 
 
 @njit(cache=True, nogil=True, fastmath=True)
@@ -152,13 +154,7 @@ def level_row(u, c0, c1, ax, u_fix, lvl, use_line, table, n_feat, offsets, scale
     (>= F, lattice points spanned + 1) float32, ``gcol`` int32 and ``wcol`` float32 (batch)
     are work space."""
     s = scales[lvl]
-    size_i = offsets[lvl + 1] - offsets[lvl]
-    size = np.uint32(size_i)
-    pow2 = (size_i & (size_i - 1)) == 0
-    mask = np.uint32(size_i - 1)
-    tab = table[offsets[lvl]:offsets[lvl + 1]]
-    hsh = hashed[lvl] != 0
-    row = lvl * n_feat
+    tab, size, pow2, mask, hsh, row = _level_table(lvl, table, n_feat, offsets, hashed)
     mult = _mults(hsh, res[lvl])
     one = np.uint32(1)
     # the varying axis: lattice cell and weight per voxel, and the span of cells

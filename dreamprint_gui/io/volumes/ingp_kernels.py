@@ -321,7 +321,6 @@ def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, b
     r_w = r_shapes[0, 0]
     width = max(max(d_w, r_w), max(n_d_out, enc_width))
     enc = np.zeros((enc_width, BATCH), np.float32)
-    scratch = np.zeros((16, BATCH), np.float32)
     buf_a = np.empty((width, BATCH), np.float32)
     buf_b = np.empty((width, BATCH), np.float32)
     dens = np.empty((n_d_out, BATCH), np.float32)
@@ -415,8 +414,8 @@ def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, b
             j0 += m
             if nb == BATCH:
                 encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table,
-                             n_feat, offsets, scales, res, hashed, interp, enc, scratch, line,
-                             gcol, wcol)
+                             n_feat, offsets, scales, res, hashed, interp, enc, line, gcol,
+                             wcol)
                 _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                             d_mats, d_shapes, d_act, d_out_act,
                             r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
@@ -425,7 +424,7 @@ def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, b
                 n_seg = 0
     if nb:
         encode_batch(u, nb, ax, row_form, seg_c0, seg_c1, seg_ufix, n_seg, table, n_feat,
-                     offsets, scales, res, hashed, interp, enc, scratch, line, gcol, wcol)
+                     offsets, scales, res, hashed, interp, enc, line, gcol, wcol)
         _eval_batch(nb, where, enc, buf_a, buf_b, dens, pre, h1, acc, sel,
                     d_mats, d_shapes, d_act, d_out_act,
                     r_mats, r_shapes, r_act, r_out_act, r_first_a, dir_consts,
