@@ -82,6 +82,7 @@ def height_for(n_voxels: float) -> float:
 
 def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
         source: str = "demo", height: float | None = None, up: str = "z") -> dict:
+    from dreamprint_gui.core.generators import drain
     from dreamprint_gui.job import plan
     from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.job.run import run_conversion
@@ -113,12 +114,7 @@ def one(n: float, workers: int, out: str, halftone: str, scheduler: str | None,
     ru0 = resource.getrusage(resource.RUSAGE_SELF)
     t = time.perf_counter()
     gen = run_conversion(s, context=ctx, preflight=False)
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            m = stop.value
-            break
+    m = drain(gen)
     wall = time.perf_counter() - t
     ru1 = resource.getrusage(resource.RUSAGE_SELF)
     cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)

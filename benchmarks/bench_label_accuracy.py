@@ -270,6 +270,7 @@ def determinism_guard(kinds, n_voxels: float) -> bool:
 def dump(kinds, n_voxels: float, path: str) -> None:
     """Labels, intended concentrations and manifest figures of each kind's job (the code on
     ``PYTHONPATH``), saved for :func:`compare`."""
+    from dreamprint_gui.core.generators import drain
     from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.job.run import run_conversion
 
@@ -285,12 +286,7 @@ def dump(kinds, n_voxels: float, path: str) -> None:
             gen = run_conversion(ConvertSettings(
                 source=src, output=os.path.join(tmp, "JOB"), height_mm=height_for(src, n_voxels),
                 workers=2, printer=PRINTER, **PLACEMENT))
-            while True:
-                try:
-                    next(gen)
-                except StopIteration as stop:
-                    m = stop.value
-                    break
+            m = drain(gen)
         meta[k] = {key: m[key] for key in ("voxel_counts", "mean_concentration",
                                            "clamped_density")}
     np.savez_compressed(path, meta=json.dumps(meta), **arrays)

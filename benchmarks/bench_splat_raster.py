@@ -101,6 +101,7 @@ def job_labels(path: str, height: float) -> tuple[np.ndarray, dict]:
     j850-paper, the file's box, up = z, as ``job_hashes.py``)."""
     from job_hashes import PLACEMENT, PRINTER
 
+    from dreamprint_gui.core.generators import drain
     from dreamprint_gui.job.encode.png_slices import read_png_labels
     from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.job.run import run_conversion
@@ -110,12 +111,7 @@ def job_labels(path: str, height: float) -> tuple[np.ndarray, dict]:
         out = os.path.join(tmp, "JOB")
         gen = run_conversion(ConvertSettings(source=path, output=out, height_mm=height,
                                              workers=2, printer=PRINTER, **PLACEMENT))
-        while True:
-            try:
-                next(gen)
-            except StopIteration as stop:
-                m = stop.value
-                break
+        m = drain(gen)
         palette = np.array([m["labels"][k]["rgb"] for k in m["labels"]], np.uint8)
         files = sorted(Path(out, "slices").iterdir())
         return np.stack([read_png_labels(f, palette) for f in files]), m

@@ -64,6 +64,7 @@ def height_for(source: str, n_voxels: float, options: dict | None = None) -> flo
 
 def job_hash(source: str, height: float, workers: int, slab_layers: int | None,
              scheduler: str | None = None) -> tuple[list[int], str, str]:
+    from dreamprint_gui.core.generators import drain
     from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.job.run import run_conversion
 
@@ -74,12 +75,7 @@ def job_hash(source: str, height: float, workers: int, slab_layers: int | None,
                             slab_layers=slab_layers, scheduler=scheduler, printer=PRINTER,
                             **PLACEMENT)
         gen = run_conversion(s)
-        while True:
-            try:
-                next(gen)
-            except StopIteration as stop:
-                m = stop.value
-                break
+        m = drain(gen)
         h = hashlib.sha256()
         for f in sorted(Path(out, "slices").iterdir()):
             h.update(f.read_bytes())

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.generators import relay
 from dreamprint_gui.job.correction import save_correction
 from dreamprint_gui.job.plan import ConvertProgress, ConvertSettings, JobCancelled
 from dreamprint_gui.job.run import run_conversion
@@ -152,15 +153,12 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
             raise JobCancelled("the export was cancelled")
         conv = run_conversion(replace(settings, compensation=str(out)), cancel,
                               preflight=preflight)
-        try:
-            while True:
-                c: ConvertProgress = next(conv)
-                within = c.layers_done / c.layers_total if c.layers_total else 0.0
-                yield clock.progress("converting", within, c.message, c)
-        except StopIteration as stop:
-            manifest = stop.value
-        finally:
-            conv.close()
+
+        def converting(c: ConvertProgress):
+            within = c.layers_done / c.layers_total if c.layers_total else 0.0
+            return clock.progress("converting", within, c.message, c)
+
+        manifest = yield from relay(conv, converting)
     except BaseException:
         if written:  # this run's correction goes with the job it was made for
             out.unlink(missing_ok=True)
@@ -194,16 +192,8 @@ def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = Non
     clock = PhaseClock({"compensating": float(train), "proof (open loop)": float(proof),
                         "proof (compensated)": float(proof)})
     state: dict = {"total": int(iterations) + 1}
-    gen = optimise(cs, cancel)
-    try:
-        while True:
-            p = next(gen)
-            yield clock.progress("compensating", _optimise_within(p, state),
-                                 state.get("msg", p.message), p)
-    except StopIteration as stop:
-        res = stop.value
-    finally:
-        gen.close()
+    res = yield from relay(optimise(cs, cancel), lambda p: clock.progress(
+        "compensating", _optimise_within(p, state), state.get("msg", p.message), p))
     out: dict[str, Any] = {"optimiser": res["report"]}
     fd, tmp = tempfile.mkstemp(prefix="dreamprint-correction-", suffix=".npz")
     os.close(fd)
@@ -213,15 +203,10 @@ def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = Non
                                  ("proof (compensated)", "compensated", tmp)):
             if cancel is not None and cancel.is_set():
                 raise JobCancelled("the compensation was cancelled")
-            g = render_proof(replace(ps, compensation=comp), cancel)
-            try:
-                while True:
-                    p = next(g)
-                    yield clock.progress(phase, _proof_within(p), p.message or p.stage, p)
-            except StopIteration as stop:
-                out[key] = stop.value
-            finally:
-                g.close()
+            out[key] = yield from relay(
+                render_proof(replace(ps, compensation=comp), cancel),
+                lambda p, phase=phase: clock.progress(phase, _proof_within(p),
+                                                      p.message or p.stage, p))
     finally:
         Path(tmp).unlink(missing_ok=True)
     if cancel is not None and cancel.is_set():

@@ -149,18 +149,22 @@ def test_a_tile_sees_the_same_part_of_the_print_as_the_frame():
     assert err < 0.5 * np.abs(part - ref[::-1]).mean()
 
 
-def test_extra_samples_on_tiles_keep_the_mean_and_lower_the_noise():
-    """A White block rendered at 4 spp, its central tile at 4 + 28: outside the tile the
-    image is the 4-spp render itself; inside, the mean matches the 4-spp render within its
-    noise and two seeds differ less (about sqrt(8) less)."""
-    p = default_profile()
-    b = spectral_bands(p, 3)
+def _white_fog(n_bands: int):
+    """A 4 mm cube of 30 % White in Clear on 8^3 cells, ``n_bands`` bands: (sigma_t, albedo,
+    lower corner, one view)."""
+    b = spectral_bands(default_profile(), n_bands)
     frac = np.zeros((8, 8, 8, 7), np.float32)
     frac[..., INKS.index("W")] = 0.3
     frac[..., 6] = 0.7
     st, al = medium_coefficients(frac, b.K, b.S)
-    lo = -np.full(3, 2.0)
-    views = orbit_views((4.0,) * 3, 1)
+    return st, al, -np.full(3, 2.0), orbit_views((4.0,) * 3, 1)
+
+
+def test_extra_samples_on_tiles_keep_the_mean_and_lower_the_noise():
+    """A White block rendered at 4 spp, its central tile at 4 + 28: outside the tile the
+    image is the 4-spp render itself; inside, the mean matches the 4-spp render within its
+    noise and two seeds differ less (about sqrt(8) less)."""
+    st, al, lo, views = _white_fog(3)
     tile = (0, (4, 4, 16, 16))
     base, _ = pr.render_print_seeds(st, al, lo, -lo, views, RES, 4, (1, 2))
     more, info = pr.render_print_seeds(st, al, lo, -lo, views, RES, 4, (1, 2), extra=[tile],
@@ -291,14 +295,7 @@ def test_the_faint_pass_gets_a_quarter_of_the_samples():
 def test_samples_per_pass_set_each_pass_noise():
     """Two passes rendered at 16 and 4 spp: reported as such, repeatable bit for bit; the
     4-spp pass differs between seeds about twice as much as at 16, the 16-spp one as at 16."""
-    p = default_profile()
-    b = spectral_bands(p, 6)
-    frac = np.zeros((8, 8, 8, 7), np.float32)
-    frac[..., INKS.index("W")] = 0.3
-    frac[..., 6] = 0.7
-    st, al = medium_coefficients(frac, b.K, b.S)
-    lo = -np.full(3, 2.0)
-    views = orbit_views((4.0,) * 3, 1)
+    st, al, lo, views = _white_fog(6)
     (x, y), info = pr.render_print_seeds(st, al, lo, -lo, views, RES, [16, 4], (1, 2))
     (x2, _), _ = pr.render_print_seeds(st, al, lo, -lo, views, RES, [16, 4], (1, 2))
     (u, v), _ = pr.render_print_seeds(st, al, lo, -lo, views, RES, 16, (1, 2))

@@ -162,6 +162,7 @@ def test_splat_job_identical_with_one_or_two_workers(shared_data, tmp_path):
     slices, byte for byte, and the same manifest figures."""
     import hashlib
 
+    from dreamprint_gui.core.generators import drain
     from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.job.run import run_conversion
 
@@ -172,12 +173,7 @@ def test_splat_job_identical_with_one_or_two_workers(shared_data, tmp_path):
         gen = run_conversion(ConvertSettings(source=src, output=str(job), height_mm=3.0,
                                              table_size=17, seed=3, workers=workers,
                                              slab_layers=slab))
-        while True:
-            try:
-                next(gen)
-            except StopIteration as stop:
-                m = stop.value
-                break
+        m = drain(gen)
         h = hashlib.sha256()
         for f in sorted((job / "slices").iterdir()):
             h.update(f.read_bytes())
