@@ -8,7 +8,9 @@ over the object, and the wall and CPU seconds of one render of the view. Targets
 mean S-CIELAB dE2000, <= 60 s per view on CPU. ``--spp 16,64 --thick-spp 0,48 --samplers
 independent,multijitter`` sweeps (the measurement behind the defaults); ``--thick-spp``: more
 samples on the tiles where the print is optically thick (``runner.THICK_T``);
-``--faint-pass both``: the faint last pass at a quarter of the spp and at all of it.
+``--faint-pass both``: the faint last pass at a quarter of the spp and at all of it;
+``--bricks adaptive,16,32``: the medium cut by the cost model (``proof.bricks``, the proof's) or
+into cubes of so many cells; ``--source FILE --height-mm H``: another source than the demo.
 
 ``--block-error``: a small job (demo, 3 mm) whose print is rendered from the full-resolution
 labels (one cell per printer voxel) and from blocks of the default 40 mm job's size (4 x 11 x 22
@@ -36,7 +38,7 @@ def _medium(lab, block, layers_per_block):
 
 
 def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None,
-               thick_spp=0, faint=True):
+               thick_spp=0, faint=True, brick=None):
     """The print of one view rendered at each of ``seeds``: (XYZ per seed, coverage, wall s,
     render info with ``cpu_s``), the thick tiles rendered ``thick_spp`` more."""
     from dreamprint_gui.proof.medium import medium_coefficients
@@ -58,7 +60,8 @@ def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None
     per_pass = pass_spp(bands.xyz_weights, spp) if faint else spp
     imgs, info = render_print_seeds(st, al, lo, hi, [view], res, per_pass, tuple(seeds),
                                     sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth,
-                                    extra=extra, extra_spp=thick_spp)
+                                    extra=extra, extra_spp=thick_spp,
+                                    brick=brick)
     t = time.perf_counter() - t0
     # CPU seconds of all this process's threads: on a shared machine the wall time says more
     # about the other processes than about the variant (llvm or scalar)
@@ -90,9 +93,11 @@ def speed(args) -> None:
     rrs = [None] if args.rr_depths is None else [int(x) for x in args.rr_depths.split(",")]
     thicks = [int(x) for x in (args.thick_spp or str(DEFAULT_THICK_SPP)).split(",")]
     faints = [False, True] if args.faint_pass == "both" else [args.faint_pass == "quarter"]
-    s = ProofSettings(source="demo", height_mm=args.height_mm, resolution=args.resolution)
-    print(f"demo at {args.height_mm} mm, {args.resolution} x {args.resolution}, spp {spps}, "
-          f"samplers {samplers}, {os.cpu_count()} cores, load average "
+    bricks = [None if x == "adaptive" else int(x)
+              for x in (args.bricks or "adaptive").split(",")]
+    s = ProofSettings(source=args.source, height_mm=args.height_mm, resolution=args.resolution)
+    print(f"{args.source} at {args.height_mm} mm, {args.resolution} x {args.resolution}, "
+          f"spp {spps}, samplers {samplers}, {os.cpu_count()} cores, load average "
           f"{os.getloadavg()[0]:.1f} (shared machine)")
     t0 = time.perf_counter()
     lab = method_labels(s)
@@ -113,15 +118,18 @@ def speed(args) -> None:
     print(f"source render (per view)      {time.perf_counter() - t3:7.1f} s")
     spd = samples_per_degree(2 * view.half_mm / args.resolution, s.viewing_distance_mm)
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
-    print(f"{'sampler':12s} {'rr':>4s} {'spp':>5s} {'thick':>5s} {'s/view':>7s} {'CPU s':>6s} "
+    print(f"{'sampler':12s} {'bricks':>8s} {'rr':>4s} {'spp':>5s} {'thick':>5s} "
+          f"{'s/view':>7s} {'CPU s':>6s} "
           f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}  spp per pass")
-    for sampler, rr in [(a, b) for a in samplers for b in rrs]:
-        _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr)  # JIT warm-up
+    for sampler, rr, brick in [(a, b, c) for a in samplers for b in rrs for c in bricks]:
+        # JIT warm-up
+        _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr, brick=brick)
         for spp, thick, faint in [(a, b, c) for a in spps for b in thicks for c in faints]:
             (a, b), alpha, t, info = _print_xyz(med, bands, view, args.resolution, spp, (1, 2),
-                                                sampler, rr, thick, faint)
+                                                sampler, rr, thick, faint, brick)
             f = noise_floor(a, b, alpha, bands.observer, spd)
-            print(f"{sampler:12s} {info['rr_depth']:4d} {spp:5d} {thick:5d} {t / 2:7.1f} "
+            print(f"{sampler:12s} {str(info['bricks']):>8s} {info['rr_depth']:4d} {spp:5d} "
+                  f"{thick:5d} {t / 2:7.1f} "
                   f"{info['cpu_s'] / 2:6.1f} {f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
                   f"{f['p95_scielab_de2000']:6.2f}  {info['pass_spp']}", flush=True)
@@ -170,7 +178,10 @@ def block_error(args) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
+    ap.add_argument("--source", default="demo", help="a volume file (default: the demo)")
     ap.add_argument("--height-mm", type=float, default=40.0)
+    ap.add_argument("--bricks", default=None, help="'adaptive' (the proof's, proof.bricks) or "
+                    "cells per brick edge (cubes, one Mitsuba medium each), comma-separated")
     ap.add_argument("--resolution", type=int, default=256)
     ap.add_argument("--spp", default=None, help="spp, or a comma-separated list (default: "
                     "the proof's default)")

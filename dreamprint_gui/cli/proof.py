@@ -96,8 +96,9 @@ def _common(f, halftones: bool = False):
         click.option("--views", type=int, default=4, show_default=True),
         click.option("--resolution", type=int, default=256, show_default=True,
                      help="Image width and height in pixels."),
-        click.option("--spp", type=int, default=16, show_default=True,
-                     help="Samples per pixel of the print render."),
+        click.option("--spp", type=int, default=64, show_default=True,  # runner.DEFAULT_SPP
+                     help="Samples per pixel of the print render (64: a noise floor of "
+                          "about 0.5 S-CIELAB dE2000)."),
         click.option("--thick-spp", type=int, default=0, show_default=True,
                      help="More samples per pixel on the tiles where the print is optically "
                           "thick (direct transmittance < 0.1), where its render noise is; 0: "

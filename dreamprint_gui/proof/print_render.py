@@ -4,7 +4,7 @@ Defines :func:`render_print` and :data:`DEFAULT_MAX_DEPTH`.
 
 Scene (units mm, the print centred on the origin, z up):
 
-- the print: boxes ("bricks" of 16^3 cells, see :func:`scene_dict`) with index-matched
+- the print: boxes ("bricks" of cells, :mod:`.bricks`, see :func:`scene_dict`) with index-matched
   (``null``) boundaries, each holding a ``heterogeneous`` medium: ``sigma_t`` and ``albedo``
   grid volumes on the proof's cells (:mod:`.medium`, :mod:`.km_to_rte`), nearest-cell lookup
   (a cell is a uniform mixture), the phase function of :mod:`.optics` (isotropic by default).
@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.job.plan import JobCancelled
+from dreamprint_gui.proof.bricks import partition, uniform
 from dreamprint_gui.proof.cameras import View
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics
@@ -58,7 +59,6 @@ INTEGRATOR = "volpathmis"
 DEFAULT_SAMPLER = "independent"
 DEFAULT_RR_DEPTH = 5          # Mitsuba's: Russian roulette from the 5th bounce on
 SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
-BRICK_CELLS = 16
 FAINT_PASS = 0.25     # a pass weighing less than this x the largest in colour gets spp / 4
 TILE_PX = 32
 BRICK_GAP = 1.5e-4
@@ -99,7 +99,7 @@ def hides_direct(floor: bool, optics: Optics | None) -> bool:
 
 def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray,
                views: list[View], resolution: int, spp: int, max_depth: int,
-               key_light: float = 0.0, floor: bool = False, brick: int = BRICK_CELLS,
+               key_light: float = 0.0, floor: bool = False, brick: int | None = None,
                sampler: str = "independent", optics: Optics | None = None,
                rr_depth: int | None = None,
                crops: list[tuple[int, tuple[int, int, int, int]]] = ()) -> dict:
@@ -120,41 +120,38 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                               "hide_emitters": hides_direct(floor, optics)},
                "environment": {"type": "constant", "radiance": {"type": "rgb",
                                                                 "value": [1.0, 1.0, 1.0]}}}
-    # Bricks of brick^3 cells, each its own box and medium: delta tracking then steps by the
-    # brick's own majorant (Mitsuba's heterogeneous medium has one majorant per medium), so the
-    # thin Clear around an object is not crossed in the steps of its densest ink; bricks holding
-    # no ink are left out. Boundaries are index-matched; between bricks a gap of vacuum wider
+    # Bricks, each its own box and medium: delta tracking then steps by the brick's own
+    # majorant (Mitsuba's heterogeneous medium has one majorant per medium), so the thin Clear
+    # around an object is not crossed in the steps of its densest ink; bricks holding no ink are
+    # left out. By default the boxes of proof.bricks.partition (a cost model of crossings
+    # against collision steps: 25.0 -> 12.8 s per demo render against cubes of 16 cells),
+    # ``brick`` N: cubes of N cells. Boundaries are index-matched; between bricks a gap of vacuum wider
     # than Mitsuba's ray epsilon (~1e-4 relative to the coordinates) is needed: with shared
     # faces (or gaps of 2e-5 relative) rays leaving a brick skipped the next one and renders
     # came out too bright against the closed-form transmittance of an absorber; with
     # BRICK_GAP (1.5e-4 relative per side: 3 um in a 40 mm print, 0.1 % of a 16-cell brick)
     # they agree (tests/proof/test_print_render.py).
     gap = BRICK_GAP * (1.0 + float(np.abs(np.concatenate([lo, hi])).max()))
-    n_bricks = 0
-    for z0 in range(0, ncz, brick):
-        for y0 in range(0, ncy, brick):
-            for x0 in range(0, ncx, brick):
-                st = sigma_t3[z0:z0 + brick, y0:y0 + brick, x0:x0 + brick]
-                if not np.any(st > 0):
-                    continue
-                al = albedo3[z0:z0 + brick, y0:y0 + brick, x0:x0 + brick]
-                nz_, ny_, nx_ = st.shape[:3]
-                blo = lo + cell * np.array([x0, y0, z0])
-                ext = cell * np.array([nx_, ny_, nz_])
-                grid_tf = T().translate(blo.tolist()) @ T().scale(ext.tolist())
-                medium = {"type": "heterogeneous", "scale": 1.0,
-                          "sigma_t": {"type": "gridvolume", "filter_type": "nearest",
-                                      "grid": mi.VolumeGrid(np.ascontiguousarray(st)),
-                                      "to_world": grid_tf, "raw": True},
-                          "albedo": {"type": "gridvolume", "filter_type": "nearest",
-                                     "grid": mi.VolumeGrid(np.ascontiguousarray(al)),
-                                     "to_world": grid_tf, "raw": True},
-                          "phase": dict(phase)}
-                d[f"brick_{n_bricks:05d}"] = {
-                    "type": "cube", "to_world": T().translate((blo + ext / 2).tolist())
-                    @ T().scale((ext / 2 - gap).tolist()), "bsdf": {"type": "null"},
-                    "interior": medium}
-                n_bricks += 1
+    boxes = (partition(sigma_t3, tuple(cell)) if brick is None
+             else uniform(sigma_t3, int(brick)))
+    for n_bricks, (z0, z1, y0, y1, x0, x1) in enumerate(boxes):
+        st = sigma_t3[z0:z1, y0:y1, x0:x1]
+        al = albedo3[z0:z1, y0:y1, x0:x1]
+        blo = lo + cell * np.array([x0, y0, z0])
+        ext = cell * np.array([x1 - x0, y1 - y0, z1 - z0])
+        grid_tf = T().translate(blo.tolist()) @ T().scale(ext.tolist())
+        medium = {"type": "heterogeneous", "scale": 1.0,
+                  "sigma_t": {"type": "gridvolume", "filter_type": "nearest",
+                              "grid": mi.VolumeGrid(np.ascontiguousarray(st)),
+                              "to_world": grid_tf, "raw": True},
+                  "albedo": {"type": "gridvolume", "filter_type": "nearest",
+                             "grid": mi.VolumeGrid(np.ascontiguousarray(al)),
+                             "to_world": grid_tf, "raw": True},
+                  "phase": dict(phase)}
+        d[f"brick_{n_bricks:05d}"] = {
+            "type": "cube", "to_world": T().translate((blo + ext / 2).tolist())
+            @ T().scale((ext / 2 - gap).tolist()), "bsdf": {"type": "null"},
+            "interior": medium}
     ext = hi - lo
     mid = (hi + lo) / 2
     bsdf = optics.bsdf()
@@ -209,7 +206,8 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                        sampler: str = DEFAULT_SAMPLER, optics: Optics | None = None,
                        rr_depth: int | None = None,
                        extra: list[tuple[int, tuple[int, int, int, int]]] = (),
-                       extra_spp: int = 0) -> tuple[list[NDArray], dict]:
+                       extra_spp: int = 0,
+                       brick: int | None = None) -> tuple[list[NDArray], dict]:
     """:func:`render_print` at each of ``seeds`` (one scene per pass serves them all): the
     proof and its noise floor's second render. Returns the images per seed and the info.
     ``spp``: samples per pixel of every pass, or one count per pass (:func:`pass_spp`).
@@ -241,8 +239,8 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
             mi, np.ascontiguousarray(sigma_t[..., ch], np.float32),
             np.ascontiguousarray(albedo[..., ch], np.float32), lo, hi, views, resolution,
             pass_spp_[p],
-            max_depth, key_light, floor, sampler=sampler, optics=optics, rr_depth=rr_depth,
-            crops=extra))
+            max_depth, key_light, floor, brick=brick, sampler=sampler, optics=optics,
+            rr_depth=rr_depth, crops=extra))
         sensors = {sn.id(): sn for sn in scene.sensors()}
         for out, seed in zip(outs, seeds, strict=True):
             for i in range(len(views)):
@@ -276,6 +274,7 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
             "extra_spp": int(extra_spp) if extra else 0,
             "extra_pixels": int(sum(r[2] * r[3] for _, r in extra)),
             "rr_depth": int(DEFAULT_RR_DEPTH if rr_depth is None else rr_depth),
+            "bricks": "adaptive" if brick is None else int(brick),
             **(optics or Optics()).describe()}
     return [out[..., :nb_] for out in outs], info
 

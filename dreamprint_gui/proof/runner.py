@@ -68,7 +68,9 @@ __all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_pr
 MAX_RESOLUTION = 4096
 MAX_SPP = 65536
 MAX_VIEWS = 64
-DEFAULT_SPP = 16
+# 64: the demo's noise floor 0.48 S-CIELAB at 47 s per view-render (bench_proof.py, quiet
+# 2-core host, adaptive bricks); 16 gave 0.98 (docs/physics.md "Noise floor")
+DEFAULT_SPP = 64
 DEFAULT_RESOLUTION = 256
 DEFAULT_MAX_CELLS = 128
 DEFAULT_THICK_SPP = 0
