@@ -653,7 +653,9 @@ def predicted_appearance(tables: ColourTables, profile: InkProfile, rgb: ArrayLi
     """(sRGB (..., 3), sigma (...)) of what the print job will deposit per voxel.
 
     Runs the same fused kernel as the job, then evaluates the resulting six-ink mixtures with
-    the full model (colour at the reference thickness, eq. 7; sigma, eq. 9).
+    the full model (colour at the reference thickness, eq. 7; sigma, eq. 9), in chunks of
+    :data:`APPEARANCE_CHUNK` voxels (the spectral model holds a few float64 arrays of voxels x
+    wavelengths: the proof's 1.9e6 cells at once took 4 GB).
     """
     rgb = np.asarray(rgb, dtype=np.float32)
     shape = rgb.shape[:-1]
@@ -662,9 +664,16 @@ def predicted_appearance(tables: ColourTables, profile: InkProfile, rgb: ArrayLi
     conc = np.empty((flat.shape[0], len(INKS)), dtype=np.float32)
     lookup_and_align_into(tables, flat, target, conc)
     obs = observer_for(profile.wavelengths_nm)
-    srgb = obs.XYZ_to_sRGB(mixture_colour(profile, conc.astype(np.float64), observer=obs))
-    sigma = mixture_sigma(profile, conc.astype(np.float64))
+    srgb = np.empty((flat.shape[0], 3), np.float64)
+    sigma = np.empty(flat.shape[0], np.float64)
+    for a in range(0, flat.shape[0], APPEARANCE_CHUNK):
+        c = conc[a:a + APPEARANCE_CHUNK].astype(np.float64)
+        srgb[a:a + APPEARANCE_CHUNK] = obs.XYZ_to_sRGB(mixture_colour(profile, c, observer=obs))
+        sigma[a:a + APPEARANCE_CHUNK] = mixture_sigma(profile, c)
     return srgb.reshape(shape + (3,)), sigma.reshape(shape)
+
+
+APPEARANCE_CHUNK = 1 << 16
 
 
 __all__ += ["lookup"]

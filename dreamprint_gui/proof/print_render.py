@@ -125,12 +125,12 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
     # around an object is not crossed in the steps of its densest ink; bricks holding no ink are
     # left out. By default the boxes of proof.bricks.partition (a cost model of crossings
     # against collision steps: 25.0 -> 12.8 s per demo render against cubes of 16 cells),
-    # ``brick`` N: cubes of N cells. Boundaries are index-matched; between bricks a gap of vacuum wider
-    # than Mitsuba's ray epsilon (~1e-4 relative to the coordinates) is needed: with shared
-    # faces (or gaps of 2e-5 relative) rays leaving a brick skipped the next one and renders
-    # came out too bright against the closed-form transmittance of an absorber; with
-    # BRICK_GAP (1.5e-4 relative per side: 3 um in a 40 mm print, 0.1 % of a 16-cell brick)
-    # they agree (tests/proof/test_print_render.py).
+    # ``brick`` N: cubes of N cells. Boundaries are index-matched; between bricks a gap of
+    # vacuum wider than Mitsuba's ray epsilon (~1e-4 relative to the coordinates) is needed:
+    # with shared faces (or gaps of 2e-5 relative) rays leaving a brick skipped the next one
+    # and renders came out too bright against the closed-form transmittance of an absorber;
+    # with BRICK_GAP (1.5e-4 relative per side: 3 um in a 40 mm print, 0.1 % of a 16-cell
+    # brick) they agree (tests/proof/test_print_render.py).
     gap = BRICK_GAP * (1.0 + float(np.abs(np.concatenate([lo, hi])).max()))
     boxes = (partition(sigma_t3, tuple(cell)) if brick is None
              else uniform(sigma_t3, int(brick)))

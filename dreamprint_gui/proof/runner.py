@@ -337,13 +337,16 @@ def gamut_floor(lab, field, views, resolution: int, src_lin: list, src_alpha: li
     ctx = getattr(lab, "ctx", None)
     if ctx is None or ctx.tables is None:
         return None
-    rgb = np.clip(field.colour, 0, 1)
+    # cells below the background threshold print nothing here: only the others are predicted
+    kept = field.sigma >= ctx.halftoner.threshold
+    rgb = np.clip(field.colour[kept], 0, 1)
     srgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * rgb ** (1 / 2.4) - 0.055)
-    pred, sig = predicted_appearance(ctx.tables, lab.profile, srgb.reshape(-1, 3),
-                                     field.sigma.reshape(-1))
-    pred = np.clip(pred.reshape(field.colour.shape), 0, 1)
-    lin = np.where(pred <= 0.04045, pred / 12.92, ((pred + 0.055) / 1.055) ** 2.4)
-    sig = np.where(field.sigma >= ctx.halftoner.threshold, sig.reshape(field.sigma.shape), 0)
+    pred, sig_kept = predicted_appearance(ctx.tables, lab.profile, srgb, field.sigma[kept])
+    pred = np.clip(pred, 0, 1)
+    lin = np.zeros(field.colour.shape, np.float64)
+    lin[kept] = np.where(pred <= 0.04045, pred / 12.92, ((pred + 0.055) / 1.055) ** 2.4)
+    sig = np.zeros(field.sigma.shape, np.float64)
+    sig[kept] = sig_kept
     floor_field = SourceField(np.ascontiguousarray(sig, np.float32),
                               np.ascontiguousarray(lin, np.float32), field.lo_mm,
                               field.cell_mm)
