@@ -30,13 +30,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["partition", "uniform", "COLLISION_WEIGHT", "Box"]
+__all__ = ["partition", "uniform", "optically_deep", "COLLISION_WEIGHT", "DEEP_TAU", "Box"]
 
 # cost of a collision step against a boundary crossing, per (majorant x volume) against per
 # unit surface (module docstring)
 COLLISION_WEIGHT = 4.0 * 0.118
 
 Box = tuple[int, int, int, int, int, int]    # z0, z1, y0, y1, x0, x1 (cells, half-open)
+
+# a box whose mean extinction (its least extinct channel) times its smallest extent is above
+# this many mean free paths samples no emitters from inside (optically_deep)
+DEEP_TAU = 3.0
 
 
 def _box_cost(shape: tuple[int, int, int], majorant: float, cell: NDArray) -> float:
@@ -127,3 +131,19 @@ def uniform(sigma_t: NDArray, brick: int) -> list[Box]:
                 if np.any(m[box[0]:box[1], box[2]:box[3], box[4]:box[5]] > 0):
                     out.append(box)
     return out
+
+
+def optically_deep(sigma_t: NDArray, box: Box, cell_mm: tuple[float, float, float],
+                   tau: float = DEEP_TAU) -> bool:
+    """Whether ``box`` of ``sigma_t`` (ncz, ncy, ncx, channels) is optically deep: its mean
+    extinction in its least extinct channel times its smallest extent (mm) above ``tau`` mean
+    free paths. From most of its scattering events a shadow ray towards the environment
+    crosses several mean free paths of ink and carries almost nothing, at the price of a
+    ratio-tracked walk out of the print; a path that escapes finds the uniform environment by
+    itself. The renderer switches next-event estimation off inside such boxes
+    (``sample_emitters``; unbiased either way, :mod:`.print_render`)."""
+    z0, z1, y0, y1, x0, x1 = box
+    sub = np.asarray(sigma_t)[z0:z1, y0:y1, x0:x1]
+    mean = sub.reshape(-1, sub.shape[-1]).mean(axis=0) if sub.ndim == 4 else sub.mean()
+    extent = min((x1 - x0) * cell_mm[0], (y1 - y0) * cell_mm[1], (z1 - z0) * cell_mm[2])
+    return float(np.min(mean)) * extent > tau

@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.job.plan import JobCancelled
-from dreamprint_gui.proof.bricks import partition, uniform
+from dreamprint_gui.proof.bricks import optically_deep, partition, uniform
 from dreamprint_gui.proof.cameras import View
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics
@@ -134,7 +134,8 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
     gap = BRICK_GAP * (1.0 + float(np.abs(np.concatenate([lo, hi])).max()))
     boxes = (partition(sigma_t3, tuple(cell)) if brick is None
              else uniform(sigma_t3, int(brick)))
-    for n_bricks, (z0, z1, y0, y1, x0, x1) in enumerate(boxes):
+    for n_bricks, box in enumerate(boxes):
+        z0, z1, y0, y1, x0, x1 = box
         st = sigma_t3[z0:z1, y0:y1, x0:x1]
         al = albedo3[z0:z1, y0:y1, x0:x1]
         blo = lo + cell * np.array([x0, y0, z0])
@@ -148,6 +149,10 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                              "grid": mi.VolumeGrid(np.ascontiguousarray(al)),
                              "to_world": grid_tf, "raw": True},
                   "phase": dict(phase)}
+        if key_light <= 0 and optically_deep(sigma_t3, box, tuple(cell)):
+            # no shadow rays from deep inside the ink (bricks.optically_deep); a directional
+            # key light can only be reached by them, so it keeps them everywhere
+            medium["sample_emitters"] = False
         d[f"brick_{n_bricks:05d}"] = {
             "type": "cube", "to_world": T().translate((blo + ext / 2).tolist())
             @ T().scale((ext / 2 - gap).tolist()), "bsdf": {"type": "null"},

@@ -59,3 +59,17 @@ def test_partition_separates_dense_ink_from_thin_clear_and_lowers_the_cost():
     assert c < _cost(uniform(m, 16), m, cell)
     # the cost: crossings (surface) plus collision steps (majorant x volume)
     assert _box_cost((1, 1, 1), 2.0, np.ones(3)) == pytest.approx(6.0 + COLLISION_WEIGHT * 2.0)
+
+
+def test_optically_deep_counts_mean_free_paths_across_the_smallest_extent():
+    from dreamprint_gui.proof.bricks import optically_deep
+
+    m = np.zeros((10, 20, 40, 3), np.float32)
+    m[...] = (2.0, 1.0, 8.0)
+    box = (0, 10, 0, 20, 0, 40)
+    # least extinct channel 1.0 /mm x smallest extent (z: 10 cells of 0.5 mm) = 5 mfp
+    assert optically_deep(m, box, (0.5, 0.5, 0.5), tau=4.9)
+    assert not optically_deep(m, box, (0.5, 0.5, 0.5), tau=5.1)
+    assert not optically_deep(m, (0, 2, 0, 20, 0, 40), (0.5, 0.5, 0.5))     # a thin sheet
+    assert not optically_deep(np.full((8, 8, 8, 3), 0.01, np.float32), (0, 8, 0, 8, 0, 8),
+                              (1.0, 1.0, 1.0))                               # Clear

@@ -310,3 +310,46 @@ def test_samples_per_pass_set_each_pass_noise():
     np.testing.assert_array_equal(x[..., :3], u[..., :3])    # the same seeds, the same spp
     ratio = (x - y)[..., 3:].std() / (u - v)[..., 3:].std()
     assert 1.5 < ratio < 2.7
+
+
+def _h_function(omega: float, mu: float, n: int = 64) -> float:
+    """Chandrasekhar's H-function of isotropic scattering (albedo omega), by iterating
+    1 / H(mu) = sqrt(1 - omega) + (omega / 2) int_0^1 mu' H(mu') / (mu + mu') dmu'."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = (x + 1) / 2, w / 2
+    h = np.ones(n)
+    for _ in range(400):
+        h = 1 / (np.sqrt(1 - omega) + omega / 2 * np.sum(w * x * h / (x[:, None] + x), axis=1))
+    return float(1 / (np.sqrt(1 - omega) + omega / 2 * np.sum(w * x * h / (mu + x))))
+
+
+def test_deep_brick_without_shadow_rays_matches_the_semi_infinite_closed_form():
+    """An optically deep block (60 mean free paths; isotropic scattering, albedo 0.95) seen
+    face-on under the uniform environment: the radiance leaving its face's centre is the
+    semi-infinite RTE's 1 - sqrt(1 - omega) H(1) (Chandrasekhar 1960). The proof renders such
+    a brick without next-event estimation (bricks.optically_deep); with it, the same
+    expectation (the two estimators agree, and both match the closed form)."""
+    from dreamprint_gui.proof.cameras import View
+
+    mi, _, _ = load_mitsuba()
+    n, cell, omega = 30, 0.5, 0.95
+    st = np.full((n, n, n, 3), 4.0, np.float32)
+    al = np.full_like(st, omega)
+    lo = -np.full(3, n * cell / 2)
+    view = View(0.0, 0.0, 0.6 * n * cell, 4 * n * cell)
+    d = pr.scene_dict(mi, st, al, lo, -lo, [view], RES, 256, 512)
+    bricks = [v for k, v in d.items() if k.startswith("brick_")]
+    assert len(bricks) == 1 and bricks[0]["interior"]["sample_emitters"] is False
+    exact = 1 - np.sqrt(1 - omega) * _h_function(omega, 1.0)
+    centre = slice(RES // 2 - 3, RES // 2 + 3)
+    got = []
+    for nee in (False, True):
+        bricks[0]["interior"]["sample_emitters"] = nee
+        img = np.asarray(mi.render(mi.load_dict(d), spp=512, seed=5))[centre, centre, :3]
+        got.append(img.mean(axis=(0, 1)))
+    np.testing.assert_allclose(got[0], exact, atol=0.01)
+    np.testing.assert_allclose(got[1], exact, atol=0.01)
+    # a key light keeps the shadow rays (it is reached by no other path)
+    d = pr.scene_dict(mi, st, al, lo, -lo, [view], RES, 256, 512, key_light=1.0)
+    assert all("sample_emitters" not in v["interior"] for k, v in d.items()
+               if k.startswith("brick_"))
