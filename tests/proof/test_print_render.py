@@ -314,17 +314,6 @@ def test_samples_per_pass_set_each_pass_noise():
     assert 1.5 < ratio < 2.7
 
 
-def _h_function(omega: float, mu: float, n: int = 64) -> float:
-    """Chandrasekhar's H-function of isotropic scattering (albedo omega), by iterating
-    1 / H(mu) = sqrt(1 - omega) + (omega / 2) int_0^1 mu' H(mu') / (mu + mu') dmu'."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    x, w = (x + 1) / 2, w / 2
-    h = np.ones(n)
-    for _ in range(400):
-        h = 1 / (np.sqrt(1 - omega) + omega / 2 * np.sum(w * x * h / (x[:, None] + x), axis=1))
-    return float(1 / (np.sqrt(1 - omega) + omega / 2 * np.sum(w * x * h / (mu + x))))
-
-
 def test_deep_brick_without_shadow_rays_matches_the_semi_infinite_closed_form():
     """An optically deep block (60 mean free paths; isotropic scattering, albedo 0.95) seen
     face-on under the uniform environment: the radiance leaving its face's centre is the
@@ -332,6 +321,7 @@ def test_deep_brick_without_shadow_rays_matches_the_semi_infinite_closed_form():
     a brick without next-event estimation (bricks.optically_deep); with it, the same
     expectation (the two estimators agree, and both match the closed form)."""
     from dreamprint_gui.proof.cameras import View
+    from dreamprint_gui.proof.thick_patch import chandrasekhar_h
 
     mi, _, _ = load_mitsuba()
     n, cell, omega = 30, 0.5, 0.95
@@ -342,7 +332,9 @@ def test_deep_brick_without_shadow_rays_matches_the_semi_infinite_closed_form():
     d = pr.scene_dict(mi, st, al, lo, -lo, [view], RES, 256, 512)
     bricks = [v for k, v in d.items() if k.startswith("brick_")]
     assert len(bricks) == 1 and bricks[0]["interior"]["sample_emitters"] is False
-    exact = 1 - np.sqrt(1 - omega) * _h_function(omega, 1.0)
+    # H by thick_patch.chandrasekhar_h, itself checked against Chandrasekhar's table and an
+    # iterative solution (tests/proof/test_thick_patch.py)
+    exact = 1 - np.sqrt(1 - omega) * chandrasekhar_h([omega], [1.0])[0, 0]
     centre = slice(RES // 2 - 3, RES // 2 + 3)
     got = []
     for nee in (False, True):
