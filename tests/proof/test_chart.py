@@ -173,3 +173,17 @@ def test_chart_proof_bad_input(tmp_path, capsys, case, words):
     _, err = capsys.readouterr()
     assert code == 2 and err.startswith("dreamprint: error:") and words in err, err
     assert err.count("\n") == 1 and not (tmp_path / "x").exists()
+
+
+def test_the_starter_chart_is_a_valid_recipes_file():
+    """resources/charts/starter-24.csv, the chart the README proofs (and an operator prints):
+    24 distinct mixtures of the five opaque inks, each summing to 1, read by the recipes reader
+    that `calibrate --chart` and `proof --chart` use."""
+    from dreamprint_gui.core.resources import resource_path
+    from dreamprint_gui.io.recipes import read_recipes
+
+    rec = read_recipes(resource_path("charts", "starter-24.csv"))
+    assert rec.shape == (24, 6)
+    np.testing.assert_allclose(rec.sum(axis=1), 1.0)
+    assert len({tuple(r) for r in rec.round(6)}) == 24
+    assert np.all(rec[:, INKS.index("Cl")] == 0)
