@@ -648,6 +648,9 @@ def lookup_and_align_into(tables: ColourTables, rgb: NDArray, sigma_target: NDAr
     return AlignCounts(int(stats[0]), int(stats[1]), float(stats[2]), float(stats[3]))
 
 
+APPEARANCE_CHUNK = 1 << 16   # voxels per evaluation of the spectral model (predicted_appearance)
+
+
 def predicted_appearance(tables: ColourTables, profile: InkProfile, rgb: ArrayLike,
                          sigma_target: ArrayLike) -> tuple[NDArray, NDArray]:
     """(sRGB (..., 3), sigma (...)) of what the print job will deposit per voxel.
@@ -671,9 +674,6 @@ def predicted_appearance(tables: ColourTables, profile: InkProfile, rgb: ArrayLi
         srgb[a:a + APPEARANCE_CHUNK] = obs.XYZ_to_sRGB(mixture_colour(profile, c, observer=obs))
         sigma[a:a + APPEARANCE_CHUNK] = mixture_sigma(profile, c)
     return srgb.reshape(shape + (3,)), sigma.reshape(shape)
-
-
-APPEARANCE_CHUNK = 1 << 16
 
 
 __all__ += ["lookup"]

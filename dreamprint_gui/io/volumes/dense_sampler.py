@@ -208,7 +208,6 @@ def dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
     nxo = ix0.shape[0]
     w = nxo * nc
     zero = np.float32(0.0)
-    one = np.float32(1.0)
     if not vz[k]:
         if mode == RAW:
             out[:nyo * w] = zero
@@ -220,7 +219,6 @@ def dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
     sp, sq = _planes_for(vol, rows_nz, iz0[k], iz1[k], srows, ix0, ix1, wx, vx, planes,
                          planes_nz, plane_layer)
     fz = wz[k]
-    gz = one - fz
     for j in range(nyo):
         b0 = rslot[iy0[j]]
         b1 = rslot[iy1[j]]
@@ -234,14 +232,8 @@ def dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
                 if mode == COLOUR:
                     rgb[j * nxo * 3:(j + 1) * nxo * 3] = zero
             continue
-        fy = wy[j]
-        gy = one - fy
-        r00 = planes[sp, b0]
-        r01 = planes[sq, b0]
-        r10 = planes[sp, b1]
-        r11 = planes[sq, b1]
-        for t in range(w):
-            row[t] = (r00[t] * gz + r01[t] * fz) * gy + (r10[t] * gz + r11[t] * fz) * fy
+        _lerp_row(row, w, planes[sp, b0], planes[sq, b0], planes[sp, b1], planes[sq, b1],
+                  fz, wy[j])
         if mode == RAW:
             for i in range(nxo):
                 for c in range(nc):
@@ -267,7 +259,6 @@ def dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0,
     nyo = iy0.shape[0]
     nxo = ix0.shape[0]
     zero = np.float32(0.0)
-    one = np.float32(1.0)
     if not vz[k]:
         for j in range(nyo):
             _window_row(row, nxo, zero, True, low, inv_width, density, sigma, j * nxo)
@@ -275,21 +266,25 @@ def dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0,
     sp, sq = _planes_for(vol, rows_nz, iz0[k], iz1[k], srows, ix0, ix1, wx, vx, planes,
                          planes_nz, plane_layer)
     fz = wz[k]
-    gz = one - fz
     for j in range(nyo):
         if not vy[j]:
             _window_row(row, nxo, zero, True, low, inv_width, density, sigma, j * nxo)
             continue
-        fy = wy[j]
-        gy = one - fy
-        r00 = planes[sp, rslot[iy0[j]]]
-        r01 = planes[sq, rslot[iy0[j]]]
-        r10 = planes[sp, rslot[iy1[j]]]
-        r11 = planes[sq, rslot[iy1[j]]]
-        for t in range(nxo):
-            v = (r00[t] * gz + r01[t] * fz) * gy + (r10[t] * gz + r11[t] * fz) * fy
-            row[t] = v
+        b0 = rslot[iy0[j]]
+        b1 = rslot[iy1[j]]
+        _lerp_row(row, nxo, planes[sp, b0], planes[sq, b0], planes[sp, b1], planes[sq, b1],
+                  fz, wy[j])
         _window_row(row, nxo, zero, False, low, inv_width, density, sigma, j * nxo)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _lerp_row(row, n, r00, r01, r10, r11, fz, fy):
+    """``row[:n]``: the trilinear sample of one output row from its four x-interpolated plane
+    rows (z0/z1 x y0/y1), weights ``fz`` along z and ``fy`` along y (float32 throughout)."""
+    gz = np.float32(1.0) - fz
+    gy = np.float32(1.0) - fy
+    for t in range(n):
+        row[t] = (r00[t] * gz + r01[t] * fz) * gy + (r10[t] * gz + r11[t] * fz) * fy
 
 
 @njit(cache=True, nogil=True, inline="always")

@@ -84,6 +84,20 @@ def _snapshot(tmp_path, seed, interpolation="Linear"):
     return p, dmats, rmats, table, levels
 
 
+def _reference(src, xs, ys, zs, dmats, rmats, table, levels):
+    """The numpy reference of the snapshot at the source's grid points (z, y, x order):
+    which points are inside the unit cube and occupied, and the field (sigma, rgb) there.
+    Source = (C^T q - offset) / scale, with source -z as instant-ngp -y (view "down")."""
+    Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
+    q = np.stack([Y * 0.8 + 0.4, Z * 0.8 + 0.3, X * 0.8 + 0.5], -1).reshape(-1, 3)
+    occ = src.model.occupancy
+    keep = np.array([bool(np.all(v >= 0) and np.all(v <= 1) and occupied(v, occ, 0))
+                     for v in q])
+    want_s, want_c = ref_field(q[keep], dmats, rmats, table, levels, 2,
+                               [np.array([0, -1.0, 0])])
+    return keep, want_s, want_c
+
+
 def test_row_path_matches_numpy_reference(tmp_path):
     p, dmats, rmats, table, levels = _snapshot(tmp_path, 11)
     src = open_source(p, view="down", threads=1)
@@ -93,15 +107,9 @@ def test_row_path_matches_numpy_reference(tmp_path):
     zs = (np.linspace(0.1, 0.9, 5) - 0.3) / 0.8
     assert _row_axis(src._A, xs) == 2
     rgb, sig = src.evaluate(xs, ys, zs)
-    Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
-    q = np.stack([Y * 0.8 + 0.4, Z * 0.8 + 0.3, X * 0.8 + 0.5], -1).reshape(-1, 3)
-    occ = src.model.occupancy
-    keep = np.array([bool(np.all(v >= 0) and np.all(v <= 1) and occupied(v, occ, 0))
-                     for v in q])
+    keep, want_s, want_c = _reference(src, xs, ys, zs, dmats, rmats, table, levels)
     assert 0.2 < keep.mean() < 0.8
     np.testing.assert_array_equal(sig.reshape(-1) > 0, keep)
-    down = [np.array([0, -1.0, 0])]               # source -z is instant-ngp -y
-    want_s, want_c = ref_field(q[keep], dmats, rmats, table, levels, 2, down)
     # float32 positions against float64 (as the per-voxel path: test_volumes_ingp)
     np.testing.assert_allclose(sig.reshape(-1)[keep], want_s, rtol=1e-4)
     np.testing.assert_allclose(rgb.reshape(-1, 3)[keep], want_c, atol=2e-4)
@@ -125,13 +133,8 @@ def test_column_path_matches_numpy_reference(tmp_path):
     zs = (np.linspace(0.2, 0.8, 4) - 0.3) / 0.8
     assert src._line_axis(xs, ys) == 1 and src._line_axis(ys, xs) == 0
     rgb, sig = src.evaluate(xs, ys, zs)
-    Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
-    q = np.stack([Y * 0.8 + 0.4, Z * 0.8 + 0.3, X * 0.8 + 0.5], -1).reshape(-1, 3)
-    keep = np.array([bool(np.all(v >= 0) and np.all(v <= 1) and
-                          occupied(v, src.model.occupancy, 0)) for v in q])
+    keep, want_s, want_c = _reference(src, xs, ys, zs, dmats, rmats, table, levels)
     np.testing.assert_array_equal(sig.reshape(-1) > 0, keep)
-    want_s, want_c = ref_field(q[keep], dmats, rmats, table, levels, 2,
-                               [np.array([0, -1.0, 0])])
     np.testing.assert_allclose(sig.reshape(-1)[keep], want_s, rtol=1e-4)
     np.testing.assert_allclose(rgb.reshape(-1, 3)[keep], want_c, atol=5e-4)
     # the same kernel along rows (la = 0): float32 rounding apart
