@@ -143,11 +143,30 @@ def test_uniform_correction_scales_linear_colour_and_density():
     g[...] = (0.5, 1.5, 0.25, 2.0)
     r2, d2 = rgb.copy(), dens.copy()
     apply_correction(g, (4, 6, 10), 4, r2, d2)
-    want = _encode(_decode(rgb.astype(np.float64)) * np.array([0.5, 1.5, 0.25]))
+    lin = _decode(rgb.astype(np.float64)) * np.array([0.5, 1.5, 0.25])
+    # a colour pushed above 1 is scaled down as a whole (its chromaticity kept), not clipped
+    want = _encode(lin / np.maximum(lin.max(axis=-1, keepdims=True), 1.0))
     fg = dens > 0
     np.testing.assert_allclose(r2[fg], want[fg], atol=2e-6)
     np.testing.assert_array_equal(r2[~fg], rgb[~fg])
     np.testing.assert_allclose(d2, 2.0 * dens, rtol=1e-6)
+
+
+def test_a_gain_above_the_top_keeps_the_asked_chromaticity():
+    # white asked 10 % brighter in blue than in red: it cannot be brighter, so it becomes the
+    # white whose linear R : G : B are 1 : 1.05 : 1.1 (a bluish white the print can show),
+    # where clipping each channel would have left it white
+    g = np.empty((1, 1, 1, 4), np.float32)
+    g[...] = (1.0, 1.05, 1.1, 1.0)
+    rgb = np.ones((1, 1, 2, 3), np.float32)
+    rgb[0, 0, 1] = (0.2, 0.4, 0.6)
+    apply_correction(g, (2, 1, 1), 0, rgb, np.ones((1, 1, 2), np.float32))
+    np.testing.assert_allclose(_decode(rgb[0, 0, 0].astype(np.float64)),
+                               [1 / 1.1, 1.05 / 1.1, 1.0], atol=1e-6)
+    # a colour that stays inside keeps each channel's own factor
+    np.testing.assert_allclose(_decode(rgb[0, 0, 1].astype(np.float64)),
+                               _decode(np.array([0.2, 0.4, 0.6])) * [1.0, 1.05, 1.1],
+                               atol=1e-6)
 
 
 def test_field_is_trilinear_between_cell_centres():
