@@ -349,7 +349,7 @@ def gamut_floor(lab, field, views, resolution: int, src_lin: list, src_alpha: li
     sig[kept] = sig_kept
     floor_field = SourceField(np.ascontiguousarray(sig, np.float32),
                               np.ascontiguousarray(lin, np.float32), field.lo_mm,
-                              field.cell_mm)
+                              field.cell_mm, field.nearest)
     to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
     per_view = []
     for i, v in enumerate(views):

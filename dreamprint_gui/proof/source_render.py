@@ -13,8 +13,13 @@ with sigma the source's density in 1/mm at the print's physical size (the produc
 rule) and c its colour made linear (sRGB transfer function inverted); B the background, the same
 white environment the print is lit by (1, i.e. the D65 white), or a neutral floor's radiance
 where the ray meets the floor. sigma and sigma*c are trilinear between cell centres (colour
-premultiplied, so it does not bleed into empty cells). The rays are the print renderer's
-(:mod:`.cameras`), averaged over ``sub x sub`` sub-pixels like its box-filtered pixels.
+premultiplied, so it does not bleed into empty cells); a solid's cells (``--content solid``:
+occupied at the solid density, or empty) are read from the nearest cell instead, as the
+print's medium is: trilinear, the solid density's huge value stays opaque down to a small
+weight, so the surface sat up to half a cell outside the occupied cells' midpoint (the
+MagicaVoxel knight at 20 mm on 128 cells: coverage error -0.049 against its print). The rays
+are the print renderer's (:mod:`.cameras`), averaged over ``sub x sub`` sub-pixels like its
+box-filtered pixels.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.io.volumes.base import PrintGrid
+from dreamprint_gui.job.content import SolidSource
 from dreamprint_gui.proof.cameras import View
 
 __all__ = ["SourceField", "sample_source", "render_source", "optical_depth"]
@@ -38,11 +44,13 @@ class SourceField:
     colour: NDArray[np.float32]       # (ncz, ncy, ncx, 3) linear sRGB
     lo_mm: NDArray[np.float64]        # world position of the cells' min corner
     cell_mm: NDArray[np.float64]
+    nearest: bool = False             # a solid: nearest-cell lookup (module doc)
 
 
 def sample_source(source, grid, block_xyz: tuple[int, int, int], density_scale: float,
                   cells_xyz: tuple[int, int, int], lo_mm: NDArray) -> SourceField:
-    """Sample ``source`` at the centres of the proof's cells (blocks of the print ``grid``)."""
+    """Sample ``source`` at the centres of the proof's cells (blocks of the print ``grid``);
+    a solid (:class:`...job.content.SolidSource`) is read back from the nearest cell."""
 
     cell = tuple(b * v for b, v in zip(block_xyz, grid.voxel_mm, strict=True))
     cgrid = PrintGrid(tuple(int(c) for c in cells_xyz), cell, tuple(grid.origin),
@@ -52,7 +60,7 @@ def sample_source(source, grid, block_xyz: tuple[int, int, int], density_scale: 
     lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
     return SourceField(np.ascontiguousarray(dens, np.float32),
                        np.ascontiguousarray(lin, np.float32), np.asarray(lo_mm, np.float64),
-                       np.asarray(cell, np.float64))
+                       np.asarray(cell, np.float64), isinstance(source, SolidSource))
 
 
 @nb.njit(cache=True, inline="always")
@@ -86,7 +94,8 @@ def _corner(p, lo, cell, shape):
 
 
 @nb.njit(cache=True, nogil=True)
-def _march(origins, d, lo, cell, sigma, sc, h, floor_z, floor_rho, rgb_out, alpha_out):
+def _march(origins, d, lo, cell, sigma, sc, h, floor_z, floor_rho, nearest, rgb_out,
+           alpha_out):
     nz, ny, nx = sigma.shape
     hi = np.empty(3)
     shape = (nx, ny, nz)
@@ -107,6 +116,11 @@ def _march(origins, d, lo, cell, sigma, sc, h, floor_z, floor_rho, rgb_out, alph
                 for a in range(3):
                     p[a] = o[a] + t * d[a]
                 idx, fr = _corner(p, lo, cell, shape)
+                if nearest:  # the nearest centre gets all the weight
+                    for a in range(3):
+                        if fr[a] >= 0.5:
+                            idx[a] += 1
+                        fr[a] = 0.0
                 s = 0.0
                 e0 = 0.0
                 e1 = 0.0
@@ -191,8 +205,8 @@ def render_source(field: SourceField, view: View, resolution: int, sub: int = 2,
     sc = np.ascontiguousarray(field.sigma[..., None] * field.colour, np.float32)
     fz = float(field.lo_mm[2])
     _march(flat, np.ascontiguousarray(d), field.lo_mm, field.cell_mm, field.sigma, sc,
-           _step(field.cell_mm), fz, -1.0 if floor_rho is None else float(floor_rho), rgb,
-           alpha)
+           _step(field.cell_mm), fz, -1.0 if floor_rho is None else float(floor_rho),
+           bool(field.nearest), rgb, alpha)
     rgb = rgb.reshape(resolution, sub, resolution, sub, 3).mean(axis=(1, 3))
     alpha = alpha.reshape(resolution, sub, resolution, sub).mean(axis=(1, 3))
     del n
