@@ -380,7 +380,8 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.option("--iterations", type=int, default=4, show_default=True)
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("--resolution", type=int, default=64, show_default=True)
-@click.option("--spp", type=int, default=4, show_default=True)
+@click.option("--spp", type=int, default=32, show_default=True,
+              help="Samples per pixel of the training renders.")
 @click.option("--cells", "max_cells", type=int, default=32, show_default=True,
               help="Proof cells along the print's longest axis.")
 @click.option("--field-cells", type=int, default=32, show_default=True,
