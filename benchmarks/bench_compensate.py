@@ -113,10 +113,11 @@ def floor_only(a) -> None:
         for bg in a.backgrounds.split(","):
             t0 = time.perf_counter()
             ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm, views=4,
-                               resolution=a.resolution, background=bg, max_cells=a.cells)
+                               resolution=a.resolution, background=bg,
+                               max_cells=a.cells or 128)
             lab = EngineLabels(_convert_settings(ps))
             size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
-            block = block_for_cell(lab.voxel_mm, size, a.cells)
+            block = block_for_cell(lab.voxel_mm, size, a.cells or 128)
             cells = tuple(-(-n // b) for n, b in zip(lab.shape_xyz, block, strict=True))
             lo = -0.5 * np.asarray(size)
             field = sample_source(lab.source, lab.grid, block, lab.density_scale, cells, lo)
@@ -142,7 +143,9 @@ def main() -> None:
     ap.add_argument("--resolution", type=int, default=64)
     ap.add_argument("--spp", type=int, default=32)
     ap.add_argument("--views", type=int, default=3)
-    ap.add_argument("--cells", type=int, default=32)
+    ap.add_argument("--cells", type=int, default=None,
+                    help="The optimisation's proof cells (default: the optimiser's: 128 for "
+                         "a solid, 32 otherwise); --floor-only: the proof's (default 128).")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--step", type=float, default=1.0, help="The optimiser's step.")
     ap.add_argument("--judge-spp", type=int, default=256,

@@ -131,3 +131,16 @@ def test_evaluate_methods_compensated_row_and_gamut_floor(capsys):
     assert (paper["method"], comp["method"]) == ("paper", "compensated")
     assert len(comp["training"]["before"]) and comp["optimise_seconds"] > 0
     assert t["gamut_floor"]["object_pixels"] > 0
+
+
+def test_a_solid_is_optimised_on_finer_cells(shared_data):
+    from dreamprint_gui.proof.compensate import FOG_CELLS, SOLID_CELLS, _Loop
+
+    knight = str(shared_data / "voxels" / "magicavoxel_chr_knight.vox")
+    never = lambda: False  # noqa: E731
+    assert _Loop(CompensateSettings(source=knight, height_mm=3.0, table_size=17), [],
+                 never).cells == SOLID_CELLS
+    assert _Loop(CompensateSettings(source="demo", height_mm=3.0, table_size=17), [],
+                 never).cells == FOG_CELLS
+    assert _Loop(CompensateSettings(source=knight, height_mm=3.0, table_size=17, max_cells=20),
+                 [], never).cells == 20
