@@ -55,7 +55,11 @@ __all__ = ["rasterise_splats", "pack_gaussians", "TILE_X", "TILE_Y", "TILE_Z", "
            "K_WALK"]
 
 TILE_X = 64
-TILE_Y = 16
+# 64 rows: a 1e6-Gaussian scene's Gaussians span ~14 rows, a real scene's ~90; 16-row tiles cut
+# most of them into 2-6 tiles, each walking its rows from the box's corner again (rasterising
+# 11.2 -> 10.0 CPU ns per voxel at 1e9, the INRIA sample 13.8 -> 11.5). The accumulator, 1 MB,
+# stays within a core's L2.
+TILE_Y = 64
 TILE_Z = 8
 SCAN_X = 8         # exact path: boxes at most this many voxels wide in x are scanned voxel-wise
 CUT_Q = 9.0        # the support: q <= 9 (3 sigma)
