@@ -42,7 +42,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dreamprint_gui.core.kernels.vec16 import transpose16x13, weighted_sum16
+from dreamprint_gui.core.kernels.vec16 import prefetch, transpose16x13, weighted_sum16
 from dreamprint_gui.core.kernels.vector_math import exp2_f32, log2_f32
 from dreamprint_gui.core.profile import INKS, InkProfile, default_profile
 from dreamprint_gui.gamut.forward import N_COLOUR_INKS
@@ -226,6 +226,11 @@ K_TARGET = K_RHOK + 1  # 13: the voxel's target sigma (1/mm)
 K_LOW = K_TARGET + 1   # 14
 K_HIGH = K_LOW + 1     # 15
 ROW_BLOCK = 1024       # voxels per call of align_rows
+# interpolate_nodes asks for the eight node lines of the voxel this many voxels ahead while it
+# sums the current one: colours that change from voxel to voxel (a 1e6-Gaussian scene) miss
+# the caches on most nodes of the 64 MB table, and the loads of one voxel's sum alone kept too
+# few misses in flight (16-48 ahead measured alike; 8 and 96 less well)
+PREFETCH_AHEAD = 32
 # A target at or above this (1/mm) means "solid": the node's own undiluted mixture (rho = 1,
 # no Clear, no grey; job.content.SOLID_SIGMA). No medium is this dense.
 SOLID_TARGET = 1e30
@@ -285,7 +290,10 @@ def kernel_table(tables: ColourTables) -> np.ndarray:
 def interpolate_nodes(flat, n, rgb, m, W, off, A):
     """The interpolated kernel-table lanes of voxels ``0 .. m-1`` (clean sRGB ``rgb``, one row
     per channel) voxel-major: voxel ``k``'s :data:`LANES` lanes at ``A[k * LANES:]``. The first
-    two passes of :func:`interpolate_block` (``W``, ``off`` scratch)."""
+    two passes of :func:`interpolate_block` (``W``, ``off`` scratch); the second prefetches
+    the nodes of voxel ``k +`` :data:`PREFETCH_AHEAD` into the L2 cache while it sums voxel
+    ``k``'s (a hint: no value changes; the interpolation alone on a 1e6-Gaussian scene's
+    colours 38 -> 29 ns per voxel, the demo's and a smoke's unchanged)."""
     RS = ROW_STRIDE
     top = n - 1
     one = np.float32(1.0)
@@ -315,6 +323,17 @@ def interpolate_nodes(flat, n, rgb, m, W, off, A):
     sj = np.uint64(n * LANES)
     si = np.uint64(n * n * LANES)
     for k in range(m):
+        kp = min(k + PREFETCH_AHEAD, m - 1)
+        p0 = np.uint64(off[kp])
+        p4 = p0 + si
+        prefetch(flat, p0)
+        prefetch(flat, p0 + sk)
+        prefetch(flat, p0 + sj)
+        prefetch(flat, p0 + sj + sk)
+        prefetch(flat, p4)
+        prefetch(flat, p4 + sk)
+        prefetch(flat, p4 + sj)
+        prefetch(flat, p4 + sj + sk)
         o0 = np.uint64(off[k])
         o2 = o0 + sj
         o4 = o0 + si

@@ -9,12 +9,14 @@ from numba.core.errors import TypingError
 
 from dreamprint_gui.core.kernels.vec16 import (
     accumulate8,
+    prefetch,
     transpose16x13,
     weighted_sum16,
 )
 from dreamprint_gui.gamut.alignment import (
     K_RHOK,
     LANES,
+    PREFETCH_AHEAD,
     ROW_BLOCK,
     ROW_STRIDE,
     block_buffers,
@@ -72,7 +74,8 @@ def test_intrinsics_refuse_other_types():
               np.zeros(16, np.float32), np.uint64(0))
 
 
-@pytest.mark.parametrize("m", [1, 15, 16, 17, 333, ROW_BLOCK])
+@pytest.mark.parametrize("m", [1, 15, 16, 17, PREFETCH_AHEAD, PREFETCH_AHEAD + 1, 333,
+                               ROW_BLOCK])
 def test_interpolate_block_is_trilinear_interpolation_of_the_node_lanes(m):
     n = 9
     rng = np.random.default_rng(m)
@@ -104,6 +107,22 @@ def test_interpolate_block_is_trilinear_interpolation_of_the_node_lanes(m):
         np.testing.assert_array_equal(G[np.arange(K_RHOK + 1) * ROW_STRIDE + 1],
                                       table[-1, -1, -1, :K_RHOK + 1])
     assert np.all(np.isnan(G[(K_RHOK + 1) * ROW_STRIDE:]))  # the target's lane untouched
+
+
+@njit
+def _prefetch_all(src, step):
+    for i in range(0, src.shape[0], step):
+        prefetch(src, np.uint64(i))
+    return src[src.shape[0] - 1]
+
+
+def test_prefetch_is_only_a_hint():
+    src = np.random.default_rng(4).random(4096).astype(np.float32)
+    before = src.copy()
+    assert _prefetch_all(src, 7) == before[-1]
+    np.testing.assert_array_equal(src, before)
+    with pytest.raises(TypingError):
+        _prefetch_all(np.zeros(64), 1)
 
 
 def test_finish_staging_cleans_colours():

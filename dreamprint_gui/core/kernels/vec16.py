@@ -6,6 +6,8 @@ Defines
   ``a_n = src[o_n:o_n+16]``: the trilinear interpolation of one voxel's 16 table lanes.
 - :func:`transpose16x13`: 16 rows of 16 floats (voxel-major) -> their first 13 columns as rows
   (lane-major), the layout in which the alignment pass vectorises across voxels.
+- :func:`prefetch`: a hint that a cache line of an array will be read soon (the table lookup's
+  nodes, a few voxels ahead).
 - :func:`accumulate8`: ``acc[8 j : 8 j + 8] += src[o : o + 8]`` in float64, the step of a sum
   kept as 8 partial sums (a float reduction written as a loop stays one add at a time: LLVM may
   not reorder float additions).
@@ -29,7 +31,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-__all__ = ["weighted_sum16", "transpose16x13", "accumulate8"]
+__all__ = ["weighted_sum16", "transpose16x13", "accumulate8", "prefetch"]
 
 _F32 = ir.FloatType()
 _I32 = ir.IntType(32)
@@ -143,6 +145,28 @@ def accumulate8(typingctx, src, o, acc, j):
         at = builder.bitcast(builder.gep(ab, [builder.mul(args[3], ir.Constant(_I64, 8))],
                                          inbounds=True), d8.as_pointer())
         builder.store(builder.fadd(builder.load(at, align=8), builder.fpext(x, d8)), at, align=8)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def prefetch(typingctx, src, i):
+    """A hint (``llvm.prefetch``: read, locality 2, data cache; x86 ``prefetcht1``, into the
+    L2 cache) that the cache line holding ``src[i]`` (float32 1-D array, ``i`` uint64/int64)
+    will be read soon. No effect on any value; an address outside the array is not an error
+    but a wasted hint."""
+    if not (_f32_array(src) and _is_i64(i)):
+        return None
+    sig = types.void(src, i)
+
+    def codegen(context, builder, signature, args):
+        base = _data(context, builder, signature.args[0], args[0])
+        ptr = builder.bitcast(builder.gep(base, [args[1]], inbounds=True),
+                              ir.IntType(8).as_pointer())
+        fnty = ir.FunctionType(ir.VoidType(), [ptr.type, _I32, _I32, _I32])
+        fn = builder.module.declare_intrinsic("llvm.prefetch", [ptr.type], fnty)
+        builder.call(fn, [ptr, ir.Constant(_I32, 0), ir.Constant(_I32, 2), ir.Constant(_I32, 1)])
         return context.get_dummy_value()
 
     return sig, codegen
