@@ -169,7 +169,7 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
 
 def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = None,
                          iterations: int = 4, training_views: int = 3, train_resolution: int = 64,
-                         train_spp: int = 4, field_cells: int = 32,
+                         train_spp: int = 32, field_cells: int = 32,
                          ) -> Generator[CompensationProgress, None, dict[str, Any]]:
     """Optimise a correction for the proof's job on the training cameras with halftone and
     render seed ``ps.seed + 1`` (:mod:`.compensate`), then render the proof of the open-loop

@@ -112,7 +112,7 @@ def test_proof_images_scale_with_the_page_and_the_de_map_has_a_colour_bar(qtbot)
     assert page.image_labels[0].image_rect().width() < r.width()
 
 
-TINY_TRAINING = {"training_views": 1, "train_resolution": 24, "field_cells": 6}
+TINY_TRAINING = {"training_views": 1, "train_resolution": 24, "train_spp": 4, "field_cells": 6}
 
 
 def test_proof_page_compensates_and_shows_both_prints(qtbot, table_size):
