@@ -26,6 +26,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import load_profile
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.orient import Orientation, orient_source
+from dreamprint_gui.job.content import apply_content
 from dreamprint_gui.job.encode.png_slices import read_png_labels
 from dreamprint_gui.job.plan import prepare_job
 from dreamprint_gui.job.slab import halftone_layer
@@ -139,6 +140,9 @@ class JobFolderLabels:
                 o["up"], int(o["rotate_deg"]), bool(o.get("auto")), o.get("reason", "")))
         if (place.get("fit") or {}).get("mode") == "occupied":
             bounds = place["fit"]["bounds"]
+        if (src.get("content") or {}).get("mode") == "solid":  # as the job sampled it
+            thr = float((m.get("background") or {}).get("density_threshold_per_mm") or 0.0)
+            self.source, _ = apply_content(self.source, "solid", thr)
         size = req.get("size_mm")
         self.grid = grid_for_source(self.source, self.voxel_mm, height_mm=req.get("height_mm"),
                                     size_mm=None if size is None else tuple(size),

@@ -202,3 +202,27 @@ def test_proof_with_a_surface_and_hg_phase(tmp_path, capsys):
     assert rep["optics"]["refractive_index"] == 1.5 and rep["km_to_rte"]["g"] == 0.4
     assert rep["renderer"]["surface"] == "matte" and rep["noise_floor"] is None
     assert rep["overall"]["object_pixels"] > 0
+
+
+def test_a_solid_jobs_folder_is_proofed_against_its_source_as_the_job_read_it(
+        tmp_path, capsys, shared_data):
+    import numpy as np
+
+    from dreamprint_gui.job.plan import ConvertSettings
+    from dreamprint_gui.proof.labels import EngineLabels, JobFolderLabels
+    from dreamprint_gui.proof.source_render import sample_source
+
+    knight = str(shared_data / "voxels" / "magicavoxel_chr_knight.vox")
+    job = tmp_path / "job"
+    assert main(["convert", knight, "-o", str(job), "--height-mm", "2", "--table-size",
+                 "17", "-q"]) == 0
+    capsys.readouterr()
+    folder = JobFolderLabels(job)
+    engine = EngineLabels(ConvertSettings(source=knight, height_mm=2.0, table_size=17))
+    assert folder.grid == engine.grid
+    lo = np.zeros(3)
+    a, b = (sample_source(x.source, x.grid, (8, 8, 8), 1.0,
+                          tuple(-(-n // 8) for n in x.grid.shape_xyz), lo)
+            for x in (folder, engine))
+    assert a.nearest and b.nearest  # solid: the occupied cells at the solid density
+    np.testing.assert_array_equal(a.sigma, b.sigma)
