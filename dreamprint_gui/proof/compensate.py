@@ -425,6 +425,7 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
                   "factors (dreamprint_gui.proof.compensate)",
         "training_views": [v.describe() for v in loop.views],
         "settings": {k: v for k, v in s.__dict__.items() if k not in ("output", "overwrite")},
+        "proof_cells": loop.cells,
         "field_cells_xyz": list(loop.gshape[::-1]),
         "history": history,
         "figures": {"before": history[0], "after": {**history[int(np.argmin(

@@ -61,7 +61,7 @@ def test_loop_lowers_the_error_and_writes_a_correction(tmp_path, capsys):
     assert code == 0, cap.err
     rep = json.loads(cap.out)
     hist = rep["history"]
-    assert len(hist) == 3
+    assert len(hist) == 3 and rep["proof_cells"] == 12
     after = rep["figures"]["after"]
     assert after["mean_de2000"] < hist[0]["mean_de2000"]
     corr = load_correction(out)
