@@ -104,7 +104,7 @@ def floor_only(a) -> None:
     from dreamprint_gui.proof.labels import EngineLabels
     from dreamprint_gui.proof.medium import block_for_cell
     from dreamprint_gui.proof.methods import _convert_settings
-    from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
+    from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS, ProofSettings, gamut_floor
     from dreamprint_gui.proof.scielab import samples_per_degree
     from dreamprint_gui.proof.source_render import render_source, sample_source
     from dreamprint_gui.proof.spectral import spectral_bands
@@ -114,10 +114,10 @@ def floor_only(a) -> None:
             t0 = time.perf_counter()
             ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm, views=4,
                                resolution=a.resolution, background=bg,
-                               max_cells=a.cells or 128)
+                               max_cells=a.cells or DEFAULT_MAX_CELLS)
             lab = EngineLabels(_convert_settings(ps))
             size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
-            block = block_for_cell(lab.voxel_mm, size, a.cells or 128)
+            block = block_for_cell(lab.voxel_mm, size, a.cells or DEFAULT_MAX_CELLS)
             cells = tuple(-(-n // b) for n, b in zip(lab.shape_xyz, block, strict=True))
             lo = -0.5 * np.asarray(size)
             field = sample_source(lab.source, lab.grid, block, lab.density_scale, cells, lo)

@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.job.content import SolidSource
 from dreamprint_gui.job.correction import (
     Correction,
     placement_key,
@@ -64,7 +65,13 @@ from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_
 from dreamprint_gui.proof.methods import _convert_settings
 from dreamprint_gui.proof.optics import resolve_optics
 from dreamprint_gui.proof.print_render import render_print
-from dreamprint_gui.proof.runner import ProofProgress, ProofSettings, _in_thread, print_xyz
+from dreamprint_gui.proof.runner import (
+    DEFAULT_MAX_CELLS,
+    ProofProgress,
+    ProofSettings,
+    _in_thread,
+    print_xyz,
+)
 from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import (
     SourceField,
@@ -83,7 +90,7 @@ TRAIN_ELEVATION_DEG = 35.0
 # (read at the cell's centre) may be empty: on coarse cells the print of a solid is fatter than
 # its source by up to half a cell (the knight at 20 mm on 32 cells: coverage +0.073, and the
 # field then learned a held-out dE2000 10 % worse than none; on 128 cells: +0.003, no worse)
-SOLID_CELLS = 128
+SOLID_CELLS = DEFAULT_MAX_CELLS    # the proof's own
 FOG_CELLS = 32
 RATIO_CLIP = 2.0
 _EPS_COLOUR = 0.02
@@ -280,7 +287,8 @@ class _Loop:
         lab = self.lab
         self.bands = spectral_bands(lab.profile, s.bands)
         self.print_size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
-        solid = getattr(lab.ctx.content, "mode", "fog") == "solid"
+        # a solid as sample_source tells it (the job's source wrapped by job.content)
+        solid = isinstance(lab.source, SolidSource)
         self.cells = s.max_cells or (SOLID_CELLS if solid else FOG_CELLS)
         self.block = block_for_cell(lab.voxel_mm, self.print_size, self.cells)
         self.views = views
