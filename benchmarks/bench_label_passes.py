@@ -37,7 +37,7 @@ from dreamprint_gui.gamut.alignment import (  # noqa: E402
     ROW_BLOCK,
     ROW_STRIDE,
     RUN_MIN,
-    align_rows,
+    align_block,
     block_buffers,
     count_runs,
     finish_staging,
@@ -130,16 +130,7 @@ def _layer(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear, method, mask
                 else:
                     interpolate_block(flat, n, col, mb, W, off, A, G)
             if upto >= 3:
-                lo, hi = align_rows(G, mb, sigma_clear, C)
-                stats[0] += lo
-                stats[1] += hi
-                w_lo = stats[2]
-                w_hi = stats[3]
-                for k in range(mb):
-                    w_lo = max(w_lo, np.float64(C[6 * ROW_STRIDE + k]))
-                    w_hi = max(w_hi, np.float64(C[7 * ROW_STRIDE + k]))
-                stats[2] = w_lo
-                stats[3] = w_hi
+                align_block(sigma_clear, mb, G, C, stats)
             if upto >= 4:
                 label_rows(C2, tq[k0:], mb, order, bg_label, lab)
             if upto >= 5:

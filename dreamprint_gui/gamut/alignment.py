@@ -591,18 +591,32 @@ def align_block(sigma_clear, m, G, C, stats):
     lo, hi = align_rows(G, m, sigma_clear, C)
     stats[0] += lo
     stats[1] += hi
-    # the running maxima in locals: through the array, each voxel waits for the last one's
-    # store; a block with no clamped voxel has only zeros there
+    # a block with no clamped voxel has only zeros there
     if lo > 0:
-        w_lo = stats[2]
-        for k in range(m):
-            w_lo = max(w_lo, np.float64(C[6 * ROW_STRIDE + k]))
-        stats[2] = w_lo
+        stats[2] = max(stats[2], np.float64(_row_max(C, 6 * ROW_STRIDE, m)))
     if hi > 0:
-        w_hi = stats[3]
-        for k in range(m):
-            w_hi = max(w_hi, np.float64(C[7 * ROW_STRIDE + k]))
-        stats[3] = w_hi
+        stats[3] = max(stats[3], np.float64(_row_max(C, 7 * ROW_STRIDE, m)))
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _row_max(C, base, m):
+    """The largest of ``C[base:base + m]`` (non-negative float32, no NaN), 0 if none: 16
+    running maxima, one per lane of a vector (a single running maximum waits for the last
+    comparison at every voxel: 1.1 -> 0.2 ns per voxel). Most blocks have a voxel clamped low
+    (3-16 % of the foreground of the sample kinds), so this runs for most blocks."""
+    acc = np.zeros(16, np.float32)
+    m16 = m - m % 16
+    for k0 in range(0, m16, 16):
+        for j in range(16):
+            v = C[base + k0 + j]
+            acc[j] = v if v > acc[j] else acc[j]
+    w = np.float32(0.0)
+    for j in range(16):
+        w = acc[j] if acc[j] > w else w
+    for k in range(m16, m):
+        v = C[base + k]
+        w = v if v > w else w
+    return w
 
 
 @nb.njit(cache=True, nogil=True)
