@@ -9,8 +9,14 @@ staged colours of a block of foreground voxels: the fused job paths, :data:`AS_I
 The encoding is IEC 61966-2-1's: ``12.92 x`` for ``x <= 0.0031308``, else
 ``1.055 x^(1/2.4) - 0.055``, after clipping ``x`` to [0, 1] (NaN stays NaN), in float32 steps
 (``x * 12.92``; ``p = x^(1/2.4)``, ``p * 1.055``, ``- 0.055``, each rounded to float32, the
-constants float32 too). ``p`` is ``exp2(log2(x) e)`` in float64 with ``e`` = float32(1/2.4),
-from :mod:`...job.sample_label.vector_math` (relative error < 1e-10), rounded once to float32.
+constants float32 too). ``p`` is ``exp2_f32(log2_f32(x) e)`` with ``e`` = float32(1/2.4), from
+:mod:`...core.kernels.vector_math`: float32 arithmetic, 8 values per AVX2 instruction. Against
+a correctly rounded reference (float64 ``**`` rounded to float32) the encoded value is within
+2^-23 (1.2e-7; every float32 of (0.0031308, 1] compared, 35 % of them differ, by 1-8 units in
+the last place), a thousandth of the 100^3 colour table's node spacing
+(tests/io/volumes/test_srgb_encode.py). Speed: ~1.7 ns per value in the cache (5.2 ns per
+voxel's three; with float64 ``exp2(log2)`` correctly rounded but for 6 in a million values, as
+until issue 25: 10.4).
 
 Why not ``np.power(x, 1/2.4, dtype=np.float32)`` (what the slab path used before): numpy
 dispatches float32 ``power`` by CPU. On an AVX-512 CPU it runs Intel's SVML, elsewhere the C
@@ -18,10 +24,8 @@ library's ``powf``, and the two disagree in the last bit for 20 % of the values 
 (0.0031308, 1] (all 70,439,397 float32 values there compared on the project's VM, numpy 2.4).
 A Dask cluster of mixed machines would then label some voxels of a linear-colour source
 differently, and a compiled loop that calls ``powf`` cannot be vectorised. Plain IEEE
-arithmetic rounds identically everywhere, vectorised or not. Against a correctly rounded
-reference (float64 ``**`` rounded to float32) ``p`` differs by one unit in the last place for
-6 in a million values of (0.0031308, 1] (tests/io/volumes/test_srgb_encode.py); SVML's differs
-for 19 %. Speed: ~2.6 ns per value in the cache (numpy's SVML path: ~2.0).
+arithmetic (no fused multiply-adds: numba compiles without fast-math) rounds identically
+everywhere, vectorised or not.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.core.kernels.vector_math import exp2_f64, log2_f64
+from dreamprint_gui.core.kernels.vector_math import exp2_f32, log2_f32
 
 __all__ = ["srgb_encode32", "encode_where", "clip_where", "prepare_staged", "encode_inplace",
            "AS_IS", "CLIP", "ENCODE"]
@@ -37,7 +41,7 @@ __all__ = ["srgb_encode32", "encode_where", "clip_where", "prepare_staged", "enc
 # What :func:`prepare_staged` does to a colour: nothing, clip to [0, 1], sRGB-encode.
 AS_IS, CLIP, ENCODE = 0, 1, 2
 
-_E = float(np.float32(1 / 2.4))
+_E = np.float32(1 / 2.4)
 _LOW = np.float32(0.0031308)
 _SLOPE = np.float32(12.92)
 _A = np.float32(1.055)
@@ -53,7 +57,7 @@ def srgb_encode32(x):
     c = c if c < one else one
     c = x if x != x else c                              # NaN stays NaN, as np.clip
     lin = c * _SLOPE
-    p = np.float32(exp2_f64(log2_f64(np.float64(c if c > _LOW else one)) * _E))
+    p = exp2_f32(log2_f32(c if c > _LOW else one) * _E)
     enc = p * _A - _B
     return lin if (c <= _LOW or c != c) else enc
 
