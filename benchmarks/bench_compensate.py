@@ -144,8 +144,8 @@ def main() -> None:
     ap.add_argument("--spp", type=int, default=32)
     ap.add_argument("--views", type=int, default=3)
     ap.add_argument("--cells", type=int, default=None,
-                    help="The optimisation's proof cells (default: the optimiser's: 128 for "
-                         "a solid, 32 otherwise); --floor-only: the proof's (default 128).")
+                    help="The optimisation's proof cells (default: the optimiser's, the "
+                         "proof's 128); --floor-only: the proof's (default 128).")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--step", type=float, default=1.0, help="The optimiser's step.")
     ap.add_argument("--judge-spp", type=int, default=256,

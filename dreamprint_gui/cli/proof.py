@@ -383,8 +383,8 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.option("--spp", type=int, default=32, show_default=True,
               help="Samples per pixel of the training renders.")
 @click.option("--cells", "max_cells", type=int, default=None,
-              help="Proof cells along the print's longest axis (default: 128 for solid "
-                   "content, 32 otherwise).")
+              help="Proof cells along the print's longest axis of the training renders "
+                   "(default: the proof's, 128).")
 @click.option("--field-cells", type=int, default=32, show_default=True,
               help="Correction cells along the print's longest axis.")
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",

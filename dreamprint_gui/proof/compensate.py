@@ -50,7 +50,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.job.content import SolidSource
 from dreamprint_gui.job.correction import (
     Correction,
     placement_key,
@@ -86,12 +85,14 @@ __all__ = ["CompensateSettings", "run_compensate", "optimise", "backproject",
            "training_views", "TRAIN_ELEVATION_DEG"]
 
 TRAIN_ELEVATION_DEG = 35.0
-# A solid's boundary cell holds a fraction of ink dense enough to be opaque, where the source
-# (read at the cell's centre) may be empty: on coarse cells the print of a solid is fatter than
-# its source by up to half a cell (the knight at 20 mm on 32 cells: coverage +0.073, and the
-# field then learned a held-out dE2000 10 % worse than none; on 128 cells: +0.003, no worse)
-SOLID_CELLS = DEFAULT_MAX_CELLS    # the proof's own
-FOG_CELLS = 32
+# The training renders use the proof's own cells: the field learns to correct the print the
+# proof judges. On coarser cells the print is another medium: a solid's boundary cell holds
+# enough ink to be opaque where the source (read at the cell's centre) is empty (the knight at
+# 20 mm on 32 cells: coverage +0.073, and a held-out dE2000 10 % worse than no field; on 128:
+# +0.003), and a splat's averaged cells print lighter than its fine ones, so the field learned
+# to darken it (INRIA splat, held-out L* -1.2 trained on 32 cells, -0.8 on 128; dE2000 5.33
+# -> 4.81; bench_compensate.py)
+TRAIN_CELLS = DEFAULT_MAX_CELLS
 RATIO_CLIP = 2.0
 _EPS_COLOUR = 0.02
 _ALPHA_MIN = 0.02
@@ -112,7 +113,7 @@ class CompensateSettings:
     # training renders: at 4 spp their noise drowned the error (INRIA splat, held-out dE2000
     # 5.81 trained at 4 spp, 5.33 at 32; bench_compensate.py)
     spp: int = 32
-    # proof cells on the longest axis; None: SOLID_CELLS for a solid, else FOG_CELLS
+    # proof cells on the longest axis; None: TRAIN_CELLS
     max_cells: int | None = None
     field_cells: int = 32          # correction cells on the longest axis
     step: float = 1.0
@@ -135,7 +136,7 @@ class CompensateSettings:
                              resolution=self.resolution, spp=self.spp, method=method,
                              halftone=self.halftone, seed=self.seed,
                              density_scale=self.density_scale, background=self.background,
-                             max_cells=self.max_cells or FOG_CELLS,
+                             max_cells=self.max_cells or TRAIN_CELLS,
                              layers_per_block=self.layers_per_block,
                              bands=self.bands, max_depth=self.max_depth,
                              table_size=self.table_size, source_options=self.source_options,
@@ -287,9 +288,7 @@ class _Loop:
         lab = self.lab
         self.bands = spectral_bands(lab.profile, s.bands)
         self.print_size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
-        # a solid as sample_source tells it (the job's source wrapped by job.content)
-        solid = isinstance(lab.source, SolidSource)
-        self.cells = s.max_cells or (SOLID_CELLS if solid else FOG_CELLS)
+        self.cells = s.max_cells or TRAIN_CELLS
         self.block = block_for_cell(lab.voxel_mm, self.print_size, self.cells)
         self.views = views
         self.gshape = field_shape(self.print_size, s.field_cells)

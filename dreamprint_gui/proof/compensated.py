@@ -183,7 +183,7 @@ def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = Non
     cs = CompensateSettings(
         source=ps.source, height_mm=ps.height_mm, size_mm=ps.size_mm, printer=ps.printer,
         profile=ps.profile, views=training_views, iterations=iterations, seed=ps.seed + 1,
-        resolution=train_resolution, spp=train_spp, max_cells=min(ps.max_cells, 64),
+        resolution=train_resolution, spp=train_spp, max_cells=ps.max_cells,
         field_cells=field_cells, halftone=ps.halftone, density_scale=ps.density_scale,
         background=ps.background, table_size=ps.table_size, source_options=ps.source_options,
         up=ps.up, rotate=ps.rotate, fit=ps.fit)

@@ -133,14 +133,18 @@ def test_evaluate_methods_compensated_row_and_gamut_floor(capsys):
     assert t["gamut_floor"]["object_pixels"] > 0
 
 
-def test_a_solid_is_optimised_on_finer_cells(shared_data):
-    from dreamprint_gui.proof.compensate import FOG_CELLS, SOLID_CELLS, _Loop
+def test_training_renders_use_the_proofs_cells(shared_data):
+    """Solid or fog, the field is trained on the medium the proof judges (its default cells)
+    unless told otherwise."""
+    from dreamprint_gui.proof.compensate import TRAIN_CELLS, _Loop
+    from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS
 
     knight = str(shared_data / "voxels" / "magicavoxel_chr_knight.vox")
     never = lambda: False  # noqa: E731
+    assert TRAIN_CELLS == DEFAULT_MAX_CELLS
     assert _Loop(CompensateSettings(source=knight, height_mm=3.0, table_size=17), [],
-                 never).cells == SOLID_CELLS
+                 never).cells == TRAIN_CELLS
     assert _Loop(CompensateSettings(source="demo", height_mm=3.0, table_size=17), [],
-                 never).cells == FOG_CELLS
+                 never).cells == TRAIN_CELLS
     assert _Loop(CompensateSettings(source=knight, height_mm=3.0, table_size=17, max_cells=20),
                  [], never).cells == 20
