@@ -7,7 +7,7 @@ the proof's cameras at elevation 20 degrees with the seed), on the default print
 one PNG with the figures of both and a JSON of the reports beside it.
 
     PYTHONPATH=. python scripts/compensation_figure.py SOURCE OUT.png [--height-mm 20]
-        [--background empty] [--views 2] [--resolution 160] [--spp 8] [--cells 32]
+        [--background empty] [--views 2] [--resolution 160] [--spp 64] [--cells 128]
 """
 
 from __future__ import annotations
@@ -83,8 +83,8 @@ def main() -> int:
     ap.add_argument("--background", default="empty", choices=("clear", "empty"))
     ap.add_argument("--views", type=int, default=2)
     ap.add_argument("--resolution", type=int, default=160)
-    ap.add_argument("--spp", type=int, default=8)
-    ap.add_argument("--cells", type=int, default=32)
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--cells", type=int, default=128)
     ap.add_argument("--iterations", type=int, default=4)
     ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args()
