@@ -104,7 +104,7 @@ def floor_only(a) -> None:
     from dreamprint_gui.proof.labels import EngineLabels
     from dreamprint_gui.proof.medium import block_for_cell
     from dreamprint_gui.proof.methods import _convert_settings
-    from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS, ProofSettings, gamut_floor
+    from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
     from dreamprint_gui.proof.scielab import samples_per_degree
     from dreamprint_gui.proof.source_render import render_source, sample_source
     from dreamprint_gui.proof.spectral import spectral_bands
@@ -114,10 +114,10 @@ def floor_only(a) -> None:
             t0 = time.perf_counter()
             ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm, views=4,
                                resolution=a.resolution, background=bg,
-                               max_cells=a.cells or DEFAULT_MAX_CELLS)
+                               max_cells=a.cells)
             lab = EngineLabels(_convert_settings(ps))
             size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
-            block = block_for_cell(lab.voxel_mm, size, a.cells or DEFAULT_MAX_CELLS)
+            block = block_for_cell(lab.voxel_mm, size, a.cells)
             cells = tuple(-(-n // b) for n, b in zip(lab.shape_xyz, block, strict=True))
             lo = -0.5 * np.asarray(size)
             field = sample_source(lab.source, lab.grid, block, lab.density_scale, cells, lo)
@@ -135,7 +135,7 @@ def floor_only(a) -> None:
 
 def main() -> None:
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
-    from dreamprint_gui.proof.runner import ProofSettings, render_proof
+    from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS, ProofSettings, render_proof
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--height-mm", type=float, default=20.0)
@@ -143,9 +143,9 @@ def main() -> None:
     ap.add_argument("--resolution", type=int, default=64)
     ap.add_argument("--spp", type=int, default=32)
     ap.add_argument("--views", type=int, default=3)
-    ap.add_argument("--cells", type=int, default=None,
-                    help="The optimisation's proof cells (default: the optimiser's, the "
-                         "proof's 128); --floor-only: the proof's (default 128).")
+    ap.add_argument("--cells", type=int, default=DEFAULT_MAX_CELLS,
+                    help="The optimisation's proof cells (the proof's); --floor-only: the "
+                         "proof's.")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--step", type=float, default=1.0, help="The optimiser's step.")
     ap.add_argument("--judge-spp", type=int, default=256,

@@ -382,9 +382,9 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.option("--resolution", type=int, default=64, show_default=True)
 @click.option("--spp", type=int, default=32, show_default=True,
               help="Samples per pixel of the training renders.")
-@click.option("--cells", "max_cells", type=int, default=None,
+@click.option("--cells", "max_cells", type=int, default=128, show_default=True,
               help="Proof cells along the print's longest axis of the training renders "
-                   "(default: the proof's, 128).")
+                   "(the proof's).")
 @click.option("--field-cells", type=int, default=32, show_default=True,
               help="Correction cells along the print's longest axis.")
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",

@@ -113,8 +113,7 @@ class CompensateSettings:
     # training renders: at 4 spp their noise drowned the error (INRIA splat, held-out dE2000
     # 5.81 trained at 4 spp, 5.33 at 32; bench_compensate.py)
     spp: int = 32
-    # proof cells on the longest axis; None: TRAIN_CELLS
-    max_cells: int | None = None
+    max_cells: int = TRAIN_CELLS   # proof cells on the longest axis
     field_cells: int = 32          # correction cells on the longest axis
     step: float = 1.0
     halftone: str = "blue-noise"
@@ -140,7 +139,7 @@ class CompensateSettings:
                              resolution=self.resolution, spp=self.spp, method=method,
                              halftone=self.halftone, seed=self.seed,
                              density_scale=self.density_scale, background=self.background,
-                             max_cells=self.max_cells or TRAIN_CELLS,
+                             max_cells=self.max_cells,
                              layers_per_block=self.layers_per_block,
                              bands=self.bands, max_depth=self.max_depth,
                              table_size=self.table_size, source_options=self.source_options,
@@ -152,7 +151,7 @@ def validate(s: CompensateSettings) -> None:
         raise DreamPrintError(f"--views must be 1..16, got {s.views}")
     if not 0 <= int(s.iterations) <= 50:
         raise DreamPrintError(f"--iterations must be 0..50, got {s.iterations}")
-    if s.max_cells is not None and not 4 <= int(s.max_cells) <= 512:
+    if not 4 <= int(s.max_cells) <= 512:
         raise DreamPrintError(f"--cells must be 4..512, got {s.max_cells}")
     if not 2 <= int(s.field_cells) <= 64:
         raise DreamPrintError(f"--field-cells must be 2..64, got {s.field_cells}")
@@ -292,7 +291,7 @@ class _Loop:
         lab = self.lab
         self.bands = spectral_bands(lab.profile, s.bands)
         self.print_size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
-        self.cells = s.max_cells or TRAIN_CELLS
+        self.cells = int(s.max_cells)
         self.block = block_for_cell(lab.voxel_mm, self.print_size, self.cells)
         self.views = views
         self.gshape = field_shape(self.print_size, s.field_cells)
