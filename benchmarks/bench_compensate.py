@@ -6,8 +6,10 @@ render seed ``SEED + 1``; then the proof (cameras at elevation 20 degrees, seed 
 paper's method and of the compensated job. Prints dE2000 mean / p95, S-CIELAB and the
 coverage error of both on the held-out cameras, the reduction, the gamut floor, the render
 noise of the paper's proof (the print rendered again at seed + 1: what no method can go below
-at these samples per pixel), the optimisation's wall time and the row's CPU time (all threads);
-with the machine's load (``/proc/loadavg``), since the wall time depends on it.
+at these samples per pixel), the shares of the figures from the object pixels where the source
+is empty (a Clear block's body: what no ink inside the object changes), the optimisation's
+wall time and the row's CPU time (all threads); with the machine's load (``/proc/loadavg``),
+since the wall time depends on it.
 
     PYTHONPATH=. python benchmarks/bench_compensate.py [--height-mm 20] [--iterations 4]
         [--resolution 64] [--spp 32] [--views 3] [--backgrounds clear,empty] [--only knight]
@@ -217,6 +219,15 @@ def main() -> None:
                   f"{noise['paper']['mean_scielab_de2000']:4.2f} | optimise {t_opt:.0f} s, all "
                   f"{row['cpu_s']:.0f} CPU s "
                   f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)
+            if p["empty_source_fraction"] > 0.005:
+                print(f"{'':14s} where the source is empty ({100 * p['empty_source_fraction']:.0f}"
+                      f" % of the object pixels): shares of dE {p['empty_source_de2000']:5.2f} /"
+                      f" {c['empty_source_de2000']:5.2f}, S-CIELAB "
+                      f"{p['empty_source_scielab_de2000']:5.2f} / "
+                      f"{c['empty_source_scielab_de2000']:5.2f}, cov "
+                      f"{p['empty_source_coverage_error']:+.3f} / "
+                      f"{c['empty_source_coverage_error']:+.3f} (paper / compensated)",
+                      flush=True)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
             json.dump(rows, fh, indent=2)

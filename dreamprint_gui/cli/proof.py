@@ -196,6 +196,7 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
     """Render SOURCE (a volume, 'demo', or an exported JOB folder) as printed, beside the
     source, and measure how alike they look; or, with --chart, a printed chart's recipes as
     an instrument would measure them."""
+    from dreamprint_gui.proof.compare import empty_source_note
     from dreamprint_gui.proof.runner import run_proof
 
     if chart is not None or reflectance is not None:
@@ -218,6 +219,9 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
                f"{o['psnr_db']:.1f} dB, SSIM {o['ssim']:.3f}, coverage "
                f"{o['source_coverage']:.3f} -> {o['print_coverage']:.3f} "
                f"({report['timings_s']['total']:.0f} s, {report['renderer']['variant']})")
+    note = empty_source_note(o)
+    if note:
+        click.echo(note)
     f = report["noise_floor"]
     if f is not None:
         click.echo(f"noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 mean "

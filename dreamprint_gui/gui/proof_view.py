@@ -367,6 +367,8 @@ class ProofPage(QWidget):
         self._end("succeeded", "done: open loop and compensated on this page's cameras")
 
     def _on_result(self, result: dict) -> None:
+        from dreamprint_gui.proof.compare import empty_source_note
+
         self.comparison = None
         self._set_mode(PROOF_TITLES)
         self.result = result["report"]
@@ -383,7 +385,8 @@ class ProofPage(QWidget):
             f"{self.result['viewing']['distance_mm']:g} mm{floor}; PSNR {o['psnr_db']:.1f} dB; "
             f"SSIM {o['ssim']:.3f}; coverage "
             f"{o['source_coverage']:.3f} (source) -> {o['print_coverage']:.3f} (print); "
-            f"{self.result['renderer']['variant']}, {self.result['timings_s']['total']:.0f} s")
+            f"{self.result['renderer']['variant']}, {self.result['timings_s']['total']:.0f} s"
+            + (f"; {note}" if (note := empty_source_note(o)) else ""))
         self._end("succeeded", "done")
 
     def _show_view(self, i: int) -> None:

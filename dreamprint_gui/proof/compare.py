@@ -1,8 +1,8 @@
 """Source vs print: dE2000 map, mean / 95th-percentile dE2000 and S-CIELAB dE2000, PSNR, SSIM,
 coverage error; the noise floor between two renders of the same print.
 
-Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_heatmap` and
-:data:`COVERAGE_THRESHOLD`.
+Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_heatmap`,
+:func:`empty_source_note` and :data:`COVERAGE_THRESHOLD`.
 
 - Colour: both images are XYZ relative to the white environment (D65 white = the observer's
   white), converted to CIELAB with that white; dE2000 by colour-science (CIE 2000).
@@ -18,6 +18,13 @@ Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_
   the emission-absorption alpha for the source, ``exp(-integral sigma_t)`` of the print's medium
   (luminance-weighted over bands) for the print. Coverage error: mean over object pixels of
   print minus source (positive: the print looks more opaque), and its mean absolute value.
+- Where the source is empty (:func:`compare_view`'s ``empty_source_*``): the object pixels
+  where only the print has coverage (source coverage at most the threshold), e.g. a Clear
+  block's body around the object: their fraction of the object pixels, and their shares of
+  the mean dE2000, of the mean S-CIELAB dE2000 and of the coverage error (sums over those
+  pixels / all object pixels, so that a figure is its share inside the source plus this one).
+  What lies there is not the object's reproduction: no ink placed inside the source's
+  silhouette changes it.
 - PSNR and SSIM (scikit-image, ``data_range = 1``, SSIM per channel with its default 7 x 7
   window) on the display images (sRGB-encoded, clipped to [0, 1]) over the whole frame.
 """
@@ -32,6 +39,7 @@ from dreamprint_gui.proof.scielab import scielab_de2000
 
 __all__ = ["compare_view", "noise_floor", "summarise", "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "de_heatmap", "to_display",
+           "empty_source_note",
            "COVERAGE_THRESHOLD", "DE_MAP_MAX"]
 
 COVERAGE_THRESHOLD = 0.05
@@ -72,6 +80,8 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     ssim = float(structural_similarity(a, b, data_range=1.0, channel_axis=-1))
     n = int(mask.sum())
     cov = (prn_alpha - src_alpha)[mask]
+    empty = mask & (src_alpha <= threshold)
+    share = 1.0 / n if n else 0.0
     figures = {
         "object_pixels": n,
         "mean_de2000": float(de[mask].mean()) if n else 0.0,
@@ -83,6 +93,10 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
         "coverage_abs_error": float(np.abs(cov).mean()) if n else 0.0,
         "source_coverage": float(src_alpha[mask].mean()) if n else 0.0,
         "print_coverage": float(prn_alpha[mask].mean()) if n else 0.0,
+        "empty_source_fraction": float(empty.sum() * share),
+        "empty_source_de2000": float(de[empty].sum() * share),
+        "empty_source_scielab_de2000": float(sde[empty].sum() * share),
+        "empty_source_coverage_error": float((prn_alpha - src_alpha)[empty].sum() * share),
     }
     return figures, np.where(mask, de, np.nan)
 
@@ -120,10 +134,23 @@ def summarise(views: list[dict]) -> dict:
         w = np.ones(len(views))
     keys = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000",
             "psnr_db", "ssim", "coverage_error", "coverage_abs_error", "source_coverage",
-            "print_coverage")
+            "print_coverage", "empty_source_fraction", "empty_source_de2000",
+            "empty_source_scielab_de2000", "empty_source_coverage_error")
     out = {k: float(np.average([v[k] for v in views], weights=w)) for k in keys}
     out["object_pixels"] = int(sum(v["object_pixels"] for v in views))
     return out
+
+
+def empty_source_note(figures: dict, min_fraction: float = 0.005) -> str:
+    """One line on the share of the figures from the object pixels where the source is empty
+    (:func:`compare_view`), or "" when they are under ``min_fraction`` of the object pixels."""
+    if figures.get("empty_source_fraction", 0.0) < min_fraction:
+        return ""
+    return (f"where the source is empty ({100 * figures['empty_source_fraction']:.0f} % of the "
+            f"object pixels, e.g. a Clear block's body; no ink in the object changes it): "
+            f"{figures['empty_source_de2000']:.2f} of the dE2000 mean, "
+            f"{figures['empty_source_scielab_de2000']:.2f} of the S-CIELAB mean, "
+            f"{figures['empty_source_coverage_error']:+.3f} of the coverage error")
 
 
 SIGNIFICANCE_FACTOR = 3.0

@@ -30,7 +30,11 @@ def test_proof_demo_writes_everything_and_is_deterministic(tmp_path, capsys):
     o = rep["overall"]
     assert o["object_pixels"] > 0 and 0 <= o["mean_de2000"] <= o["p95_de2000"] + 1e-9
     assert set(o) >= {"psnr_db", "ssim", "coverage_error", "coverage_abs_error",
-                      "mean_scielab_de2000", "p95_scielab_de2000"}
+                      "mean_scielab_de2000", "p95_scielab_de2000", "empty_source_fraction",
+                      "empty_source_de2000", "empty_source_coverage_error"}
+    # the default Clear block: the object pixels where the source is empty are part of the
+    # figures (their shares are at most the figures themselves)
+    assert 0 <= o["empty_source_de2000"] <= o["mean_de2000"]
     # the noise floor: the print again at seed + 1; S-CIELAB blurs what the eye does not see
     f = rep["noise_floor"]
     assert f["seeds"] == [0, 1] and f["object_pixels"] > 0
