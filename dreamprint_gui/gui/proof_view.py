@@ -58,6 +58,12 @@ def compensation_text(result: dict) -> str:
     rows.append(f"change: dE2000 {100 * (b['mean_de2000'] / a['mean_de2000'] - 1):+.0f} %, "
                 f"S-CIELAB {100 * (b['mean_scielab_de2000'] / a['mean_scielab_de2000'] - 1):+.0f}"
                 " %")
+    if a.get("empty_source_fraction", 0.0) >= 0.005:
+        rows.append(f"of which where the source is empty ({100 * a['empty_source_fraction']:.0f} "
+                    f"% of the object pixels, e.g. the Clear block; no correction changes it): "
+                    f"dE2000 {a['empty_source_de2000']:.2f} -> {b['empty_source_de2000']:.2f}, "
+                    f"coverage error {a['empty_source_coverage_error']:+.3f} -> "
+                    f"{b['empty_source_coverage_error']:+.3f}")
     floor = result["open_loop"]["report"].get("gamut_floor")
     opt = result["optimiser"]
     f = opt["figures"]

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from dreamprint_gui.gui.proof_view import COMPENSATION_TITLES, ProofPage
+from dreamprint_gui.gui.proof_view import COMPENSATION_TITLES, ProofPage, compensation_text
 from dreamprint_gui.job.plan import ConvertSettings
 from dreamprint_gui.proof.compare import to_display
 
@@ -191,3 +191,25 @@ def test_proof_page_reports_a_failed_compensation_in_one_line(qtbot, table_size)
     msg = page.status.text()
     assert "cloud.vdb" in msg and "Traceback" not in msg and "\n" not in msg
     assert page.compensate_button.isEnabled()
+
+
+def test_compensation_text_names_the_share_where_the_source_is_empty():
+    """With a Clear block the comparison says how much of each figure lies where the source is
+    empty (what no correction changes); without one it says nothing of it."""
+    def overall(de, share, frac):
+        return {"mean_de2000": de, "p95_de2000": 2 * de, "mean_scielab_de2000": de / 2,
+                "coverage_error": 0.1, "empty_source_fraction": frac,
+                "empty_source_de2000": share, "empty_source_coverage_error": 0.08}
+
+    def result(frac):
+        return {"open_loop": {"report": {"overall": overall(8.0, 5.5, frac),
+                                         "gamut_floor": None}},
+                "compensated": {"report": {"overall": overall(7.0, 5.4, frac)}},
+                "optimiser": {"training_views": [0, 1, 2], "settings": {"seed": 1},
+                              "seconds": 3.0, "figures": {"before": {"mean_de2000": 9.0},
+                                                          "after": {"mean_de2000": 8.0}}}}
+
+    text = compensation_text(result(0.8))
+    assert "where the source is empty (80 % of the object pixels" in text
+    assert "dE2000 5.50 -> 5.40, coverage error +0.080 -> +0.080" in text
+    assert "source is empty" not in compensation_text(result(0.0))
