@@ -407,6 +407,7 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
                source_options, table_size, overwrite, as_json, up, rotate, fit) -> None:
     """Optimise a correction (colour and density factors on a coarse field) so that the proof
     of the print of SOURCE matches its render; apply it with convert --compensation."""
+    from dreamprint_gui.proof.compare import empty_source_note
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
 
     _check_source(source)
@@ -426,3 +427,6 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
                f"{a['mean_de2000']:.2f}, coverage error {b['coverage_error']:+.3f} -> "
                f"{a['coverage_error']:+.3f} (iteration {a['iteration']}; "
                f"{report['seconds']:.0f} s)")
+    note = empty_source_note(b)
+    if note:
+        click.echo(f"on the training cameras, {note}")

@@ -39,10 +39,13 @@ from dreamprint_gui.proof.scielab import scielab_de2000
 
 __all__ = ["compare_view", "noise_floor", "summarise", "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "de_heatmap", "to_display",
-           "empty_source_note",
+           "empty_source_note", "EMPTY_SOURCE_KEYS",
            "COVERAGE_THRESHOLD", "DE_MAP_MAX"]
 
 COVERAGE_THRESHOLD = 0.05
+# compare_view's figures of the object pixels where the source is empty (module docstring)
+EMPTY_SOURCE_KEYS = ("empty_source_fraction", "empty_source_de2000",
+                     "empty_source_scielab_de2000", "empty_source_coverage_error")
 DE_MAP_MAX = 20.0
 
 
@@ -134,8 +137,7 @@ def summarise(views: list[dict]) -> dict:
         w = np.ones(len(views))
     keys = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000",
             "psnr_db", "ssim", "coverage_error", "coverage_abs_error", "source_coverage",
-            "print_coverage", "empty_source_fraction", "empty_source_de2000",
-            "empty_source_scielab_de2000", "empty_source_coverage_error")
+            "print_coverage", *EMPTY_SOURCE_KEYS)
     out = {k: float(np.average([v[k] for v in views], weights=w)) for k in keys}
     out["object_pixels"] = int(sum(v["object_pixels"] for v in views))
     return out

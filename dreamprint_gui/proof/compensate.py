@@ -58,7 +58,7 @@ from dreamprint_gui.job.correction import (
 )
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.proof.cameras import View, orbit_views
-from dreamprint_gui.proof.compare import compare_view, summarise
+from dreamprint_gui.proof.compare import EMPTY_SOURCE_KEYS, compare_view, summarise
 from dreamprint_gui.proof.labels import EngineLabels
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
 from dreamprint_gui.proof.methods import _convert_settings
@@ -410,7 +410,8 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         o = summarise(figs)
         history.append({"iteration": it, "elapsed_s": round(el(), 2),
                         **{k: o[k] for k in ("mean_de2000", "p95_de2000", "mean_scielab_de2000",
-                                             "coverage_error", "coverage_abs_error")}})
+                                             "coverage_error", "coverage_abs_error",
+                                             *EMPTY_SOURCE_KEYS)}})
         if it == 0:
             t_first = el()
         left = "" if it == 0 or it == n_it else \

@@ -62,6 +62,9 @@ def test_loop_lowers_the_error_and_writes_a_correction(tmp_path, capsys):
     rep = json.loads(cap.out)
     hist = rep["history"]
     assert len(hist) == 3 and rep["proof_cells"] == 12
+    # the default Clear block: the share of the training figures where the source is empty
+    assert 0 <= hist[0]["empty_source_de2000"] <= hist[0]["mean_de2000"]
+    assert 0 <= hist[0]["empty_source_fraction"] <= 1
     after = rep["figures"]["after"]
     assert after["mean_de2000"] < hist[0]["mean_de2000"]
     corr = load_correction(out)
