@@ -136,6 +136,7 @@ def floor_only(a) -> None:
 
 
 def main() -> None:
+    from dreamprint_gui.proof.compare import inside_source
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
     from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS, ProofSettings, render_proof
 
@@ -226,8 +227,11 @@ def main() -> None:
                       f"{p['empty_source_scielab_de2000']:5.2f} / "
                       f"{c['empty_source_scielab_de2000']:5.2f}, cov "
                       f"{p['empty_source_coverage_error']:+.3f} / "
-                      f"{c['empty_source_coverage_error']:+.3f} (paper / compensated)",
-                      flush=True)
+                      f"{c['empty_source_coverage_error']:+.3f} (paper / compensated); inside "
+                      f"the source dE {inside_source(p, 'mean_de2000'):5.2f} -> "
+                      f"{inside_source(c, 'mean_de2000'):5.2f}, S-CIELAB "
+                      f"{inside_source(p, 'mean_scielab_de2000'):5.2f} -> "
+                      f"{inside_source(c, 'mean_scielab_de2000'):5.2f}", flush=True)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
             json.dump(rows, fh, indent=2)

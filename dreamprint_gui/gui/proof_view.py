@@ -47,6 +47,7 @@ COMPENSATION_TITLES = ("source (emission-absorption)", "open-loop print (paper's
 def compensation_text(result: dict) -> str:
     """The figures of a compensation (:func:`..proof.compensated.compare_compensation`):
     open loop and compensated on the proof's cameras, the gamut floor, the optimiser's own."""
+    from dreamprint_gui.proof.compare import inside_source
     rows = []
     for key, name in (("open_loop", "open loop"), ("compensated", "compensated")):
         o = result[key]["report"]["overall"]
@@ -64,6 +65,12 @@ def compensation_text(result: dict) -> str:
                     f"dE2000 {a['empty_source_de2000']:.2f} -> {b['empty_source_de2000']:.2f}, "
                     f"coverage error {a['empty_source_coverage_error']:+.3f} -> "
                     f"{b['empty_source_coverage_error']:+.3f}")
+        if a["empty_source_fraction"] < 1.0:
+            rows.append("inside the source: dE2000 mean "
+                        f"{inside_source(a, 'mean_de2000'):.2f} -> "
+                        f"{inside_source(b, 'mean_de2000'):.2f}, S-CIELAB "
+                        f"{inside_source(a, 'mean_scielab_de2000'):.2f} -> "
+                        f"{inside_source(b, 'mean_scielab_de2000'):.2f}")
     floor = result["open_loop"]["report"].get("gamut_floor")
     opt = result["optimiser"]
     f = opt["figures"]

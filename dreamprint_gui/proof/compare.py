@@ -2,7 +2,7 @@
 coverage error; the noise floor between two renders of the same print.
 
 Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_heatmap`,
-:func:`empty_source_note` and :data:`COVERAGE_THRESHOLD`.
+:func:`empty_source_note`, :func:`inside_source` and :data:`COVERAGE_THRESHOLD`.
 
 - Colour: both images are XYZ relative to the white environment (D65 white = the observer's
   white), converted to CIELAB with that white; dE2000 by colour-science (CIE 2000).
@@ -39,7 +39,7 @@ from dreamprint_gui.proof.scielab import scielab_de2000
 
 __all__ = ["compare_view", "noise_floor", "summarise", "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "de_heatmap", "to_display",
-           "empty_source_note", "EMPTY_SOURCE_KEYS",
+           "empty_source_note", "EMPTY_SOURCE_KEYS", "inside_source",
            "COVERAGE_THRESHOLD", "DE_MAP_MAX"]
 
 COVERAGE_THRESHOLD = 0.05
@@ -143,16 +143,37 @@ def summarise(views: list[dict]) -> dict:
     return out
 
 
+def inside_source(figures: dict, key: str) -> float | None:
+    """The mean of ``key`` (``mean_de2000``, ``mean_scielab_de2000`` or ``coverage_error``)
+    over the object pixels where the source is not empty: the figure less its share where the
+    source is empty (:func:`compare_view`), over the rest's fraction; None when there is no
+    such pixel."""
+    share = {"mean_de2000": "empty_source_de2000",
+             "mean_scielab_de2000": "empty_source_scielab_de2000",
+             "coverage_error": "empty_source_coverage_error"}[key]
+    rest = 1.0 - figures["empty_source_fraction"]
+    if rest <= 0.0:
+        return None
+    return (figures[key] - figures[share]) / rest
+
+
 def empty_source_note(figures: dict, min_fraction: float = 0.005) -> str:
     """One line on the share of the figures from the object pixels where the source is empty
-    (:func:`compare_view`), or "" when they are under ``min_fraction`` of the object pixels."""
+    (:func:`compare_view`) and the figures inside the source, or "" when those pixels are under
+    ``min_fraction`` of the object pixels."""
     if figures.get("empty_source_fraction", 0.0) < min_fraction:
         return ""
-    return (f"where the source is empty ({100 * figures['empty_source_fraction']:.0f} % of the "
+    note = (f"where the source is empty ({100 * figures['empty_source_fraction']:.0f} % of the "
             f"object pixels, e.g. a Clear block's body; no ink in the object changes it): "
             f"{figures['empty_source_de2000']:.2f} of the dE2000 mean, "
             f"{figures['empty_source_scielab_de2000']:.2f} of the S-CIELAB mean, "
             f"{figures['empty_source_coverage_error']:+.3f} of the coverage error")
+    inside = [inside_source(figures, k)
+              for k in ("mean_de2000", "mean_scielab_de2000", "coverage_error")]
+    if inside[0] is None:
+        return note
+    return (note + f"; inside the source: dE2000 mean {inside[0]:.2f}, S-CIELAB "
+            f"{inside[1]:.2f}, coverage error {inside[2]:+.3f}")
 
 
 SIGNIFICANCE_FACTOR = 3.0

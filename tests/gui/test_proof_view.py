@@ -199,7 +199,8 @@ def test_compensation_text_names_the_share_where_the_source_is_empty():
     def overall(de, share, frac):
         return {"mean_de2000": de, "p95_de2000": 2 * de, "mean_scielab_de2000": de / 2,
                 "coverage_error": 0.1, "empty_source_fraction": frac,
-                "empty_source_de2000": share, "empty_source_coverage_error": 0.08}
+                "empty_source_de2000": share, "empty_source_scielab_de2000": 2.0,
+                "empty_source_coverage_error": 0.08}
 
     def result(frac):
         return {"open_loop": {"report": {"overall": overall(8.0, 5.5, frac),
@@ -212,4 +213,6 @@ def test_compensation_text_names_the_share_where_the_source_is_empty():
     text = compensation_text(result(0.8))
     assert "where the source is empty (80 % of the object pixels" in text
     assert "dE2000 5.50 -> 5.40, coverage error +0.080 -> +0.080" in text
+    # inside the source: (8.0 - 5.5) / 0.2 -> (7.0 - 5.4) / 0.2; S-CIELAB (4 - 2) / 0.2 -> ...
+    assert "inside the source: dE2000 mean 12.50 -> 8.00, S-CIELAB 10.00 -> 7.50" in text
     assert "source is empty" not in compensation_text(result(0.0))

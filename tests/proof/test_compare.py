@@ -53,6 +53,16 @@ def test_empty_source_shares_add_up_to_the_figures(obs):
     assert 0.0 < fig["empty_source_scielab_de2000"] < fig["mean_scielab_de2000"]
 
 
+def test_inside_the_source_is_the_figure_over_the_source_pixels(obs):
+    from dreamprint_gui.proof.compare import inside_source
+
+    src, prn, sa, pa = _scene(obs, 0.2)
+    fig, de = compare_view(src, prn, sa, pa, obs, samples_per_degree=10.0)
+    assert inside_source(fig, "coverage_error") == pytest.approx(0.02)  # 0.92 against 0.9
+    assert inside_source(fig, "mean_de2000") == pytest.approx(float(de[8:24, 8:24].mean()))
+    assert inside_source({**fig, "empty_source_fraction": 1.0}, "mean_de2000") is None
+
+
 def test_no_empty_source_share_without_haze(obs):
     src, prn, sa, pa = _scene(obs, 0.0)
     fig, _ = compare_view(src, prn, sa, pa, obs, samples_per_degree=10.0)
@@ -70,5 +80,6 @@ def test_the_note_names_the_empty_source_share_only_when_there_is_one(obs):
     fig, _ = compare_view(src, prn, sa, pa, obs, samples_per_degree=10.0)
     note = empty_source_note(fig)
     assert "75 % of the object pixels" in note and "+0.150 of the coverage error" in note
+    assert "inside the source: dE2000 mean" in note and "coverage error +0.020" in note
     src, prn, sa, pa = _scene(obs, 0.0)
     assert empty_source_note(compare_view(src, prn, sa, pa, obs, 10.0)[0]) == ""
