@@ -65,12 +65,11 @@ def compensation_text(result: dict) -> str:
                     f"dE2000 {a['empty_source_de2000']:.2f} -> {b['empty_source_de2000']:.2f}, "
                     f"coverage error {a['empty_source_coverage_error']:+.3f} -> "
                     f"{b['empty_source_coverage_error']:+.3f}")
-        if a["empty_source_fraction"] < 1.0:
-            rows.append("inside the source: dE2000 mean "
-                        f"{inside_source(a, 'mean_de2000'):.2f} -> "
-                        f"{inside_source(b, 'mean_de2000'):.2f}, S-CIELAB "
-                        f"{inside_source(a, 'mean_scielab_de2000'):.2f} -> "
-                        f"{inside_source(b, 'mean_scielab_de2000'):.2f}")
+        de = [inside_source(o, "mean_de2000") for o in (a, b)]
+        sc = [inside_source(o, "mean_scielab_de2000") for o in (a, b)]
+        if None not in de:
+            rows.append(f"inside the source: dE2000 mean {de[0]:.2f} -> {de[1]:.2f}, "
+                        f"S-CIELAB {sc[0]:.2f} -> {sc[1]:.2f}")
     floor = result["open_loop"]["report"].get("gamut_floor")
     opt = result["optimiser"]
     f = opt["figures"]

@@ -82,7 +82,8 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     psnr = float(peak_signal_noise_ratio(a, b, data_range=1.0))
     ssim = float(structural_similarity(a, b, data_range=1.0, channel_axis=-1))
     n = int(mask.sum())
-    cov = (prn_alpha - src_alpha)[mask]
+    d_alpha = prn_alpha - src_alpha
+    cov = d_alpha[mask]
     empty = mask & (src_alpha <= threshold)
     share = 1.0 / n if n else 0.0
     figures = {
@@ -99,7 +100,7 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
         "empty_source_fraction": float(empty.sum() * share),
         "empty_source_de2000": float(de[empty].sum() * share),
         "empty_source_scielab_de2000": float(sde[empty].sum() * share),
-        "empty_source_coverage_error": float((prn_alpha - src_alpha)[empty].sum() * share),
+        "empty_source_coverage_error": float(d_alpha[empty].sum() * share),
     }
     return figures, np.where(mask, de, np.nan)
 
