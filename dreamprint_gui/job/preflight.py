@@ -501,6 +501,16 @@ KEEP_PRINTED = 0.05
 SUGGEST_BELOW_CLAMPED = 0.10
 
 
+def _at_most(limit: float) -> str:
+    """``limit`` to three significant digits, rounded down: a scale the warnings name as one
+    that clamps nothing must not exceed the limit they measured (0.2475 reads 0.247, not
+    0.248)."""
+    if not limit > 0 or not math.isfinite(limit):
+        return f"{limit:.3g}"
+    step = 10.0 ** (math.floor(math.log10(limit)) - 2)
+    return f"{math.floor(limit / step * (1 + 1e-12)) * step:.3g}"
+
+
 def _warnings(pf: Preflight) -> list[PreflightWarning]:
     """The warnings of a pre-flight, made together so that they never contradict each other:
 
@@ -529,7 +539,8 @@ def _warnings(pf: Preflight) -> list[PreflightWarning]:
             up = pf.max_unclamped_density_scale
             if up is not None and up > 1.5 * pf.density_scale:
                 hint = (f"the source prints as a faint haze: try --content solid, or a larger "
-                        f"--density-scale (up to {up:.3g} clamps none of the sampled voxels)")
+                        f"--density-scale (up to {_at_most(up)} clamps none of the sampled "
+                        "voxels)")
             else:
                 hint = "the source prints as a faint haze: try --content solid"
         nums = {"clear_or_empty_fraction": clear, "ink_fraction": pf.ink_fraction}
@@ -556,12 +567,12 @@ def _warnings(pf: Preflight) -> list[PreflightWarning]:
             msg += " (see the Clear warning: --content solid, not a lower scale)"
         elif safe is not None and lost is not None and lost <= KEEP_PRINTED \
                 and pf.clamped_printed_fraction < SUGGEST_BELOW_CLAMPED:
-            msg += (f"; --density-scale {safe:.3g} or less avoids it in the sampled voxels (the "
-                    "densest voxels may be unsampled: a little less is safer)")
+            msg += (f"; --density-scale {_at_most(safe)} or less avoids it in the sampled voxels "
+                    "(the densest voxels may be unsampled: a little less is safer)")
         elif safe is not None:
             msg += ("; the dense parts read as solid, so the scale is kept: "
-                    f"--density-scale {safe:.3g} would avoid clamping but thin the whole object "
-                    f"{pf.density_scale / max(safe, 1e-300):.3g}-fold"
+                    f"--density-scale {_at_most(safe)} would avoid clamping but thin the whole "
+                    f"object {pf.density_scale / max(safe, 1e-300):.3g}-fold"
                     + (f" ({100 * lost:.0f} % of its printed voxels would turn to background)"
                        if lost else "")
                     + "; --content solid prints it solid on purpose")

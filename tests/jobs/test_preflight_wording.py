@@ -1,6 +1,8 @@
 """Wording of the pre-flight summary: time estimates read as English, the clamping hint is
 honest about being estimated from a sample."""
 
+import numpy as np
+
 from dreamprint_gui.job.preflight import Preflight, PreflightWarning, _warnings
 
 
@@ -41,3 +43,14 @@ def test_clamp_hint_keeps_a_dense_object_dense():
     w = {x.code: x for x in _warnings(_pf(5.0, clamped=40, safe=3.29, lost=0.3))}
     msg = w["clamped"].message
     assert "or less" not in msg and "the scale is kept" in msg and "30 %" in msg
+
+
+def test_a_named_scale_limit_is_rounded_down():
+    """A scale named as clamping nothing never exceeds the measured limit."""
+    from dreamprint_gui.job.preflight import _at_most
+
+    assert _at_most(0.24750321925095606) == "0.247"
+    assert _at_most(0.25) == "0.25"
+    assert _at_most(19.999) == "19.9"
+    for v in 10.0 ** np.random.default_rng(0).uniform(-4, 4, 500):
+        assert float(_at_most(v)) <= v * (1 + 1e-12)
