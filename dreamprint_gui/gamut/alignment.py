@@ -15,7 +15,7 @@ Defines
 - :func:`align_rows`: that kernel's alignment of a run of voxels (branch-free, vectorised),
   which the print job's per-layer kernel calls directly; :func:`kernel_table`: the table the
   lookup reads (the packed fields padded to :data:`LANES` float32 per node, interpolated in
-  float32 as whole vectors by :func:`interpolate_block`).
+  float32 as whole vectors, tetrahedral, by :func:`interpolate_block`).
 - :func:`lookup_runs`: the same interpolation for a block whose voxels come in runs of one
   colour, once per run and copied along it (the same bits; :func:`lookup_align_block` takes it
   when the runs average :data:`RUN_MIN` voxels or more).
@@ -226,7 +226,7 @@ K_TARGET = K_RHOK + 1  # 13: the voxel's target sigma (1/mm)
 K_LOW = K_TARGET + 1   # 14
 K_HIGH = K_LOW + 1     # 15
 ROW_BLOCK = 1024       # voxels per call of align_rows
-# interpolate_nodes asks for the eight node lines of the voxel this many voxels ahead while it
+# interpolate_nodes asks for the four node lines of the voxel this many voxels ahead while it
 # sums the current one: colours that change from voxel to voxel (a 1e6-Gaussian scene) miss
 # the caches on most nodes of the 64 MB table, and the loads of one voxel's sum alone kept too
 # few misses in flight (16-48 ahead measured alike; 8 and 96 less well)
@@ -261,7 +261,7 @@ def kernel_table(tables: ColourTables) -> np.ndarray:
     flattened.
 
     Built once per table (memoised on the identity of ``packed``). The padding lets the
-    compiled trilinear interpolation load each node as whole vectors.
+    compiled tetrahedral interpolation load each node as whole vectors.
     """
     key = id(tables.packed)
     with _PADDED_LOCK:  # concurrent slab workers build it once
@@ -290,13 +290,32 @@ def kernel_table(tables: ColourTables) -> np.ndarray:
 def interpolate_nodes(flat, n, rgb, m, W, off, A):
     """The interpolated kernel-table lanes of voxels ``0 .. m-1`` (clean sRGB ``rgb``, one row
     per channel) voxel-major: voxel ``k``'s :data:`LANES` lanes at ``A[k * LANES:]``. The first
-    two passes of :func:`interpolate_block` (``W``, ``off`` scratch); the second prefetches
-    the nodes of voxel ``k +`` :data:`PREFETCH_AHEAD` into the L2 cache while it sums voxel
-    ``k``'s (a hint: no value changes; the interpolation alone on a 1e6-Gaussian scene's
-    colours 38 -> 29 ns per voxel, the demo's and a smoke's unchanged)."""
+    two passes of :func:`interpolate_block` (``W``, ``off`` scratch).
+
+    Tetrahedral interpolation (the rule of ICC colour management modules for 3D tables): the
+    cell of voxel ``k`` is cut into six tetrahedra along its main diagonal; with its fractions
+    sorted ``a >= b >= c`` (the coordinates ``x, y, z`` reordered, each with its node stride
+    ``s_a, s_b, s_c``), the lanes are
+
+        v = (1 - a) v_000 + (a - b) v_(s_a) + (b - c) v_(s_a + s_b) + c v_111,
+
+    four nodes instead of trilinear's eight, linear along the grey axis, continuous across
+    tetrahedra and cells, and exact at the nodes. Pass 1 (vectorised across voxels) writes the
+    four weights into rows 0-3 of ``W``, the first node's offset into ``off[k]`` and the
+    second and third nodes' offsets from it into ``off[ROW_BLOCK + k]`` and
+    ``off[2 ROW_BLOCK + k]``; pass 2 prefetches the nodes of voxel ``k +``
+    :data:`PREFETCH_AHEAD` into the L2 cache while it sums voxel ``k``'s (a hint: no value
+    changes). Against trilinear (``bench_label_accuracy.py --only lookup``): dE2000 to the
+    direct solve p95 0.0156 -> 0.0120 over all colour sets (radiance 0.040 -> 0.025); the
+    lookup of a 1e6-Gaussian scene's colours 37 -> 25 ns per voxel (half the node lines)."""
     RS = ROW_STRIDE
     top = n - 1
     one = np.float32(1.0)
+    RB = ROW_BLOCK
+    sk = np.int64(LANES)
+    sj = np.int64(n * LANES)
+    si = np.int64(n * n * LANES)
+    s3 = si + sj + sk
     for k in range(m):
         cx = rgb[k] * np.float32(top)
         cy = rgb[RS + k] * np.float32(top)
@@ -307,57 +326,49 @@ def interpolate_nodes(flat, n, rgb, m, W, off, A):
         fx = cx - np.float32(i0)
         fy = cy - np.float32(j0)
         fz = cz - np.float32(k0)
-        gx = one - fx
-        gy = one - fy
-        gz = one - fz
-        W[k] = gx * gy * gz
-        W[RS + k] = gx * gy * fz
-        W[2 * RS + k] = gx * fy * gz
-        W[3 * RS + k] = gx * fy * fz
-        W[4 * RS + k] = fx * gy * gz
-        W[5 * RS + k] = fx * gy * fz
-        W[6 * RS + k] = fx * fy * gz
-        W[7 * RS + k] = fx * fy * fz
+        # the fractions sorted a >= b >= c, and the strides of the largest and the smallest
+        # (min / max / selects: the loop stays vectorised)
+        a = max(max(fx, fy), fz)
+        b = max(min(fx, fy), min(max(fx, fy), fz))
+        c = min(min(fx, fy), fz)
+        sa = si if (fx >= fy) & (fx >= fz) else (sj if fy >= fz else sk)
+        sc = sk if (fz <= fx) & (fz <= fy) else (sj if fy <= fx else si)
+        W[k] = one - a
+        W[RS + k] = a - b
+        W[2 * RS + k] = b - c
+        W[3 * RS + k] = c
+        off[RB + k] = sa
+        off[2 * RB + k] = s3 - sc
         off[k] = ((i0 * n + j0) * n + k0) * LANES
-    sk = np.uint64(LANES)
-    sj = np.uint64(n * LANES)
-    si = np.uint64(n * n * LANES)
+    u3 = np.uint64(s3)
     for k in range(m):
         kp = min(k + PREFETCH_AHEAD, m - 1)
         p0 = np.uint64(off[kp])
-        p4 = p0 + si
         prefetch(flat, p0)
-        prefetch(flat, p0 + sk)
-        prefetch(flat, p0 + sj)
-        prefetch(flat, p0 + sj + sk)
-        prefetch(flat, p4)
-        prefetch(flat, p4 + sk)
-        prefetch(flat, p4 + sj)
-        prefetch(flat, p4 + sj + sk)
+        prefetch(flat, p0 + np.uint64(off[RB + kp]))
+        prefetch(flat, p0 + np.uint64(off[2 * RB + kp]))
+        prefetch(flat, p0 + u3)
         o0 = np.uint64(off[k])
-        o2 = o0 + sj
-        o4 = o0 + si
-        o6 = o4 + sj
-        weighted_sum16(flat, (o0, o0 + sk, o2, o2 + sk, o4, o4 + sk, o6, o6 + sk),
-                       (W[k], W[RS + k], W[2 * RS + k], W[3 * RS + k], W[4 * RS + k],
-                        W[5 * RS + k], W[6 * RS + k], W[7 * RS + k]), A, np.uint64(k * LANES))
+        weighted_sum16(flat, (o0, o0 + np.uint64(off[RB + k]), o0 + np.uint64(off[2 * RB + k]),
+                              o0 + u3),
+                       (W[k], W[RS + k], W[2 * RS + k], W[3 * RS + k]), A, np.uint64(k * LANES))
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def interpolate_block(flat, n, rgb, m, W, off, A, G):
-    """Trilinear interpolation of the kernel table's node lanes for voxels ``0 .. m-1``.
+    """Tetrahedral interpolation of the kernel table's node lanes for voxels ``0 .. m-1``.
 
     ``rgb`` (3 * ROW_STRIDE,) float32 clean sRGB (:func:`clean_rgb`), one row per channel; ``W``
-    (8 * ROW_STRIDE,) float32, ``off`` (>= ROW_BLOCK,) int64 and ``A`` (ROW_BLOCK * LANES,)
+    (8 * ROW_STRIDE,) float32, ``off`` (>= 3 * ROW_BLOCK,) int64 and ``A`` (ROW_BLOCK * LANES,)
     float32 are scratch; writes lanes ``0 .. K_RHOK`` of ``G`` (LANES * ROW_STRIDE,), lane ``q``
     of voxel ``k`` at ``q * ROW_STRIDE + k`` (the layout of :func:`align_rows`).
 
     Three passes, each in the form the CPU runs fastest: cell and weights of every voxel
-    (vectorised across voxels); per voxel the weighted sum of its eight nodes' 16 lanes, each node
+    (vectorised across voxels); per voxel the weighted sum of its four nodes' 16 lanes, each node
     one 64-byte vector (:func:`..vec16.weighted_sum16`; a node is one cache line of the aligned
     table) (both :func:`interpolate_nodes`); the lanes of 16 voxels at a time turned into rows
     (:func:`..vec16.transpose16x13`).
-    Per lane ``(((w0 v0 + w1 v1) + w2 v2) + ... ) + w7 v7`` in float32, in that order.
+    Per lane ``((w0 v0 + w1 v1) + w2 v2) + w3 v3`` in float32, in that order.
     """
     interpolate_nodes(flat, n, rgb, m, W, off, A)
     # whole groups of 16 (ROW_BLOCK is a multiple of 16): lanes past m are never read
@@ -531,10 +542,10 @@ def lookup_runs(flat, n, col, m, W, off, A, G):
     ``0 .. m-1``; clean colours), computed once per run of voxels of one colour (bit for bit)
     and copied along the run: the lanes are functions of the colour alone, so the values are
     those of interpolating every voxel. The clean colours ``col`` are compacted in place (one
-    per run); ``off`` (2 * ROW_BLOCK + 1,) int64, ``W``, ``A`` scratch."""
+    per run); ``off`` (4 * ROW_BLOCK + 1,) int64, ``W``, ``A`` scratch."""
     RS = ROW_STRIDE
     ci = col.view(np.int32)
-    start = off[ROW_BLOCK:]
+    start = off[3 * ROW_BLOCK:]
     nu = 0
     pr = pg = pb = np.int32(0)
     for k in range(m):
@@ -639,7 +650,7 @@ def block_buffers():
     RB = ROW_BLOCK
     RS = ROW_STRIDE
     return (np.empty(3 * RS, np.float32), np.empty(8 * RS, np.float32),
-            np.empty(2 * RB + 1, np.int64),
+            np.empty(4 * RB + 1, np.int64),
             np.empty(RB * LANES, np.float32), np.empty(LANES * RS, np.float32),
             np.empty(8 * RS, np.float32))
 

@@ -4,7 +4,7 @@ Defines
 -------
 - :data:`IN_GAMUT_DE2000`: a colour is called in gamut when its best printable reproduction is
   within dE2000 1.0 (about one just-noticeable difference).
-- :func:`lut_vs_direct`: dE2000 between the colour reproduced from the table (trilinear lookup)
+- :func:`lut_vs_direct`: dE2000 between the colour reproduced from the table (tetrahedral lookup)
   and from a direct optimisation (the table's objective solved for that colour alone, after the
   table's rendering intent, from the centre of the simplex) at random in-gamut colours.
 - :func:`lattice_gap`: dE2000 to the target of the table lookup minus that of the best mixture

@@ -10,7 +10,7 @@ Defines
   dE2000 of every node's reproduction to its target (the out-of-gamut report), and metadata.
 - :func:`build_tables`, :func:`get_tables` (cached in the platformdirs user cache, keyed by the
   profile's fingerprint, objective, rendering intent, size and :data:`TABLE_VERSION`),
-  :func:`lookup` (trilinear).
+  :func:`lookup` (tetrahedral, :func:`tetrahedral_nodes`).
 - :func:`mixture_sigma`: the exact scalar sigma of six-ink mixtures, as ``predict`` computes it.
 - :func:`resolve_choice`: the objective and intent to use (explicit choice, else the profile's
   ``table`` settings, else the defaults).
@@ -36,7 +36,6 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -55,7 +54,8 @@ from dreamprint_gui.physics.colorimetry import delta_E2000
 from dreamprint_gui.physics.density import scalar_sigma
 from dreamprint_gui.physics.kubelka_munk import mix
 
-__all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "mixture_sigma",
+__all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "interpolate_fields",
+           "tetrahedral_nodes", "mixture_sigma",
            "DEFAULT_OBJECTIVE", "DEFAULT_INTENT", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS",
            "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice"]
 
@@ -328,58 +328,54 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
     return tables
 
 
-@nb.njit(cache=True, nogil=True)
-def trilinear_fields(packed, n, r, g, b, nf, out):
-    """Trilinear interpolation of the first ``nf`` fields of ``packed`` at sRGB (r, g, b)."""
-    m = n - 1
-    coords = (min(max(r, 0.0), 1.0) * m, min(max(g, 0.0), 1.0) * m,
-              min(max(b, 0.0), 1.0) * m)
-    i0 = min(int(coords[0]), m - 1)
-    j0 = min(int(coords[1]), m - 1)
-    k0 = min(int(coords[2]), m - 1)
-    fx = coords[0] - i0
-    fy = coords[1] - j0
-    fz = coords[2] - k0
-    for f in range(nf):
-        out[f] = 0.0
-    for di in range(2):
-        wx = fx if di else 1.0 - fx
-        for dj in range(2):
-            wy = fy if dj else 1.0 - fy
-            for dk in range(2):
-                w = wx * wy * (fz if dk else 1.0 - fz)
-                for f in range(nf):
-                    out[f] += w * packed[i0 + di, j0 + dj, k0 + dk, f]
+LOOKUP_CHUNK = 1 << 17  # colours per step of :func:`interpolate_fields` (bounds its memory)
 
 
-@nb.njit(cache=True, nogil=True)
-def _lookup_many(packed, rgb, out):
+def tetrahedral_nodes(rgb: NDArray, n: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """The four nodes (flat indices into an ``(n, n, n)`` grid, (N, 4)) and weights (N, 4) of
+    the tetrahedral interpolation of encoded sRGB ``rgb`` (N, 3) in an n^3 table, the rule of
+    ICC colour management modules for 3D tables and of the print job's kernel
+    (:func:`.alignment.interpolate_nodes`): with the fractions in the cell sorted
+    ``a >= b >= c``, ``v = (1 - a) v_000 + (a - b) v_(e_a) + (b - c) v_(e_a + e_b) + c v_111``.
+    Colours are clamped to the cube; NaN counts as 0 (a damaged voxel never indexes outside)."""
+    c = np.clip(np.nan_to_num(np.asarray(rgb, np.float64), nan=0.0), 0.0, 1.0) * (n - 1)
+    i0 = np.minimum(c.astype(np.int64), n - 2)
+    f = c - i0
+    order = np.argsort(-f, axis=1, kind="stable")  # largest fraction first
+    fs = np.take_along_axis(f, order, axis=1)
+    stride = np.array([n * n, n, 1], np.int64)[order]
+    base = i0 @ np.array([n * n, n, 1], np.int64)
+    nodes = np.stack([base, base + stride[:, 0], base + stride[:, 0] + stride[:, 1],
+                      base + n * n + n + 1], axis=1)
+    weights = np.stack([1.0 - fs[:, 0], fs[:, 0] - fs[:, 1], fs[:, 1] - fs[:, 2], fs[:, 2]],
+                       axis=1)
+    return nodes, weights
+
+
+def interpolate_fields(packed: NDArray, rgb: ArrayLike, fields: slice | int) -> NDArray:
+    """Fields ``fields`` of the table ``packed`` (n, n, n, F) at encoded sRGB ``rgb`` (N, 3),
+    tetrahedral (:func:`tetrahedral_nodes`), float64 (N, ...)."""
+    rgb = np.asarray(rgb).reshape(-1, 3)
     n = packed.shape[0]
-    tmp = np.empty(N_COLOUR_INKS)
-    for v in range(rgb.shape[0]):
-        r = rgb[v, 0]
-        g = rgb[v, 1]
-        b = rgb[v, 2]
-        # NaN -> 0 so that a damaged voxel cannot index outside the table
-        trilinear_fields(packed, n, r if r == r else 0.0, g if g == g else 0.0,
-                         b if b == b else 0.0, N_COLOUR_INKS, tmp)
-        tot = 0.0
-        for f in range(N_COLOUR_INKS):
-            tot += tmp[f]
-        for f in range(N_COLOUR_INKS):  # the table is float32: renormalise to the simplex
-            out[v, f] = tmp[f] / tot
+    flat = packed.reshape(n ** 3, -1)[:, fields]
+    out = np.empty((len(rgb),) + flat.shape[1:])
+    for s in range(0, len(rgb), LOOKUP_CHUNK):
+        nodes, w = tetrahedral_nodes(rgb[s:s + LOOKUP_CHUNK], n)
+        v = flat[nodes].astype(np.float64)
+        out[s:s + LOOKUP_CHUNK] = np.einsum("nk,nk...->n...", w, v)
+    return out
 
 
 def lookup(tables: ColourTables, rgb: ArrayLike) -> NDArray[np.float64]:
-    """C, M, Y, K, W (..., 5) for encoded sRGB in [0, 1] (..., 3), trilinear in the table.
+    """C, M, Y, K, W (..., 5) for encoded sRGB in [0, 1] (..., 3), tetrahedral in the table
+    (:func:`tetrahedral_nodes`, as the print job's kernel).
 
     Colours outside [0, 1] are clamped to the cube. Interpolation of simplex points stays on the
-    simplex.
+    simplex (renormalised: the table is float32).
     """
     rgb = np.asarray(rgb, dtype=np.float64)
-    flat = np.ascontiguousarray(rgb.reshape(-1, 3))
-    out = np.empty((flat.shape[0], N_COLOUR_INKS))
-    _lookup_many(tables.packed, flat, out)
+    out = interpolate_fields(tables.packed, rgb.reshape(-1, 3), F_CONC)
+    out /= out.sum(-1, keepdims=True)
     return out.reshape(rgb.shape[:-1] + (N_COLOUR_INKS,))
 
 

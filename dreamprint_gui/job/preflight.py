@@ -59,7 +59,7 @@ from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 from dreamprint_gui.gamut.forward import forward_model, mixtures_lab
 from dreamprint_gui.gamut.mapping import intent_map
 from dreamprint_gui.gamut.optimise import srgb_to_xyz
-from dreamprint_gui.gamut.tables import F_CONC, F_GREY, F_SIGMA
+from dreamprint_gui.gamut.tables import F_CONC, F_GREY, F_SIGMA, interpolate_fields
 from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
 from dreamprint_gui.job.plan import ConvertSettings, JobContext, prepare_job
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
@@ -281,25 +281,15 @@ def _intent_de(ctx, tables, near: np.ndarray) -> np.ndarray:
 
 
 def _node_fields(tables, rgb: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndarray]:
-    """(reachable density 1/mm with 10 % grey, trilinear as the kernel; dE2000 of the nearest
+    """(reachable density 1/mm with 10 % grey, tetrahedral as the kernel; dE2000 of the nearest
     node to its target under the tables' intent: the source colour for ``colorimetric``) of
     encoded sRGB ``rgb`` (N, 3)."""
 
     p = tables.packed
     n = p.shape[0]
+    s0 = interpolate_fields(p, rgb, F_SIGMA)
+    sg = interpolate_fields(p, rgb, F_GREY)
     c = np.clip(np.nan_to_num(rgb.astype(np.float64)), 0.0, 1.0) * (n - 1)
-    i0 = np.minimum(c.astype(np.int64), n - 2)
-    f = c - i0
-    s0 = np.zeros(len(rgb))
-    sg = np.zeros(len(rgb))
-    for dx in (0, 1):
-        for dy in (0, 1):
-            for dz in (0, 1):
-                w = ((f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1])
-                     * (f[:, 2] if dz else 1 - f[:, 2]))
-                node = p[i0[:, 0] + dx, i0[:, 1] + dy, i0[:, 2] + dz]
-                s0 += w * node[:, F_SIGMA]
-                sg += w * node[:, F_GREY]
     # as align_rows: the grey raises the density up to sg, unless it is no denser than s0
     reach = np.maximum(s0, sg)
     near = np.rint(c).astype(np.int64)

@@ -3,7 +3,7 @@
 Per slab of layers ``[z0, z1)``: sample the source on the printer grid (density in 1/mm, the
 volume source's rule) into the worker thread's reused buffers; then one compiled call
 (:func:`.sample_label.layer_kernel.slab_labels`, nogil) does, layer by layer, the background
-threshold (``--background clear|empty``) -> trilinear table lookup of C, M, Y, K, W -> density
+threshold (``--background clear|empty``) -> tetrahedral table lookup of C, M, Y, K, W -> density
 alignment (Clear, K/W grey; paper section 4.2) -> halftone (the rule of
 :func:`.halftone.pick_label`, section 4.3) -> label. A dense grid (a source with a
 ``layer_plan``) is sampled a layer at a time into one layer's buffers, each labelled at once by

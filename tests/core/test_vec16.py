@@ -49,17 +49,23 @@ def test_transpose_writes_the_first_thirteen_columns_as_rows_and_nothing_else():
     np.testing.assert_array_equal(dst, expect)
 
 
-def test_weighted_sum_is_the_float32_expression_in_order():
+@njit
+def _wsum4(src, o, w, out, d):
+    weighted_sum16(src, (o[0], o[1], o[2], o[3]), (w[0], w[1], w[2], w[3]), out, d)
+
+
+@pytest.mark.parametrize("nodes", [8, 4])
+def test_weighted_sum_is_the_float32_expression_in_order(nodes):
     rng = np.random.default_rng(2)
     src = (rng.standard_normal(4096) * 10.0 ** rng.integers(-6, 6, 4096)).astype(np.float32)
     for _ in range(50):
-        o = rng.integers(0, 4096 - 16, 8).astype(np.uint64)
-        w = rng.random(8).astype(np.float32)
+        o = rng.integers(0, 4096 - 16, nodes).astype(np.uint64)
+        w = rng.random(nodes).astype(np.float32)
         d = int(rng.integers(0, 48))
         out = np.full(64, np.float32(3.5))
-        _wsum(src, o, w, out, np.uint64(d))
+        (_wsum if nodes == 8 else _wsum4)(src, o, w, out, np.uint64(d))
         acc = w[0] * src[int(o[0]):int(o[0]) + 16]
-        for n in range(1, 8):
+        for n in range(1, nodes):
             acc = acc + w[n] * src[int(o[n]):int(o[n]) + 16]  # float32 rounding per operation
         assert acc.dtype == np.float32
         np.testing.assert_array_equal(out[d:d + 16], acc)
@@ -74,39 +80,84 @@ def test_intrinsics_refuse_other_types():
               np.zeros(16, np.float32), np.uint64(0))
 
 
+# The six tetrahedra of a cell as colour management modules list them: the condition on the
+# fractions (x, y, z), and the two inner vertices (unit steps in x, y, z).
+_TETRAHEDRA = (
+    (lambda x, y, z: (x >= y) & (y >= z), (1, 0, 0), (1, 1, 0)),
+    (lambda x, y, z: (x >= z) & (z >= y), (1, 0, 0), (1, 0, 1)),
+    (lambda x, y, z: (z >= x) & (x >= y), (0, 0, 1), (1, 0, 1)),
+    (lambda x, y, z: (y >= x) & (x >= z), (0, 1, 0), (1, 1, 0)),
+    (lambda x, y, z: (y >= z) & (z >= x), (0, 1, 0), (0, 1, 1)),
+    (lambda x, y, z: (z >= y) & (y >= x), (0, 0, 1), (0, 1, 1)),
+)
+
+
+def _tetrahedral_reference(table, rgb):
+    """Tetrahedral interpolation written case by case (float32 as the kernel rounds: weights
+    1 - a, a - b, b - c, c of the sorted fractions; sum in node order)."""
+    n = table.shape[0]
+    c = rgb * np.float32(n - 1)
+    i = np.minimum(c.astype(np.int64), n - 2)
+    f = c - i.astype(np.float32)
+    out = np.full((len(rgb), table.shape[-1]), np.nan, np.float32)
+    done = np.zeros(len(rgb), bool)
+    for cond, e1, e2 in _TETRAHEDRA:
+        sel = cond(f[:, 0], f[:, 1], f[:, 2]) & ~done
+        done |= sel
+        fs = -np.sort(-f[sel], axis=1)
+        w = (np.float32(1) - fs[:, 0], fs[:, 0] - fs[:, 1], fs[:, 1] - fs[:, 2], fs[:, 2])
+        ii = i[sel]
+        nodes = [ii, ii + e1, ii + e2, ii + 1]
+        acc = None
+        for wk, nk in zip(w, nodes, strict=True):
+            term = wk[:, None] * table[nk[:, 0], nk[:, 1], nk[:, 2]]
+            acc = term if acc is None else acc + term
+        out[sel] = acc
+    assert done.all()
+    return out
+
+
 @pytest.mark.parametrize("m", [1, 15, 16, 17, PREFETCH_AHEAD, PREFETCH_AHEAD + 1, 333,
                                ROW_BLOCK])
-def test_interpolate_block_is_trilinear_interpolation_of_the_node_lanes(m):
+def test_interpolate_block_is_tetrahedral_interpolation_of_the_node_lanes(m):
     n = 9
     rng = np.random.default_rng(m)
     table = rng.random((n, n, n, LANES)).astype(np.float32)
     rgb = rng.random((m, 3)).astype(np.float32)
-    rgb[:4] = [[0, 0, 0], [1, 1, 1], [1, 0, 0.5], [0.125, 1, 0]][:m]
+    rgb[:6] = [[0, 0, 0], [1, 1, 1], [1, 0, 0.5], [0.125, 1, 0], [0.3, 0.3, 0.7],
+               [0.55, 0.2, 0.55]][:m]  # nodes, a cell face, ties between fractions
     col, W, off, A, G, _ = block_buffers()
     for c in range(3):
         col[c * ROW_STRIDE:c * ROW_STRIDE + m] = rgb[:, c]
     G[:] = np.nan
     interpolate_block(table.reshape(-1), n, col, m, W, off, A, G)
-    top = np.float32(n - 1)
-    c = rgb * top
-    i = np.minimum(c.astype(np.int64), n - 2)
-    f = c - i.astype(np.float32)
-    g = np.float32(1.0) - f
-    acc = None
-    for a in (0, 1):  # node order x, then y, then z; weights (wx * wy) * wz as the kernel forms
-        for b in (0, 1):
-            for e in (0, 1):
-                w = ((f[:, 0] if a else g[:, 0]) * (f[:, 1] if b else g[:, 1])) * \
-                    (f[:, 2] if e else g[:, 2])
-                term = w[:, None] * table[i[:, 0] + a, i[:, 1] + b, i[:, 2] + e]
-                acc = term if acc is None else acc + term
+    expect = _tetrahedral_reference(table, rgb)
     for q in range(K_RHOK + 1):
-        np.testing.assert_array_equal(G[q * ROW_STRIDE:q * ROW_STRIDE + m], acc[:, q])
+        np.testing.assert_array_equal(G[q * ROW_STRIDE:q * ROW_STRIDE + m], expect[:, q])
     # at the nodes themselves the interpolation returns the node (round trip of the table)
     if m > 1:
         np.testing.assert_array_equal(G[np.arange(K_RHOK + 1) * ROW_STRIDE + 1],
                                       table[-1, -1, -1, :K_RHOK + 1])
     assert np.all(np.isnan(G[(K_RHOK + 1) * ROW_STRIDE:]))  # the target's lane untouched
+
+
+def test_interpolate_block_reproduces_a_linear_table():
+    """Closed form: tetrahedral interpolation is exact for a table linear in the colour."""
+    n = 11
+    rng = np.random.default_rng(5)
+    a = rng.standard_normal((3, LANES))
+    grid = np.stack(np.meshgrid(*[np.arange(n) / (n - 1)] * 3, indexing="ij"), -1)
+    table = (grid @ a + 0.5).astype(np.float32)
+    m = 500
+    rgb = rng.random((m, 3)).astype(np.float32)
+    col, W, off, A, G, _ = block_buffers()
+    for c in range(3):
+        col[c * ROW_STRIDE:c * ROW_STRIDE + m] = rgb[:, c]
+    interpolate_block(table.reshape(-1), n, col, m, W, off, A, G)
+    expect = rgb.astype(np.float64) @ a + 0.5
+    for q in range(K_RHOK + 1):
+        np.testing.assert_allclose(G[q * ROW_STRIDE:q * ROW_STRIDE + m], expect[:, q],
+                                   atol=2e-5)
 
 
 @njit

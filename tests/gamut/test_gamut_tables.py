@@ -69,6 +69,27 @@ def test_lookup_hits_nodes_and_stays_on_simplex(small_tables):
     assert c.min() >= 0 and np.allclose(c.sum(-1), 1.0, atol=1e-9)
 
 
+def test_interpolation_is_exact_for_a_linear_table_and_agrees_with_the_kernel(small_tables):
+    """Tetrahedral interpolation reproduces a table linear in the colour exactly (closed form),
+    and ``lookup`` and the print job's kernel apply the same rule (to float32 rounding)."""
+    from dreamprint_gui.gamut import lookup_and_align_into
+    from dreamprint_gui.gamut.alignment import SOLID_TARGET
+    from dreamprint_gui.gamut.tables import interpolate_fields
+
+    n = 7
+    a = np.random.default_rng(4).standard_normal((3, 4))
+    grid = np.stack(np.meshgrid(*[np.arange(n) / (n - 1)] * 3, indexing="ij"), -1)
+    rgb = np.random.default_rng(5).random((400, 3))
+    rgb[:3] = [[0.5, 0.5, 0.5], [0.2, 0.2, 0.9], [1.0, 0.0, 0.3]]
+    np.testing.assert_allclose(interpolate_fields(grid @ a, rgb, slice(None)), rgb @ a,
+                               atol=1e-12)
+    conc6 = np.empty((len(rgb), 6), np.float32)
+    lookup_and_align_into(small_tables, rgb.astype(np.float32),
+                          np.full(len(rgb), SOLID_TARGET, np.float32), conc6)
+    np.testing.assert_allclose(conc6[:, :5], lookup(small_tables, rgb), atol=2e-6)
+    assert np.all(conc6[:, 5] == 0)  # solid: no Clear
+
+
 def test_brightness_table_monotonic_and_solves_eq11(profile, small_tables):
     t = small_tables.brightness_rho_k
     assert t.shape == (100,)

@@ -2,8 +2,9 @@
 
 Defines
 -------
-- :func:`weighted_sum16`: ``out[d:d+16] = (((w0 a0 + w1 a1) + w2 a2) + ... ) + w7 a7`` where
-  ``a_n = src[o_n:o_n+16]``: the trilinear interpolation of one voxel's 16 table lanes.
+- :func:`weighted_sum16`: ``out[d:d+16] = ((w0 a0 + w1 a1) + w2 a2) + ... + w_{N-1} a_{N-1}``
+  where ``a_n = src[o_n:o_n+16]``: the interpolation of one voxel's 16 table lanes from its N
+  nodes (4: tetrahedral).
 - :func:`transpose16x13`: 16 rows of 16 floats (voxel-major) -> their first 13 columns as rows
   (lane-major), the layout in which the alignment pass vectorises across voxels.
 - :func:`prefetch`: a hint that a cache line of an array will be read soon (the table lookup's
@@ -63,12 +64,11 @@ def _mask(values):
 
 @intrinsic
 def weighted_sum16(typingctx, src, offsets, weights, out, d):
-    """``src`` float32 1-D array, ``offsets`` 8-tuple of uint64, ``weights`` 8-tuple of
+    """``src`` float32 1-D array, ``offsets`` N-tuple of uint64, ``weights`` N-tuple of
     float32, ``out`` float32 1-D array, ``d`` uint64: writes ``out[d:d+16]``."""
     if not (_f32_array(src) and _f32_array(out) and _is_i64(d)
-            and isinstance(offsets, types.UniTuple) and offsets.count == 8
-            and _is_i64(offsets.dtype)
-            and isinstance(weights, types.UniTuple) and weights.count == 8
+            and isinstance(offsets, types.UniTuple) and _is_i64(offsets.dtype)
+            and isinstance(weights, types.UniTuple) and weights.count == offsets.count
             and weights.dtype == types.float32):
         return None
     sig = types.void(src, offsets, weights, out, d)
@@ -77,7 +77,7 @@ def weighted_sum16(typingctx, src, offsets, weights, out, d):
         base = _data(context, builder, signature.args[0], args[0])
         dst = _data(context, builder, signature.args[3], args[3])
         acc = None
-        for n in range(8):
+        for n in range(signature.args[1].count):
             o = builder.extract_value(args[1], n)
             w = builder.insert_element(ir.Constant(_V16, None),
                                        builder.extract_value(args[2], n), ir.Constant(_I32, 0))

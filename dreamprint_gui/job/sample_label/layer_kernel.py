@@ -14,7 +14,7 @@ the voxels whose density reaches the background threshold with their halftone th
 :func:`halftone.threshold_row`, then a branch-free compaction; a sparse row: voxel by voxel),
 across rows until a block of ``ROW_BLOCK`` voxels is full (a narrow row alone would feed the
 vector passes a few voxels at a time), then stage their colour and target; (2)
-trilinear lookup of the table node fields (:func:`gamut.alignment.interpolate_block`, or once
+tetrahedral lookup of the table node fields (:func:`gamut.alignment.interpolate_block`, or once
 per run of one colour: :func:`gamut.alignment.lookup_runs`; for a source of one colour, once per
 layer, and only the targets are staged: :data:`UNIFORM`); (3)
 density alignment (:func:`gamut.alignment.align_rows`); (4) halftone
