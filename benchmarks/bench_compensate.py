@@ -131,7 +131,8 @@ def floor_only(a) -> None:
             f = gamut_floor(lab, field, views, a.resolution, [x[0] for x in src],
                             [x[1] for x in src], obs, spd)
             print(f"{name:7s} {bg:6s} gamut floor dE {f['mean_de2000']:5.2f}/"
-                  f"{f['p95_de2000']:5.2f} cov {f['coverage_error']:+.3f} "
+                  f"{f['p95_de2000']:5.2f} S-CIELAB {f['mean_scielab_de2000']:5.2f} "
+                  f"cov {f['coverage_error']:+.3f} "
                   f"({time.perf_counter() - t0:.0f} s)", flush=True)
 
 
@@ -215,7 +216,8 @@ def main() -> None:
                   f"{c['p95_de2000']:5.2f} S-CIELAB {c['mean_scielab_de2000']:5.2f} "
                   f"cov {c['coverage_error']:+.3f} | "
                   f"{-100 * row['reduction_de_mean']:+.0f}% dE mean | floor dE "
-                  f"{floor['mean_de2000']:5.2f} | render noise dE "
+                  f"{floor['mean_de2000']:5.2f} S-CIELAB {floor['mean_scielab_de2000']:5.2f} | "
+                  "render noise dE "
                   f"{noise['paper']['mean_de2000']:4.2f} S-CIELAB "
                   f"{noise['paper']['mean_scielab_de2000']:4.2f} | optimise {t_opt:.0f} s, all "
                   f"{row['cpu_s']:.0f} CPU s "
