@@ -359,7 +359,7 @@ def interpolate_block(flat, n, rgb, m, W, off, A, G):
     """Tetrahedral interpolation of the kernel table's node lanes for voxels ``0 .. m-1``.
 
     ``rgb`` (3 * ROW_STRIDE,) float32 clean sRGB (:func:`clean_rgb`), one row per channel; ``W``
-    (8 * ROW_STRIDE,) float32, ``off`` (>= 3 * ROW_BLOCK,) int64 and ``A`` (ROW_BLOCK * LANES,)
+    (4 * ROW_STRIDE,) float32, ``off`` (>= 3 * ROW_BLOCK,) int64 and ``A`` (ROW_BLOCK * LANES,)
     float32 are scratch; writes lanes ``0 .. K_RHOK`` of ``G`` (LANES * ROW_STRIDE,), lane ``q``
     of voxel ``k`` at ``q * ROW_STRIDE + k`` (the layout of :func:`align_rows`).
 
@@ -649,7 +649,7 @@ def block_buffers():
     (col, W, off, A, G, C)."""
     RB = ROW_BLOCK
     RS = ROW_STRIDE
-    return (np.empty(3 * RS, np.float32), np.empty(8 * RS, np.float32),
+    return (np.empty(3 * RS, np.float32), np.empty(4 * RS, np.float32),
             np.empty(4 * RB + 1, np.int64),
             np.empty(RB * LANES, np.float32), np.empty(LANES * RS, np.float32),
             np.empty(8 * RS, np.float32))
