@@ -7,7 +7,7 @@ change, measured.
    the same colour (the table's objective and intent, :func:`.gamut.evaluation.lut_vs_direct`'s
    rule), at in-gamut colours: ``--samples`` random colours of the sRGB cube and
    ``--per-kind`` foreground colours of each source kind. Guard: p95 <= 0.05. Printed beside
-   it: the same for the float64 trilinear lookup of the float32 100^3 table (``gamut.lookup``,
+   it: the same for the float64 tetrahedral lookup of the float32 100^3 table (``gamut.lookup``,
    today's table as stored) and the dE2000 between the two lookups. Then the kernel's sigma
    error against the exact alignment (:func:`.gamut.align_density`) at random colours and
    targets (relative; median, p95, max over unclamped voxels).

@@ -229,7 +229,8 @@ ROW_BLOCK = 1024       # voxels per call of align_rows
 # interpolate_nodes asks for the four node lines of the voxel this many voxels ahead while it
 # sums the current one: colours that change from voxel to voxel (a 1e6-Gaussian scene) miss
 # the caches on most nodes of the 64 MB table, and the loads of one voxel's sum alone kept too
-# few misses in flight (16-48 ahead measured alike; 8 and 96 less well)
+# few misses in flight (16-48 ahead measured alike, 8 and 96 less well, with the eight nodes of
+# trilinear interpolation)
 PREFETCH_AHEAD = 32
 # A target at or above this (1/mm) means "solid": the node's own undiluted mixture (rho = 1,
 # no Clear, no grey; job.content.SOLID_SIGMA). No medium is this dense.

@@ -18,7 +18,7 @@ Method: Levenberg-Marquardt (projected Gauss-Newton) per target, each step a sma
 programme on the simplex solved exactly by a primal active-set method; compiled with numba and
 run in parallel over targets (``prange``). A tiny Tikhonov term ``lam * |c|^2`` picks, among the
 mixtures of equal colour (5 inks, 3 colour constraints), the most evenly spread one, so that the
-table is a smooth function of the colour and trilinear interpolation between nodes stays accurate.
+table is a smooth function of the colour and interpolation between nodes stays accurate.
 """
 
 from __future__ import annotations

@@ -352,7 +352,8 @@ def tetrahedral_nodes(rgb: NDArray, n: int) -> tuple[NDArray[np.int64], NDArray[
     return nodes, weights
 
 
-def interpolate_fields(packed: NDArray, rgb: ArrayLike, fields: slice | int) -> NDArray:
+def interpolate_fields(packed: NDArray, rgb: ArrayLike,
+                       fields: slice | int | list[int]) -> NDArray:
     """Fields ``fields`` of the table ``packed`` (n, n, n, F) at encoded sRGB ``rgb`` (N, 3),
     tetrahedral (:func:`tetrahedral_nodes`), float64 (N, ...)."""
     rgb = np.asarray(rgb).reshape(-1, 3)

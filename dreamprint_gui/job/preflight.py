@@ -287,8 +287,7 @@ def _node_fields(tables, rgb: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndar
 
     p = tables.packed
     n = p.shape[0]
-    s0 = interpolate_fields(p, rgb, F_SIGMA)
-    sg = interpolate_fields(p, rgb, F_GREY)
+    s0, sg = interpolate_fields(p, rgb, [F_SIGMA, F_GREY]).T
     c = np.clip(np.nan_to_num(rgb.astype(np.float64)), 0.0, 1.0) * (n - 1)
     # as align_rows: the grey raises the density up to sg, unless it is no denser than s0
     reach = np.maximum(s0, sg)
@@ -493,8 +492,8 @@ SUGGEST_BELOW_CLAMPED = 0.10
 
 def _at_most(limit: float) -> str:
     """``limit`` to three significant digits, rounded down: a scale the warnings name as one
-    that clamps nothing must not exceed the limit they measured (0.2475 reads 0.247, not
-    0.248)."""
+    that clamps nothing must not exceed the limit they measured (0.24750 reads 0.247, not
+    0.248; the 1e-12 spares exact values such as 0.25 from reading 0.249)."""
     if not limit > 0 or not math.isfinite(limit):
         return f"{limit:.3g}"
     step = 10.0 ** (math.floor(math.log10(limit)) - 2)

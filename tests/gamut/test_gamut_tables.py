@@ -90,6 +90,21 @@ def test_interpolation_is_exact_for_a_linear_table_and_agrees_with_the_kernel(sm
     assert np.all(conc6[:, 5] == 0)  # solid: no Clear
 
 
+def test_tetrahedral_nodes_of_damaged_colours_stay_in_the_table():
+    """NaN reads as 0 and values outside [0, 1] as the cube's faces: every node inside the
+    table, weights on the simplex."""
+    from dreamprint_gui.gamut.tables import tetrahedral_nodes
+
+    n = 5
+    rgb = np.array([[np.nan, 0.5, 1.0], [np.inf, -np.inf, 2.0], [-0.3, 1e-9, 1 - 1e-9],
+                    [0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.3, 0.3, 0.3]])
+    nodes, w = tetrahedral_nodes(rgb, n)
+    assert nodes.min() >= 0 and nodes.max() < n ** 3
+    assert np.all(w >= 0) and np.allclose(w.sum(1), 1.0)
+    same, _ = tetrahedral_nodes(np.array([[0.0, 0.5, 1.0]]), n)
+    np.testing.assert_array_equal(nodes[0], same[0])  # NaN -> 0
+
+
 def test_brightness_table_monotonic_and_solves_eq11(profile, small_tables):
     t = small_tables.brightness_rho_k
     assert t.shape == (100,)
