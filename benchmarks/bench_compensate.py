@@ -137,7 +137,7 @@ def floor_only(a) -> None:
 
 
 def main() -> None:
-    from dreamprint_gui.proof.compare import inside_source
+    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, inside_source
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
     from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS, ProofSettings, render_proof
 
@@ -222,7 +222,7 @@ def main() -> None:
                   f"{noise['paper']['mean_scielab_de2000']:4.2f} | optimise {t_opt:.0f} s, all "
                   f"{row['cpu_s']:.0f} CPU s "
                   f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)
-            if p["empty_source_fraction"] > 0.005:
+            if p["empty_source_fraction"] >= EMPTY_NOTE_MIN:
                 print(f"{'':14s} where the source is empty ({100 * p['empty_source_fraction']:.0f}"
                       f" % of the object pixels): shares of dE {p['empty_source_de2000']:5.2f} /"
                       f" {c['empty_source_de2000']:5.2f}, S-CIELAB "

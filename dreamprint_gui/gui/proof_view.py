@@ -47,7 +47,7 @@ COMPENSATION_TITLES = ("source (emission-absorption)", "open-loop print (paper's
 def compensation_text(result: dict) -> str:
     """The figures of a compensation (:func:`..proof.compensated.compare_compensation`):
     open loop and compensated on the proof's cameras, the gamut floor, the optimiser's own."""
-    from dreamprint_gui.proof.compare import inside_source
+    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, inside_source
     rows = []
     for key, name in (("open_loop", "open loop"), ("compensated", "compensated")):
         o = result[key]["report"]["overall"]
@@ -59,7 +59,7 @@ def compensation_text(result: dict) -> str:
     rows.append(f"change: dE2000 {100 * (b['mean_de2000'] / a['mean_de2000'] - 1):+.0f} %, "
                 f"S-CIELAB {100 * (b['mean_scielab_de2000'] / a['mean_scielab_de2000'] - 1):+.0f}"
                 " %")
-    if a.get("empty_source_fraction", 0.0) >= 0.005:
+    if a.get("empty_source_fraction", 0.0) >= EMPTY_NOTE_MIN:
         rows.append(f"of which where the source is empty ({100 * a['empty_source_fraction']:.0f} "
                     f"% of the object pixels, e.g. the Clear block; no correction changes it): "
                     f"dE2000 {a['empty_source_de2000']:.2f} -> {b['empty_source_de2000']:.2f}, "

@@ -39,13 +39,19 @@ from dreamprint_gui.proof.scielab import scielab_de2000
 
 __all__ = ["compare_view", "noise_floor", "summarise", "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "de_heatmap", "to_display",
-           "empty_source_note", "EMPTY_SOURCE_KEYS", "inside_source",
+           "empty_source_note", "EMPTY_SOURCE_KEYS", "EMPTY_NOTE_MIN", "inside_source",
            "COVERAGE_THRESHOLD", "DE_MAP_MAX"]
 
 COVERAGE_THRESHOLD = 0.05
 # compare_view's figures of the object pixels where the source is empty (module docstring)
 EMPTY_SOURCE_KEYS = ("empty_source_fraction", "empty_source_de2000",
                      "empty_source_scielab_de2000", "empty_source_coverage_error")
+# each figure's share where the source is empty
+_EMPTY_SHARE = {"mean_de2000": "empty_source_de2000",
+                "mean_scielab_de2000": "empty_source_scielab_de2000",
+                "coverage_error": "empty_source_coverage_error"}
+# below this fraction of the object pixels, the figures where the source is empty go unsaid
+EMPTY_NOTE_MIN = 0.005
 DE_MAP_MAX = 20.0
 
 
@@ -149,16 +155,13 @@ def inside_source(figures: dict, key: str) -> float | None:
     over the object pixels where the source is not empty: the figure less its share where the
     source is empty (:func:`compare_view`), over the rest's fraction; None when there is no
     such pixel."""
-    share = {"mean_de2000": "empty_source_de2000",
-             "mean_scielab_de2000": "empty_source_scielab_de2000",
-             "coverage_error": "empty_source_coverage_error"}[key]
     rest = 1.0 - figures["empty_source_fraction"]
     if rest <= 0.0:
         return None
-    return (figures[key] - figures[share]) / rest
+    return (figures[key] - figures[_EMPTY_SHARE[key]]) / rest
 
 
-def empty_source_note(figures: dict, min_fraction: float = 0.005) -> str:
+def empty_source_note(figures: dict, min_fraction: float = EMPTY_NOTE_MIN) -> str:
     """One line on the share of the figures from the object pixels where the source is empty
     (:func:`compare_view`) and the figures inside the source, or "" when those pixels are under
     ``min_fraction`` of the object pixels."""
@@ -169,8 +172,7 @@ def empty_source_note(figures: dict, min_fraction: float = 0.005) -> str:
             f"{figures['empty_source_de2000']:.2f} of the dE2000 mean, "
             f"{figures['empty_source_scielab_de2000']:.2f} of the S-CIELAB mean, "
             f"{figures['empty_source_coverage_error']:+.3f} of the coverage error")
-    inside = [inside_source(figures, k)
-              for k in ("mean_de2000", "mean_scielab_de2000", "coverage_error")]
+    inside = [inside_source(figures, k) for k in _EMPTY_SHARE]
     if inside[0] is None:
         return note
     return (note + f"; inside the source: dE2000 mean {inside[0]:.2f}, S-CIELAB "
