@@ -33,6 +33,38 @@ def _numba_cache_dir() -> str:
     return str(user_cache_path("dreamprint") / "numba" / digest.hexdigest()[:16])
 
 
+def _numba_cpu_features() -> str | None:
+    """The CPU features numba compiles for where the CPU has AVX-512: the host's own (what
+    numba would use), with LLVM's ``prefer-256-bit`` tuning turned off; else None.
+
+    LLVM keeps to 256-bit vectors on Intel's AVX-512 CPUs unless told otherwise (the tuning of
+    Skylake-X and later: 512-bit instructions once slowed the clock), so the kernels written
+    for its loop vectoriser ran 8 float32 lanes where the CPU has 16. Turned off, the job's
+    labelling takes 512-bit vectors (``benchmarks/bench_label_passes.py``: the demo 21.7 ->
+    19.7 ns per foreground voxel, MetaImage 12.7 -> 11.1, ``Cd`` 21.3 -> 18.7). The width
+    changes no result: the kernels use no fast-math except InstantNGP's networks, so every
+    operation rounds as before (``benchmarks/job_hashes.py --check``: all the same).
+    """
+    import platform
+
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return None
+    import llvmlite.binding as llvm
+
+    try:
+        features = llvm.get_host_cpu_features()
+    except RuntimeError:  # LLVM cannot read this CPU's features: leave numba to decide
+        return None
+    if not features.get("avx512f", False):
+        return None
+    return features.flatten() + ",-prefer-256-bit"
+
+
 # Must be set before numba is first imported (it reads its configuration then).
 if "NUMBA_CACHE_DIR" not in _os.environ:
     _os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
+# A user's own choice of CPU, features or no AVX is kept.
+if not {"NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NUMBA_ENABLE_AVX"} & _os.environ.keys():
+    _FEATURES = _numba_cpu_features()
+    if _FEATURES is not None:
+        _os.environ["NUMBA_CPU_FEATURES"] = _FEATURES

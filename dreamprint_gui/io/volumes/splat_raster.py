@@ -62,6 +62,11 @@ __all__ = ["rasterise_splats", "pack_gaussians", "TILE_X", "TILE_Y", "TILE_Z", "
 TILE_X = 128
 TILE_Y = 64
 TILE_Z = 8
+# A layer's rows are walked in whole groups of this many (:func:`_column`; the rows past the
+# Gaussian's add 0.0, to the next column's cells where they run past the tile): a loop of a
+# multiple of 8 float64 runs in full 512-bit vectors. A Gaussian of a 1e6 scene spans ~14 rows,
+# too few for LLVM's vector loop of 8 x 4 interleaved; its rows alone then ran one at a time.
+ROW_GROUP = 8
 SCAN_X = 8         # exact path: boxes at most this many voxels wide in x are scanned voxel-wise
 CUT_Q = 9.0        # the support: q <= 9 (3 sigma)
 Q_WALK = 1000.0    # walked Gaussians: q <= this at every point of the walk (G >= e^-500)
@@ -243,7 +248,9 @@ def _column(flat, base, gcol, rcol, nr, w0, w1, w2, w3, k_xx):
     ``rcol[r]``): add ``G`` (0 below the cut: no branch) times the four weights to the
     accumulator (channel c, row r at ``flat[base + c _CH + r]``), then step every row one
     voxel along x. The rows' recurrences are independent and their accumulator cells
-    contiguous, so the loop is vectorised (indices unsigned: no negative-index wrap)."""
+    contiguous, so the loop is vectorised (indices unsigned: no negative-index wrap). ``nr``
+    is a multiple of :data:`ROW_GROUP` (rows past the Gaussian's with G = 0 add 0.0, which
+    leaves a sum's bits as they were)."""
     b = np.uint64(base)
     for r in range(nr):
         g = gcol[r]
@@ -315,6 +322,10 @@ def _walk_tile(flat, clo, chi, gcol, rcol, st, bx0, by0, kz0, xa, xb, ya, yb, ka
             gcol[r] = gy
             rcol[r] = rxy
             gy, rxy, ryy = gy * ryy, rxy * k_xy, ryy * k_yy
+        nw = (nr + ROW_GROUP - 1) // ROW_GROUP * ROW_GROUP
+        for r in range(nr, nw):
+            gcol[r] = 0.0
+            rcol[r] = 0.0
         c0, c1 = xa, xb
         if xb - xa > SCAN_X:
             c0, c1 = _chunk_columns(st, ja, nr, dz, origin, pitch, xa, xb)
@@ -323,7 +334,7 @@ def _walk_tile(flat, clo, chi, gcol, rcol, st, bx0, by0, kz0, xa, xb, ya, yb, ka
                 gcol[r] *= rcol[r]
                 rcol[r] *= k_xx
         for i in range(c0 - x0, c1 - x0 if nr else c0 - x0):
-            _column(flat, ((kk * TILE_X) + i) * TILE_Y + ja - y0, gcol, rcol, nr, w0, w1, w2,
+            _column(flat, ((kk * TILE_X) + i) * TILE_Y + ja - y0, gcol, rcol, nw, w0, w1, w2,
                     w3, k_xx)
             clo[kk, i] = min(clo[kk, i], ja - y0)
             chi[kk, i] = max(chi[kk, i], jb - y0)
@@ -434,7 +445,7 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
                     fill[tile] += 1
 
     # channel, layer, column, row
-    flat = np.zeros(4 * _CH, np.float64)
+    flat = np.zeros(4 * _CH + ROW_GROUP, np.float64)   # + the last column's padding rows
     clo = np.full((TILE_Z, TILE_X), TILE_Y, np.int64)     # touched rows of each column
     gcol = np.empty(TILE_Y)                               # a layer's rows, walked together
     rcol = np.empty(TILE_Y)

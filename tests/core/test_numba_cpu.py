@@ -1,0 +1,70 @@
+"""The package's choice of CPU features for numba (``dreamprint_gui._numba_cpu_features``):
+512-bit vectors where the CPU has AVX-512, a user's own setting kept."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+_VARS = ("NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NUMBA_ENABLE_AVX")
+
+
+def _host_features() -> tuple[str, bool]:
+    import llvmlite.binding as llvm
+
+    features = llvm.get_host_cpu_features()
+    return features.flatten(), bool(features.get("avx512f", False))
+
+
+def _run(code: str, tmp_path, **env_extra: str) -> str:
+    env = {k: v for k, v in os.environ.items() if k not in _VARS}
+    env["NUMBA_CACHE_DIR"] = str(tmp_path / "numba-cache")
+    env.update(env_extra)
+    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    return res.stdout.strip()
+
+
+_SHOW = "import os, dreamprint_gui; print(os.environ.get('NUMBA_CPU_FEATURES', '<unset>'))"
+
+
+def test_features_are_the_hosts_with_wide_vectors_on_avx512(tmp_path):
+    host, avx512 = _host_features()
+    got = _run(_SHOW, tmp_path)
+    if avx512:
+        assert got == host + ",-prefer-256-bit"
+    else:
+        assert got == "<unset>"
+
+
+@pytest.mark.parametrize("var, value", [("NUMBA_CPU_FEATURES", "+sse2"),
+                                        ("NUMBA_CPU_NAME", "generic"),
+                                        ("NUMBA_ENABLE_AVX", "0")])
+def test_a_users_own_setting_is_kept(tmp_path, var, value):
+    code = ("import os, dreamprint_gui; "
+            "print(os.environ.get('NUMBA_CPU_FEATURES', '<unset>'))")
+    got = _run(code, tmp_path, **{var: value})
+    assert got == (value if var == "NUMBA_CPU_FEATURES" else "<unset>")
+
+
+def test_kernels_take_512_bit_vectors_on_avx512(tmp_path):
+    if not _host_features()[1]:
+        pytest.skip("this CPU has no AVX-512")
+    code = (
+        "import re, numpy as np, dreamprint_gui\n"
+        "from numba import njit\n"
+        "@njit\n"
+        "def axpy(a, x, y):\n"
+        "    for i in range(x.shape[0]):\n"
+        "        y[i] = a * x[i] + y[i]\n"
+        "x = np.ones(256, np.float32)\n"
+        "axpy(np.float32(2.0), x, x.copy())\n"
+        "asm = axpy.inspect_asm(axpy.signatures[0])\n"
+        "print(len(re.findall('zmm', asm)), len(re.findall('ymm', asm)))\n"
+    )
+    zmm, _ = map(int, _run(code, tmp_path).split())
+    assert zmm > 0
