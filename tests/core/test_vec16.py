@@ -167,13 +167,18 @@ def _prefetch_all(src, step):
     return src[src.shape[0] - 1]
 
 
-def test_prefetch_is_only_a_hint():
-    src = np.random.default_rng(4).random(4096).astype(np.float32)
+@pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int64])
+def test_prefetch_is_only_a_hint(dtype):
+    src = (np.random.default_rng(4).random(4096) * 1000).astype(dtype)
     before = src.copy()
     assert _prefetch_all(src, 7) == before[-1]
     np.testing.assert_array_equal(src, before)
+
+
+@pytest.mark.parametrize("bad", [np.zeros(64, np.int8), np.zeros((8, 8), np.float32)])
+def test_prefetch_takes_only_1d_arrays_of_its_types(bad):
     with pytest.raises(TypingError):
-        _prefetch_all(np.zeros(64), 1)
+        _prefetch_all(bad, 1)
 
 
 def test_finish_staging_cleans_colours():

@@ -8,7 +8,7 @@ Defines
 - :func:`transpose16x13`: 16 rows of 16 floats (voxel-major) -> their first 13 columns as rows
   (lane-major), the layout in which the alignment pass vectorises across voxels.
 - :func:`prefetch`: a hint that a cache line of an array will be read soon (the table lookup's
-  nodes, a few voxels ahead).
+  nodes, a few voxels ahead; the splat rasteriser's next Gaussians).
 - :func:`accumulate8`: ``acc[8 j : 8 j + 8] += src[o : o + 8]`` in float64, the step of a sum
   kept as 8 partial sums (a float reduction written as a loop stays one add at a time: LLVM may
   not reorder float additions).
@@ -56,6 +56,10 @@ def _is_i64(t) -> bool:
 
 def _f32_array(t) -> bool:
     return isinstance(t, types.Array) and t.dtype == types.float32 and t.ndim == 1
+
+
+def _array_1d(t, dtypes) -> bool:
+    return isinstance(t, types.Array) and t.dtype in dtypes and t.ndim == 1
 
 
 def _mask(values):
@@ -153,10 +157,10 @@ def accumulate8(typingctx, src, o, acc, j):
 @intrinsic
 def prefetch(typingctx, src, i):
     """A hint (``llvm.prefetch``: read, locality 2, data cache; x86 ``prefetcht1``, into the
-    L2 cache) that the cache line holding ``src[i]`` (float32 1-D array, ``i`` uint64/int64)
-    will be read soon. No effect on any value; an address outside the array is not an error
-    but a wasted hint."""
-    if not (_f32_array(src) and _is_i64(i)):
+    L2 cache) that the cache line holding ``src[i]`` (a 1-D float32, float64 or int64 array,
+    ``i`` uint64/int64) will be read soon. No effect on any value; an address outside the array
+    is not an error but a wasted hint."""
+    if not (_array_1d(src, (types.float32, types.float64, types.int64)) and _is_i64(i)):
         return None
     sig = types.void(src, i)
 

@@ -49,6 +49,7 @@ import math
 import numpy as np
 from numba import njit
 
+from dreamprint_gui.core.kernels.vec16 import prefetch
 from dreamprint_gui.io.volumes.base import SlabBuffers
 
 __all__ = ["rasterise_splats", "pack_gaussians", "TILE_X", "TILE_Y", "TILE_Z", "CUT_Q", "Q_WALK",
@@ -67,6 +68,12 @@ TILE_Z = 8
 # multiple of 8 float64 runs in full 512-bit vectors. A Gaussian of a 1e6 scene spans ~14 rows,
 # too few for LLVM's vector loop of 8 x 4 interleaved; its rows alone then ran one at a time.
 ROW_GROUP = 8
+# A tile's Gaussians are scattered over the slab's records (256 bytes each, ~18 000 of them in
+# a slab of a 1e6-Gaussian scene: more than the L2 cache), so the walk asks for the record of
+# the Gaussian this many on while it walks one (a hint, no value changes): rasterising 11.9 ->
+# 10.8 ns per voxel (2, 4 and 8 ahead alike); the 9k-Gaussian sample, whose records stay in the
+# cache, unchanged.
+PREFETCH_AHEAD = 4
 SCAN_X = 8         # exact path: boxes at most this many voxels wide in x are scanned voxel-wise
 CUT_Q = 9.0        # the support: q <= 9 (3 sigma)
 Q_WALK = 1000.0    # walked Gaussians: q <= this at every point of the walk (G >= e^-500)
@@ -444,6 +451,8 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
                     members[fill[tile]] = t
                     fill[tile] += 1
 
+    records = state.reshape(-1)
+    boxes = box.reshape(-1)
     # channel, layer, column, row
     flat = np.zeros(4 * _CH + ROW_GROUP, np.float64)   # + the last column's padding rows
     clo = np.full((TILE_Z, TILE_X), TILE_Y, np.int64)     # touched rows of each column
@@ -462,8 +471,15 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
                     continue                     # outside every support: stays 0
                 x0 = tx * TILE_X
                 x1 = min(x0 + TILE_X, nx)
-                for m in range(start[tile], start[tile + 1]):
+                m_end = start[tile + 1]
+                for m in range(start[tile], m_end):
                     t = members[m]
+                    # the record of the Gaussian PREFETCH_AHEAD on into the L2 cache while
+                    # this one is walked: a tile's Gaussians lie all over the slab's records
+                    tn = members[min(m + PREFETCH_AHEAD, m_end - 1)]
+                    for ln in range(4):
+                        prefetch(records, np.uint64(tn * 32 + 8 * ln))
+                    prefetch(boxes, np.uint64(tn * 6))
                     xa = max(box[t, 0], x0)
                     xb = min(box[t, 1], x1)
                     ya = max(box[t, 2], y0)
