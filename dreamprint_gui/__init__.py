@@ -68,3 +68,9 @@ if not {"NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NUMBA_ENABLE_AVX"} & _os.enviro
     _FEATURES = _numba_cpu_features()
     if _FEATURES is not None:
         _os.environ["NUMBA_CPU_FEATURES"] = _FEATURES
+        import sys as _sys
+
+        if "numba" in _sys.modules:  # imported first (a script, a notebook): read it again
+            from numba.core import config as _numba_config
+
+            _numba_config.reload_config()

@@ -51,11 +51,14 @@ def test_a_users_own_setting_is_kept(tmp_path, var, value):
     assert got == (value if var == "NUMBA_CPU_FEATURES" else "<unset>")
 
 
-def test_kernels_take_512_bit_vectors_on_avx512(tmp_path):
+@pytest.mark.parametrize("first", ["dreamprint_gui", "numba"])
+def test_kernels_take_512_bit_vectors_on_avx512(tmp_path, first):
+    """Whichever is imported first, the package or numba."""
     if not _host_features()[1]:
         pytest.skip("this CPU has no AVX-512")
     code = (
-        "import re, numpy as np, dreamprint_gui\n"
+        f"import re, numpy as np, {first}\n"
+        "import dreamprint_gui\n"
         "from numba import njit\n"
         "@njit\n"
         "def axpy(a, x, y):\n"
