@@ -66,13 +66,13 @@ TILE_Z = 8
 # A layer's rows are walked in whole groups of this many (:func:`_column`; the rows past the
 # Gaussian's add 0.0, to the next column's cells where they run past the tile): a loop of a
 # multiple of 8 float64 runs in full 512-bit vectors. A Gaussian of a 1e6 scene spans ~14 rows,
-# too few for LLVM's vector loop of 8 x 4 interleaved; its rows alone then ran one at a time.
+# too few for LLVM's vector loop (8 x 4 interleaved), which then ran them one row at a time.
 ROW_GROUP = 8
 # A tile's Gaussians are scattered over the slab's records (256 bytes each, ~18 000 of them in
 # a slab of a 1e6-Gaussian scene: more than the L2 cache), so the walk asks for the record of
-# the Gaussian this many on while it walks one (a hint, no value changes): rasterising 11.9 ->
-# 10.8 ns per voxel (2, 4 and 8 ahead alike); the 9k-Gaussian sample, whose records stay in the
-# cache, unchanged.
+# the Gaussian this many on while it walks one (a hint, no value changes): a 1e6-Gaussian job
+# rasterised at 10.7 -> 9.6 CPU ns per voxel (bench_splat_raster.py; 2, 4 and 8 ahead alike);
+# the 9k-Gaussian sample, whose records stay in the cache, unchanged.
 PREFETCH_AHEAD = 4
 SCAN_X = 8         # exact path: boxes at most this many voxels wide in x are scanned voxel-wise
 CUT_Q = 9.0        # the support: q <= 9 (3 sigma)
