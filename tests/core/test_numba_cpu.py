@@ -19,12 +19,12 @@ def _host_features() -> tuple[str, bool]:
     return features.flatten(), bool(features.get("avx512f", False))
 
 
-def _run(code: str, tmp_path, **env_extra: str) -> str:
+def _run(code: str, tmp_path, cwd=None, **env_extra: str) -> str:
     env = {k: v for k, v in os.environ.items() if k not in _VARS}
     env["NUMBA_CACHE_DIR"] = str(tmp_path / "numba-cache")
     env.update(env_extra)
     res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         timeout=300)
+                         timeout=300, cwd=cwd)
     assert res.returncode == 0, res.stderr[-2000:]
     return res.stdout.strip()
 
@@ -51,9 +51,15 @@ def test_a_users_own_setting_is_kept(tmp_path, var, value):
     assert got == (value if var == "NUMBA_CPU_FEATURES" else "<unset>")
 
 
+def test_a_numba_config_file_is_kept(tmp_path):
+    (tmp_path / ".numba_config.yaml").write_text("cpu_name: generic\n")
+    assert _run(_SHOW, tmp_path, cwd=tmp_path) == "<unset>"
+
+
 @pytest.mark.parametrize("first", ["dreamprint_gui", "numba"])
 def test_kernels_take_512_bit_vectors_on_avx512(tmp_path, first):
-    """Whichever is imported first, the package or numba."""
+    """Whichever is imported first, the package or numba; against numba's own default (the
+    host's features alone), which keeps 256-bit vectors on CPUs tuned for them."""
     if not _host_features()[1]:
         pytest.skip("this CPU has no AVX-512")
     code = (
@@ -69,5 +75,9 @@ def test_kernels_take_512_bit_vectors_on_avx512(tmp_path, first):
         "asm = axpy.inspect_asm(axpy.signatures[0])\n"
         "print(len(re.findall('zmm', asm)), len(re.findall('ymm', asm)))\n"
     )
+    host, _ = _host_features()
+    zmm_default, _ = map(int, _run(code, tmp_path, NUMBA_CPU_FEATURES=host).split())
+    if zmm_default:
+        pytest.skip("numba's default on this CPU already takes 512-bit vectors")
     zmm, _ = map(int, _run(code, tmp_path).split())
     assert zmm > 0

@@ -63,10 +63,11 @@ __all__ = ["rasterise_splats", "pack_gaussians", "TILE_X", "TILE_Y", "TILE_Z", "
 TILE_X = 128
 TILE_Y = 64
 TILE_Z = 8
-# A layer's rows are walked in whole groups of this many (:func:`_column`; the rows past the
-# Gaussian's add 0.0, to the next column's cells where they run past the tile): a loop of a
-# multiple of 8 float64 runs in full 512-bit vectors. A Gaussian of a 1e6 scene spans ~14 rows,
-# too few for LLVM's vector loop (8 x 4 interleaved), which then ran them one row at a time.
+# A layer's rows are walked in whole groups of this many (:func:`_column`): the rows past the
+# Gaussian's have G = 0 and add 0.0 (the weights are finite: the readers drop non-finite
+# Gaussians) to the cells after the column's rows, the next column's, layer's or channel's,
+# or `flat`'s spare end. Compiled for 512-bit vectors, the loop over a 1e6 scene's ~14 rows ran
+# 1.06 ns per row and column, padded to 16 rows 0.60 (256-bit: 0.89 and 0.82).
 ROW_GROUP = 8
 # A tile's Gaussians are scattered over the slab's records (256 bytes each, ~18 000 of them in
 # a slab of a 1e6-Gaussian scene: more than the L2 cache), so the walk asks for the record of
