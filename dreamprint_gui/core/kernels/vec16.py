@@ -54,12 +54,12 @@ def _is_i64(t) -> bool:
     return isinstance(t, types.Integer) and t.bitwidth == 64
 
 
-def _f32_array(t) -> bool:
-    return isinstance(t, types.Array) and t.dtype == types.float32 and t.ndim == 1
-
-
 def _array_1d(t, dtypes) -> bool:
     return isinstance(t, types.Array) and t.dtype in dtypes and t.ndim == 1
+
+
+def _f32_array(t) -> bool:
+    return _array_1d(t, (types.float32,))
 
 
 def _mask(values):

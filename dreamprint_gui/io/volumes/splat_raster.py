@@ -454,6 +454,8 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
 
     records = state.reshape(-1)
     boxes = box.reshape(-1)
+    n_rec = state.shape[1]
+    n_box = box.shape[1]
     # channel, layer, column, row
     flat = np.zeros(4 * _CH + ROW_GROUP, np.float64)   # + the last column's padding rows
     clo = np.full((TILE_Z, TILE_X), TILE_Y, np.int64)     # touched rows of each column
@@ -478,9 +480,9 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
                     # the record of the Gaussian PREFETCH_AHEAD on into the L2 cache while
                     # this one is walked: a tile's Gaussians lie all over the slab's records
                     tn = members[min(m + PREFETCH_AHEAD, m_end - 1)]
-                    for ln in range(4):
-                        prefetch(records, np.uint64(tn * 32 + 8 * ln))
-                    prefetch(boxes, np.uint64(tn * 6))
+                    for u in range(0, n_rec, 8):          # a cache line: 8 float64
+                        prefetch(records, np.uint64(tn * n_rec + u))
+                    prefetch(boxes, np.uint64(tn * n_box))
                     xa = max(box[t, 0], x0)
                     xb = min(box[t, 1], x1)
                     ya = max(box[t, 2], y0)
