@@ -32,6 +32,53 @@ def _run(code: str, tmp_path, cwd=None, **env_extra: str) -> str:
 _SHOW = "import os, dreamprint_gui; print(os.environ.get('NUMBA_CPU_FEATURES', '<unset>'))"
 
 
+class _FakeFeatures(dict):
+    """llvmlite's host feature map, as far as the package reads it."""
+
+    def flatten(self) -> str:
+        return ",".join(("+" if on else "-") + name for name, on in self.items())
+
+
+@pytest.mark.parametrize("machine, name, flags, expect", [
+    ("x86_64", "sapphirerapids", {"avx2": True, "avx512f": True}, "+avx2,+avx512f,-prefer-256-bit"),
+    ("AMD64", "znver4", {"avx512f": True}, "+avx512f,-prefer-256-bit"),
+    ("x86_64", "skylake", {"avx2": True, "avx512f": False}, None),
+    ("x86_64", "nocona", {"avx512f": True}, None),      # numba runs such a VM without AVX
+    ("arm64", "apple-m1", {"neon": True}, None),
+])
+def test_the_choice_on_any_cpu(monkeypatch, tmp_path, machine, name, flags, expect):
+    """The decision itself, on CPUs this machine is not (llvmlite's answers replaced)."""
+    import platform
+
+    import llvmlite.binding as llvm
+
+    import dreamprint_gui
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(platform, "machine", lambda: machine)
+    monkeypatch.setattr(llvm, "get_host_cpu_name", lambda: name)
+    monkeypatch.setattr(llvm, "get_host_cpu_features", lambda: _FakeFeatures(flags))
+    assert dreamprint_gui._numba_cpu_features() == expect
+    (tmp_path / ".numba_config.yaml").write_text("cpu_name: generic\n")
+    assert dreamprint_gui._numba_cpu_features() is None  # the user's numba file decides
+
+
+def test_the_choice_when_llvm_cannot_read_the_cpu(monkeypatch, tmp_path):
+    import platform
+
+    import llvmlite.binding as llvm
+
+    import dreamprint_gui
+
+    def fail():
+        raise RuntimeError("failed to get host cpu features")
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(platform, "machine", lambda: "x86_64")
+    monkeypatch.setattr(llvm, "get_host_cpu_features", fail)
+    assert dreamprint_gui._numba_cpu_features() is None
+
+
 def test_features_are_the_hosts_with_wide_vectors_on_avx512(tmp_path):
     host, avx512 = _host_features()
     got = _run(_SHOW, tmp_path)
@@ -45,9 +92,7 @@ def test_features_are_the_hosts_with_wide_vectors_on_avx512(tmp_path):
                                         ("NUMBA_CPU_NAME", "generic"),
                                         ("NUMBA_ENABLE_AVX", "0")])
 def test_a_users_own_setting_is_kept(tmp_path, var, value):
-    code = ("import os, dreamprint_gui; "
-            "print(os.environ.get('NUMBA_CPU_FEATURES', '<unset>'))")
-    got = _run(code, tmp_path, **{var: value})
+    got = _run(_SHOW, tmp_path, **{var: value})
     assert got == (value if var == "NUMBA_CPU_FEATURES" else "<unset>")
 
 
@@ -58,10 +103,11 @@ def test_a_numba_config_file_is_kept(tmp_path):
 
 @pytest.mark.parametrize("first", ["dreamprint_gui", "numba"])
 def test_kernels_take_512_bit_vectors_on_avx512(tmp_path, first):
-    """Whichever is imported first, the package or numba; against numba's own default (the
-    host's features alone), which keeps 256-bit vectors on CPUs tuned for them."""
+    """Whichever is imported first, the package or numba; against the same features with
+    LLVM's 256-bit tuning forced on. Needs AVX-512 hardware to compile for (the decision
+    itself is tested on any CPU above)."""
     if not _host_features()[1]:
-        pytest.skip("this CPU has no AVX-512")
+        pytest.skip("this CPU has no AVX-512: no 512-bit code to look for")
     code = (
         f"import re, numpy as np, {first}\n"
         "import dreamprint_gui\n"
@@ -75,9 +121,10 @@ def test_kernels_take_512_bit_vectors_on_avx512(tmp_path, first):
         "asm = axpy.inspect_asm(axpy.signatures[0])\n"
         "print(len(re.findall('zmm', asm)), len(re.findall('ymm', asm)))\n"
     )
-    host, _ = _host_features()
-    zmm_default, _ = map(int, _run(code, tmp_path, NUMBA_CPU_FEATURES=host).split())
-    if zmm_default:
-        pytest.skip("numba's default on this CPU already takes 512-bit vectors")
     zmm, _ = map(int, _run(code, tmp_path).split())
     assert zmm > 0
+    # the same loop with the tuning forced on takes none: the package's setting is the cause
+    host, _ = _host_features()
+    zmm_tuned, ymm_tuned = map(int, _run(code, tmp_path,
+                                         NUMBA_CPU_FEATURES=host + ",+prefer-256-bit").split())
+    assert zmm_tuned == 0 and ymm_tuned > 0
