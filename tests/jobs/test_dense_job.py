@@ -1,7 +1,8 @@
-"""The fused path for dense grids (sample a layer, label it:
+"""The fused path for dense grids (sample a strip of a layer, label it:
 ``job.sample_label.dense_job``) writes exactly what the general path does (sample the whole
 slab, then ``slab_labels``): labels, counts,
-per-layer concentration sums and the clamp report, bit for bit, for any slab partition."""
+per-layer concentration sums and the clamp report, bit for bit, for any slab partition and
+any strip height."""
 
 import numpy as np
 import pytest
@@ -43,7 +44,7 @@ def _general(ctx, source, z0, z1, threshold):
     return out
 
 
-def _fused(ctx, source, z0, z1):
+def _fused(ctx, source, z0, z1, strip_voxels=None):
     nx, ny, _ = ctx.shape_xyz
     plan = source.layer_plan(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale)
     assert plan is not None
@@ -51,7 +52,10 @@ def _fused(ctx, source, z0, z1):
     dens = np.full(ny * nx, 7.0, np.float32)
     out = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64), np.zeros((z1 - z0, 7)),
            np.zeros(4))
-    dense_slab_labels(*plan, rgb, dens, z0, *ctx.kernel_args(), *out)
+    if strip_voxels is None:
+        dense_slab_labels(*plan, rgb, dens, z0, *ctx.kernel_args(), *out)
+    else:
+        dense_slab_labels(*plan, rgb, dens, z0, *ctx.kernel_args(), *out, strip_voxels)
     return out
 
 
@@ -85,6 +89,9 @@ def test_fused_path_equals_sample_then_label(tmp_path, shape, channels, threshol
     whole = _general(ctx, source, 0, nz, thr)
     assert len(np.unique(whole[0])) > 2                      # the job is not trivially uniform
     _assert_same(_fused(ctx, source, 0, nz), whole)
+    nx = ctx.shape_xyz[0]
+    for strip_voxels in (1, 3 * nx + 2):  # strips of 1 and 3 rows
+        _assert_same(_fused(ctx, source, 0, nz, strip_voxels), whole)
     assert nz > 13
     cuts = [0, 1, 4, 5, 13, nz]                               # any partition of the layers
     parts = [_fused(ctx, source, a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
@@ -117,15 +124,18 @@ def test_scalar_image_fused_path_equals_sample_then_label(tmp_path, window, colo
     whole = _general(ctx, source, 0, nz, 0.0)
     assert len(np.unique(whole[0])) > 2
 
-    def fused(z0, z1):
+    def fused(z0, z1, strip_voxels=1 << 15):
         plan = source.layer_plan(ctx.grid, z0, z1, density_scale=ctx.settings.density_scale)
         out = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
                np.zeros((z1 - z0, 7)), np.zeros(4))
         window_slab_labels(*plan, np.full((ny * nx, 3), np.nan, np.float32),
-                           np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *out)
+                           np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *out,
+                           strip_voxels)
         return out
 
     _assert_same(fused(0, nz), whole)
+    for strip_voxels in (1, 2 * nx + 1):  # strips of 1 and 2 rows
+        _assert_same(fused(0, nz, strip_voxels), whole)
     parts = [fused(a, b) for a, b in ((0, 3), (3, 4), (4, nz))]
     np.testing.assert_array_equal(np.concatenate([p[0] for p in parts]), whole[0])
 

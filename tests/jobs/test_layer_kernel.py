@@ -58,3 +58,62 @@ def test_fused_layer_equals_lookup_then_halftone(tmp_path, halftone):
     assert stats[2] == pytest.approx(short_low)
     assert stats[3] == pytest.approx(short_high)
     assert stats[0] + stats[1] > 0  # the test exercises the clamp report
+
+
+@pytest.mark.parametrize("colour_op", ["as-is", "encode", "uniform"])
+@pytest.mark.parametrize("halftone", ["blue-noise", "random"])
+def test_strips_give_the_layer_bit_for_bit(tmp_path, colour_op, halftone):
+    """A layer labelled in strips of rows (``strip_labels``, each strip's samples in arrays of
+    their own, refilled between strips) gives the labels, counts, concentration sums and clamp
+    report of the whole layer in one call, for strips of any height: the blocks, which reach
+    over strips, are the same."""
+    from dreamprint_gui.io.volumes.srgb_encode import AS_IS, ENCODE
+    from dreamprint_gui.job.sample_label.layer_kernel import (
+        UNIFORM,
+        layer_labels,
+        layer_state,
+        strip_labels,
+    )
+
+    op = {"as-is": AS_IS, "encode": ENCODE, "uniform": UNIFORM}[colour_op]
+    ctx = prepare_job(ConvertSettings(source="demo", output=tmp_path / "J", height_mm=0.6,
+                                      table_size=17, seed=3, halftone=halftone))
+    args = ctx.kernel_args()
+    ny, nx = 61, 97  # ~4000 foreground voxels a layer: blocks of 1024 end inside strips
+    rng = np.random.default_rng(8)
+    rgb = rng.random((ny * nx, 3), dtype=np.float32)
+    if op == UNIFORM:
+        rgb[:] = rgb[0]
+    dens = rng.uniform(0.0, 40.0, ny * nx).astype(np.float32)
+    dens[rng.random(ny * nx) < 0.3] = 0.0
+    dens[:4 * nx] = 0.0                          # empty rows, sparse rows
+    dens[20 * nx:22 * nx:5] = 0.0
+    dens[30 * nx:33 * nx] = np.where(np.arange(3 * nx) % 9 == 0, 30.0, 0.0)
+    dens[7] = np.nan
+    dens[ny * nx - 1] = 0.0
+    z = 5
+
+    def run(strip_rows):
+        out = (np.empty((ny, nx), np.uint8), np.zeros(7, np.int64), np.zeros(7), np.zeros(4))
+        if strip_rows is None:
+            layer_labels(rgb, dens, z, *args, *out, op)
+            return out
+        state = layer_state(nx)
+        for y0 in range(0, ny, strip_rows):
+            nr = min(strip_rows, ny - y0)
+            # the strip's own arrays, garbage beyond: only its rows may be read
+            r = np.full(((strip_rows + 3) * nx, 3), np.nan, np.float32)
+            d = np.full((strip_rows + 3) * nx, 99.0, np.float32)
+            r[:nr * nx] = rgb[y0 * nx:(y0 + nr) * nx]
+            d[:nr * nx] = dens[y0 * nx:(y0 + nr) * nx]
+            if op == UNIFORM:
+                r[0] = rgb[0]
+            strip_labels(r, d, z, y0, nr, *args, *out, op, state)
+        return out
+
+    whole = run(None)
+    assert len(np.unique(whole[0])) > 2
+    assert whole[3][0] + whole[3][1] > 0  # the clamp report is exercised
+    for strip_rows in (1, 2, 7, 13, 60, ny):
+        for a, b in zip(run(strip_rows), whole, strict=True):
+            np.testing.assert_array_equal(a.view(np.uint8), b.view(np.uint8))

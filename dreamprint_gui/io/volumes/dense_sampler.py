@@ -198,13 +198,15 @@ def _planes_for(vol, rows_nz, p, q, srows, ix0, ix1, wx, vx, planes, planes_nz, 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
-                srows, planes, planes_nz, plane_layer, row, cpl, out, rgb, sigma, mode, scale):
+                srows, planes, planes_nz, plane_layer, row, cpl, out, rgb, sigma, mode, scale,
+                j0=0, nrows=-1):
     """Output layer ``k`` of a slab (:class:`DenseLayers`) into flat arrays of that layer:
     ``out`` (ny * nx * C, mode 0), ``sigma`` (ny * nx: ``max(density * scale, 0)``) and ``rgb``
     (ny * nx * 3: colour / density clipped to [0, 1], 0 where the density is not positive);
-    see the modes above. 0 outside the grid."""
+    see the modes above. 0 outside the grid. With ``nrows >= 0``, the layer's rows ``j0 ..
+    j0 + nrows - 1`` only, into arrays of those rows (a strip: the same values)."""
     nc = vol.shape[3]
-    nyo = iy0.shape[0]
+    nyo = iy0.shape[0] if nrows < 0 else nrows
     nxo = ix0.shape[0]
     w = nxo * nc
     zero = np.float32(0.0)
@@ -219,62 +221,65 @@ def dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
     sp, sq = _planes_for(vol, rows_nz, iz0[k], iz1[k], srows, ix0, ix1, wx, vx, planes,
                          planes_nz, plane_layer)
     fz = wz[k]
-    for j in range(nyo):
+    for jl in range(nyo):
+        j = jl + j0
         b0 = rslot[iy0[j]]
         b1 = rslot[iy1[j]]
         empty = not vy[j] or (mode != RAW and not (planes_nz[sp, b0] or planes_nz[sq, b0]
                                                    or planes_nz[sp, b1] or planes_nz[sq, b1]))
         if empty:
             if mode == RAW:
-                out[j * w:(j + 1) * w] = zero
+                out[jl * w:(jl + 1) * w] = zero
             else:
-                sigma[j * nxo:(j + 1) * nxo] = zero
+                sigma[jl * nxo:(jl + 1) * nxo] = zero
                 if mode == COLOUR:
-                    rgb[j * nxo * 3:(j + 1) * nxo * 3] = zero
+                    rgb[jl * nxo * 3:(jl + 1) * nxo * 3] = zero
             continue
         _lerp_row(row, w, planes[sp, b0], planes[sq, b0], planes[sp, b1], planes[sq, b1],
                   fz, wy[j])
         if mode == RAW:
             for i in range(nxo):
                 for c in range(nc):
-                    out[j * w + i * nc + c] = row[c * nxo + i]
+                    out[jl * w + i * nc + c] = row[c * nxo + i]
             continue
         for i in range(nxo):
-            sigma[j * nxo + i] = max(row[i] * scale, zero)
+            sigma[jl * nxo + i] = max(row[i] * scale, zero)
         if mode >= COLOUR:
-            _colour_row(row, nxo, rgb[j * nxo * 3:(j + 1) * nxo * 3], cpl)
+            _colour_row(row, nxo, rgb[jl * nxo * 3:(jl + 1) * nxo * 3], cpl)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
                        rslot, srows, planes, planes_nz, plane_layer, row, low, inv_width,
-                       density, sigma):
+                       density, sigma, j0=0, nrows=-1):
     """Output layer ``k`` of a one-channel grid through a window: ``sigma`` (ny * nx) =
     ``clip((v - low) * inv_width, 0, 1) * density`` of the trilinear sample ``v``, in the row
     pass (a scalar image without a colour map: the paper's sec. 4.1 scalar field ->
     extinction). The bits of :func:`dense_layer` (mode ``RAW``) followed by
     :func:`.dense._window_kernel`'s density (the same expressions and types, 0 outside the
     grid), without
-    the layer of samples in between (a 1e9-voxel job's layer is 2 MB, as large as L2)."""
-    nyo = iy0.shape[0]
+    the layer of samples in between (a 1e9-voxel job's layer is 2 MB, as large as L2). With
+    ``nrows >= 0``, rows ``j0 .. j0 + nrows - 1`` only, into an array of those rows."""
+    nyo = iy0.shape[0] if nrows < 0 else nrows
     nxo = ix0.shape[0]
     zero = np.float32(0.0)
     if not vz[k]:
-        for j in range(nyo):
-            _window_row(row, nxo, zero, True, low, inv_width, density, sigma, j * nxo)
+        for jl in range(nyo):
+            _window_row(row, nxo, zero, True, low, inv_width, density, sigma, jl * nxo)
         return
     sp, sq = _planes_for(vol, rows_nz, iz0[k], iz1[k], srows, ix0, ix1, wx, vx, planes,
                          planes_nz, plane_layer)
     fz = wz[k]
-    for j in range(nyo):
+    for jl in range(nyo):
+        j = j0 + jl
         if not vy[j]:
-            _window_row(row, nxo, zero, True, low, inv_width, density, sigma, j * nxo)
+            _window_row(row, nxo, zero, True, low, inv_width, density, sigma, jl * nxo)
             continue
         b0 = rslot[iy0[j]]
         b1 = rslot[iy1[j]]
         _lerp_row(row, nxo, planes[sp, b0], planes[sq, b0], planes[sp, b1], planes[sq, b1],
                   fz, wy[j])
-        _window_row(row, nxo, zero, False, low, inv_width, density, sigma, j * nxo)
+        _window_row(row, nxo, zero, False, low, inv_width, density, sigma, jl * nxo)
 
 
 @njit(cache=True, nogil=True, inline="always")

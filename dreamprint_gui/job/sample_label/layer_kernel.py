@@ -4,6 +4,9 @@ Defines
 -------
 - :func:`layer_labels`: one layer of sampled colour and density (1/mm) -> material labels, label
   counts, intended concentrations and the clamp report; compiled (numba), releases the GIL.
+- :func:`strip_labels`: the same for a strip of a layer's rows, the samples of that strip alone
+  in the arrays (a fused sampler's strips stay in the L2 cache), the layer's unfinished block
+  carried from strip to strip in :func:`layer_state`: the results of the whole layer.
 - :func:`slab_labels`: the same for every layer of a slab in one call (a call from Python costs
   ~70 us of argument checks, as much as a small job's layer of 20 000 voxels).
 
@@ -50,7 +53,8 @@ from dreamprint_gui.job.halftone import (
     tile_layout,
 )
 
-__all__ = ["layer_labels", "slab_labels", "block_conc_sums", "DENSE_ROW", "UNIFORM"]
+__all__ = ["layer_labels", "strip_labels", "layer_state", "slab_labels", "block_conc_sums",
+           "DENSE_ROW", "UNIFORM"]
 
 # A ``colour_op`` of :func:`layer_labels` besides those of :mod:`..io.volumes.srgb_encode`:
 # every voxel's colour is ``rgb[0]``'s (sRGB): a source of one colour (a scalar image without a
@@ -85,6 +89,19 @@ def block_conc_sums(C, m, acc, sums):
         sums[q] += s
 
 
+@njit(cache=True, nogil=True)
+def layer_state(nx):
+    """The working arrays of one layer's labelling (:func:`strip_labels`), which carry its
+    unfinished block from one strip of rows to the next: (flat positions, halftone thresholds,
+    a row's thresholds, the block buffers of :func:`..gamut.alignment.block_buffers`, labels,
+    sums scratch, and (voxels waiting, how many of them are staged, background voxels so
+    far)). Reusable from layer to layer of rows of ``nx`` voxels."""
+    RB = ROW_BLOCK
+    col, W, off, A, G, C = block_buffers()
+    return (np.empty(RB + nx, np.int64), np.empty(RB + nx), np.empty(nx), col, W, off, A, G, C,
+            np.empty(RB, np.uint8), np.empty(48), np.zeros(3, np.int64))
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
                  method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats,
@@ -97,28 +114,51 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
     holds linear values) or clipped (``CLIP``) first, in the staged block
     (:func:`..io.volumes.srgb_encode.prepare_staged`): only the foreground voxels', the only
     colours read (the rest of ``rgb`` may hold anything); ``UNIFORM``: every voxel has
-    ``rgb[0]``'s colour, the only one read (the same labels, looked up once)."""
+    ``rgb[0]``'s colour, the only one read (the same labels, looked up once). The whole layer
+    as one strip (:func:`strip_labels`)."""
     ny, nx = labels.shape
+    strip_labels(rgb, dens, z, 0, ny, threshold, bg_label, flat, n, sigma_clear, method, mask,
+                 ox, oy, oz, seed, order, labels, counts, sums, stats, colour_op,
+                 layer_state(nx))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def strip_labels(rgb, dens, z, y0, ny_strip, threshold, bg_label, flat, n, sigma_clear,
+                 method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats, colour_op,
+                 state):
+    """:func:`layer_labels` of rows ``y0 .. y0 + ny_strip - 1`` of layer ``z`` (``labels`` the
+    whole layer, (ny, nx)), whose samples alone ``rgb`` (ny_strip*nx, 3) and ``dens``
+    (ny_strip*nx,) hold, so that a sampler can fill a strip that stays in the L2 cache instead
+    of a layer (a 1e10-voxel job's layer of colour and density is 32 MB). Call it for the
+    strips of a layer in order from ``y0 = 0`` with one ``state`` (:func:`layer_state`): the
+    block that a strip leaves unfinished waits there, its voxels' inputs staged before the
+    strip's arrays are refilled, so the blocks, and with them every label, count, sum and
+    clamp report, are those of the whole layer in one call, whatever the strips."""
+    ny = labels.shape[0]
+    nx = labels.shape[1]
     mz, my, mx = mask.shape
-    cols, rows, tiles = tile_layout(0, nx, 0, ny, z, ox, oy, oz, mz, my, mx, seed)
+    cols, rows, tiles = tile_layout(0, nx, y0, ny_strip, z, ox, oy, oz, mz, my, mx, seed)
     RB = ROW_BLOCK
-    # Foreground voxels of consecutive rows (flat position, halftone threshold) wait here until
-    # a block is full: narrow rows would otherwise give the vector passes a few voxels at a time.
-    idx = np.empty(RB + nx, np.int64)
-    tq = np.empty(RB + nx)
-    trow = np.empty(nx)
-    col, W, off, A, G, C = block_buffers()
+    RS = ROW_STRIDE
+    # Foreground voxels of consecutive rows (flat position in the layer, halftone threshold)
+    # wait here until a block is full: narrow rows would otherwise give the vector passes a few
+    # voxels at a time.
+    idx, tq, trow, col, W, off, A, G, C, lab, acc, ints = state
     C2 = C.reshape((8, ROW_STRIDE))
-    lab = np.empty(RB, np.uint8)
-    acc = np.empty(48)
     out = labels.reshape(-1)
     uniform = colour_op == UNIFORM
-    if uniform:  # G's lookup lanes, once for every block of the layer
-        uniform_lanes(flat, n, rgb[0, 0], rgb[0, 1], rgb[0, 2], col, W, off, A, G)
-    n_bg = 0
-    m = 0
-    for j in range(ny):
+    if y0 == 0:  # a new layer
+        ints[:] = 0
+        if uniform:  # G's lookup lanes, once for every block of the layer
+            uniform_lanes(flat, n, rgb[0, 0], rgb[0, 1], rgb[0, 2], col, W, off, A, G)
+    m = ints[0]       # voxels waiting
+    staged = ints[1]  # the first ``staged`` of them are in the block buffers already
+    n_bg = ints[2]
+    shift = y0 * nx   # layer position -> position in this strip's arrays
+    for jl in range(ny_strip):
+        j = y0 + jl
         base = j * nx
+        src = jl * nx
         out[base:base + nx] = bg_label
         # vectorised: the row's foreground count and span [lo, hi]; an empty row (a third or
         # more of most jobs) is filled with no compaction, and a row's compaction covers its
@@ -127,37 +167,38 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
         lo = nx
         hi = -1
         for i in range(nx):
-            f = dens[base + i] >= threshold  # NaN is background
+            f = dens[src + i] >= threshold  # NaN is background
             n_fg += 1 if f else 0
             lo = min(lo, i if f else nx)
             hi = max(hi, i if f else -1)
         n_bg += nx - n_fg
         if n_fg * DENSE_ROW >= hi + 1 - lo:
             # the span's thresholds at once (copies of mask rows), then a branch-free compaction
-            threshold_row(method, mask, tiles, cols, rows, seed, j, 0, j, z, lo, hi + 1, trow)
+            threshold_row(method, mask, tiles, cols, rows, seed, jl, 0, j, z, lo, hi + 1, trow)
             for i in range(lo, hi + 1):
                 idx[m] = base + i
                 tq[m] = trow[i]
-                m += 1 if dens[base + i] >= threshold else 0
+                m += 1 if dens[src + i] >= threshold else 0
         elif n_fg > 0:  # few foreground voxels: their thresholds one by one
             for i in range(lo, hi + 1):
-                if dens[base + i] >= threshold:
+                if dens[src + i] >= threshold:
                     idx[m] = base + i
-                    tq[m] = fg_threshold(method, mask, tiles, cols, rows, seed, i, j, i, j, z)
+                    tq[m] = fg_threshold(method, mask, tiles, cols, rows, seed, i, jl, i, j, z)
                     m += 1
         if m < RB and j < ny - 1:
             continue
         k0 = 0
         while k0 < m and (m - k0 >= RB or j == ny - 1):
             mb = min(RB, m - k0)
+            first = staged if k0 == 0 else 0  # waiting from an earlier strip: staged then
             if uniform:
-                tg = G[K_TARGET * ROW_STRIDE:]
-                for k in range(mb):
-                    tg[k] = dens[idx[k0 + k]]
+                tg = G[K_TARGET * RS:]
+                for k in range(first, mb):
+                    tg[k] = dens[idx[k0 + k] - shift]
                 align_block(sigma_clear, mb, G, C, stats)
             else:
-                for k in range(mb):
-                    p = idx[k0 + k]
+                for k in range(first, mb):
+                    p = idx[k0 + k] - shift
                     stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
                 prepare_staged(col, mb, ROW_STRIDE, colour_op)
                 lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
@@ -165,12 +206,27 @@ def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
             scatter_counts(out, idx, k0, lab, mb, counts)
             block_conc_sums(C, mb, acc, sums)
             k0 += mb
+        if k0 > 0:
+            staged = 0  # what waits now was beyond the blocks: not staged
         for k in range(m - k0):  # the unfinished block's voxels move to the front
             idx[k] = idx[k0 + k]
             tq[k] = tq[k0 + k]
         m -= k0
-    counts[bg_label] += n_bg
-    sums[bg_label] += n_bg
+    if y0 + ny_strip < ny:
+        # the layer goes on in another strip, into these arrays: stage what waits (m < RB)
+        for k in range(staged, m):
+            p = idx[k] - shift
+            if uniform:
+                G[K_TARGET * RS + k] = dens[p]
+            else:
+                stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
+        staged = m
+    else:
+        counts[bg_label] += n_bg
+        sums[bg_label] += n_bg
+    ints[0] = m
+    ints[1] = staged
+    ints[2] = n_bg
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
