@@ -84,21 +84,23 @@ def index_axis(u: np.ndarray, lo: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def leaf_grid_layer(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, sigma):
+def leaf_grid_layer(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, scale, sigma, r0=0, nrows=-1):
     """One output layer's density ``max(v, 0) * scale`` (the fog volume's rule of
     :mod:`.openvdb` and :mod:`.nanovdb`) into ``sigma`` (ny * nx), ``v`` the trilinear sample of
     the densified grid ``dense`` (nk, nj, ni) at layer corner ``k0`` / weight ``wk`` (a
     scalar), rows ``j0``/``wj`` (ny,) and columns ``i0``/``wi`` (nx,) (:func:`index_axis`);
     ``plane`` (ni,) float32 scratch. The reconstruction step of sampling (paper sec. 4.1: the
-    volume's extinction at each printer voxel centre)."""
+    volume's extinction at each printer voxel centre). With ``nrows >= 0``, the output rows
+    ``r0 .. r0 + nrows - 1`` only, into an array of those rows (a strip: the same values)."""
     nk, nj, ni = dense.shape
-    nyo = j0.shape[0]
+    nyo = j0.shape[0] if nrows < 0 else nrows
     nxo = i0.shape[0]
     zero = np.float32(0.0)
     k_ok = 0 <= k0 and k0 + 1 < nk
-    for jj in range(nyo):
+    for jl in range(nyo):
+        jj = r0 + jl
         b = j0[jj]
-        out = sigma[jj * nxo:(jj + 1) * nxo]
+        out = sigma[jl * nxo:(jl + 1) * nxo]
         if not (k_ok and 0 <= b and b + 1 < nj and (rows_nz[k0, b] or rows_nz[k0, b + 1]
                                                   or rows_nz[k0 + 1, b]
                                                   or rows_nz[k0 + 1, b + 1])):
@@ -192,7 +194,8 @@ def _x_lerp3(plane, a_lo, ni, ia, wa, o):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def leaf_grid_values_where(dense, rows_nz, k, wk_, j0, wj, i0, wi, plane, out, dens, threshold):
+def leaf_grid_values_where(dense, rows_nz, k, wk_, j0, wj, i0, wi, plane, out, dens, threshold,
+                           r0=0, nrows=-1):
     """:func:`leaf_grid_values` of one output layer (corner ``k``, weight ``wk_``) into ``out``
     (ny * nx * C, voxel-major), at the voxels whose ``dens`` (ny * nx,) reaches ``threshold``
     (NaN does not): a layer's colour for a consumer that reads it at those voxels only
@@ -207,14 +210,16 @@ def leaf_grid_values_where(dense, rows_nz, k, wk_, j0, wj, i0, wi, plane, out, d
     contiguous pass (the channel-interleaved row as one vector loop; one channel at a time read
     every third value), then the x interpolation over the span. A cloud's row holds its
     foreground in one run (spans: 35.8 % of that cloud's voxels, foreground 35.6 %), so the
-    span is not compacted further."""
+    span is not compacted further. With ``nrows >= 0``, the output rows ``r0 .. r0 + nrows -
+    1`` only, ``out`` and ``dens`` holding those rows (a strip)."""
     nk, nj, ni, nc = dense.shape
-    nyo = j0.shape[0]
+    nyo = j0.shape[0] if nrows < 0 else nrows
     nxo = i0.shape[0]
     zero = np.float32(0.0)
     k_ok = 0 <= k and k + 1 < nk
-    for jj in range(nyo):
-        base = jj * nxo
+    for jl in range(nyo):
+        jj = r0 + jl
+        base = jl * nxo
         lo = nxo
         hi = -1
         for ii in range(nxo):           # vectorised: the row's foreground span

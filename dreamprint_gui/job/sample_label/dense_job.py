@@ -4,7 +4,7 @@ Defines :func:`dense_slab_labels` (density and colour grids) and :func:`window_s
 (scalar images through a window and a colour table: VTK, MetaImage, NRRD). For each layer of
 a slab, the dense grid's trilinear samples
 (:func:`..io.volumes.dense_sampler.dense_layer`) go into colour and density arrays, which
-:func:`.layer_kernel.layer_labels` turns into labels straight away, in one compiled call
+:func:`.layer_kernel.strip_labels` turns into labels straight away, in one compiled call
 (nogil). The general path samples the whole slab first (16 bytes per voxel written to memory,
 then read back); here the arrays are reused (a 1e7-voxel job's sampling and labelling: 12.0 ->
 9.6 ns per voxel on one core, 1e8: 7.8 -> 5.9). A layer goes a strip of rows at a
@@ -32,17 +32,14 @@ from dreamprint_gui.io.volumes.dense_sampler import (
 )
 from dreamprint_gui.io.volumes.srgb_encode import AS_IS, ENCODE
 from dreamprint_gui.job.sample_label.layer_kernel import (
+    STRIP_VOXELS,
     UNIFORM,
     layer_state,
     strip_labels,
+    strip_rows,
 )
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]
-
-# A layer is sampled and labelled in strips of rows of at most this many voxels (16 bytes
-# each of colour and density: 512 kB, within the L2 cache; a 1e10-voxel job's layer is 32 MB).
-STRIP_VOXELS = 1 << 15
-
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
@@ -85,13 +82,6 @@ def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1
                          stats, op, state)
 
 
-@njit(cache=True, nogil=True)
-def strip_rows(ny, nx, strip_voxels):
-    """Rows per strip of a layer of ``ny`` rows of ``nx`` voxels: ``strip_voxels`` voxels at
-    most, one row at least."""
-    return max(1, min(ny, strip_voxels // max(nx, 1)))
-
-
 @njit(cache=True, nogil=True, error_model="numpy")
 def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                        srows, planes, planes_nz, plane_layer, row, cpl, low, inv_width, lut,
@@ -105,12 +95,12 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
     ``t * density`` and colour ``lut[t]`` (:func:`..io.volumes.dense._window_kernel`; the
     paper's sec. 4.1 maps a scalar field to extinction and albedo), density 0 at voxels outside
     the image (``outside_z[k] | outside_y[j] | outside_x[i]``, if ``use_outside``: a window
-    below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.layer_labels`.
+    below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.strip_labels`.
     The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s. A table of one colour
     (every entry the same bits: no colour map) gives only the density, windowed in the
     sampler's row pass (:func:`..io.volumes.dense_sampler.dense_window_layer`), and is looked
     up once per layer (:data:`.layer_kernel.UNIFORM`). A strip of rows at a time, as
-    :func:`dense_slab_labels`."""
+    :func:`dense_slab_labels` (``values``, ``rgb`` and ``dens``: the strip's rows used)."""
     ny, nx = labels.shape[1:]
     li = lut.view(np.int32)
     one_colour = True

@@ -53,14 +53,20 @@ from dreamprint_gui.job.halftone import (
     tile_layout,
 )
 
-__all__ = ["layer_labels", "strip_labels", "layer_state", "slab_labels", "block_conc_sums",
-           "DENSE_ROW", "UNIFORM"]
+__all__ = ["layer_labels", "strip_labels", "layer_state", "strip_rows", "slab_labels",
+           "block_conc_sums", "DENSE_ROW", "UNIFORM", "STRIP_VOXELS"]
 
 # A ``colour_op`` of :func:`layer_labels` besides those of :mod:`..io.volumes.srgb_encode`:
 # every voxel's colour is ``rgb[0]``'s (sRGB): a source of one colour (a scalar image without a
 # colour map, a density-only VDB). The lookup is done once per layer
 # (:func:`..gamut.alignment.uniform_lanes`) and only ``rgb[0]`` is read.
 UNIFORM = 3
+
+# The fused samplers (.dense_job, .leaf_grid_job) sample and label a layer in strips of rows of
+# at most this many voxels (16 bytes each of colour and density: 512 kB, within the L2 cache; a
+# 1e10-voxel job's layer is 32 MB): :func:`strip_rows`, :func:`strip_labels`.
+STRIP_VOXELS = 1 << 15
+
 
 # A row with at least 1/DENSE_ROW of its voxels in the foreground gets its halftone thresholds
 # for the whole row (:func:`.halftone.threshold_row`) and a branch-free compaction; a sparser
@@ -87,6 +93,13 @@ def block_conc_sums(C, m, acc, sums):
         for k in range(m8, m):
             s += C[q * RS + k]
         sums[q] += s
+
+
+@njit(cache=True, nogil=True)
+def strip_rows(ny, nx, strip_voxels):
+    """Rows per strip of a layer of ``ny`` rows of ``nx`` voxels: ``strip_voxels`` voxels at
+    most, one row at least."""
+    return max(1, min(ny, strip_voxels // max(nx, 1)))
 
 
 @njit(cache=True, nogil=True)

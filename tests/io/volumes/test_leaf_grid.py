@@ -89,8 +89,8 @@ def test_densify_refuses_what_it_cannot_reproduce():
 
 def _general_and_fused(ctx, src, kernel):
     """Labels, counts, sums and clamp report of three slabs through the general path (sample,
-    then label) and through ``kernel`` (the fused layer path): the same bits. Returns the
-    whole job's labels."""
+    then label) and through ``kernel`` (the fused layer path, whole layers or strips of rows):
+    the same bits. Returns the whole job's labels."""
     nx, ny, nz = ctx.shape_xyz
     whole = None
     for z0, z1 in ((0, nz), (3, 4), (nz // 2, nz)):
@@ -99,12 +99,13 @@ def _general_and_fused(ctx, src, kernel):
         a = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
              np.zeros((z1 - z0, 7)), np.zeros(4))
         _labels_of_slab(ctx, rgb, dens, z0, *a)
-        b = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
-             np.zeros((z1 - z0, 7)), np.zeros(4))
-        kernel(*src.layer_plan(ctx.grid, z0, z1), np.full((ny * nx, 3), np.nan, np.float32),
-               np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *b)
-        for x, y in zip(a, b, strict=True):
-            np.testing.assert_array_equal(x.view(np.uint8), y.view(np.uint8))
+        for strip_voxels in (1 << 15, 1, 3 * nx + 1):  # a layer; strips of 1 and 3 rows
+            b = (np.empty((z1 - z0, ny, nx), np.uint8), np.zeros(7, np.int64),
+                 np.zeros((z1 - z0, 7)), np.zeros(4))
+            kernel(*src.layer_plan(ctx.grid, z0, z1), np.full((ny * nx, 3), np.nan, np.float32),
+                   np.full(ny * nx, 7.0, np.float32), z0, *ctx.kernel_args(), *b, strip_voxels)
+            for x, y in zip(a, b, strict=True):
+                np.testing.assert_array_equal(x.view(np.uint8), y.view(np.uint8))
         whole = a if whole is None else whole
     return whole
 
