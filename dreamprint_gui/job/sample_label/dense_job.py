@@ -41,6 +41,7 @@ from dreamprint_gui.job.sample_label.layer_kernel import (
 
 __all__ = ["dense_slab_labels", "window_slab_labels"]
 
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def dense_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx, rslot,
                       srows, planes, planes_nz, plane_layer, row, cpl, scale, uniform, linear,

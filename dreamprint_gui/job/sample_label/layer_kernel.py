@@ -115,6 +115,21 @@ def layer_state(nx):
             np.empty(RB, np.uint8), np.empty(48), np.zeros(3, np.int64))
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _stage(rgb, dens, idx, k0, a, b, shift, uniform, col, G):
+    """Voxels ``a .. b - 1`` of the block that starts at waiting voxel ``k0``: their target, and
+    their colour as read unless ``uniform``, from the strip's arrays (layer position ``idx``
+    minus ``shift``) into the block buffers (:func:`..gamut.alignment.stage_voxel`)."""
+    if uniform:
+        tg = G[K_TARGET * ROW_STRIDE:]
+        for k in range(a, b):
+            tg[k] = dens[idx[k0 + k] - shift]
+    else:
+        for k in range(a, b):
+            p = idx[k0 + k] - shift
+            stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def layer_labels(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear,
                  method, mask, ox, oy, oz, seed, order, labels, counts, sums, stats,
@@ -152,7 +167,6 @@ def strip_labels(rgb, dens, z, y0, ny_strip, threshold, bg_label, flat, n, sigma
     mz, my, mx = mask.shape
     cols, rows, tiles = tile_layout(0, nx, y0, ny_strip, z, ox, oy, oz, mz, my, mx, seed)
     RB = ROW_BLOCK
-    RS = ROW_STRIDE
     # Foreground voxels of consecutive rows (flat position in the layer, halftone threshold)
     # wait here until a block is full: narrow rows would otherwise give the vector passes a few
     # voxels at a time.
@@ -204,15 +218,10 @@ def strip_labels(rgb, dens, z, y0, ny_strip, threshold, bg_label, flat, n, sigma
         while k0 < m and (m - k0 >= RB or j == ny - 1):
             mb = min(RB, m - k0)
             first = staged if k0 == 0 else 0  # waiting from an earlier strip: staged then
+            _stage(rgb, dens, idx, k0, first, mb, shift, uniform, col, G)
             if uniform:
-                tg = G[K_TARGET * RS:]
-                for k in range(first, mb):
-                    tg[k] = dens[idx[k0 + k] - shift]
                 align_block(sigma_clear, mb, G, C, stats)
             else:
-                for k in range(first, mb):
-                    p = idx[k0 + k] - shift
-                    stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
                 prepare_staged(col, mb, ROW_STRIDE, colour_op)
                 lookup_align_block(flat, n, sigma_clear, col, mb, W, off, A, G, C, stats)
             label_rows(C2, tq[k0:], mb, order, bg_label, lab)
@@ -227,12 +236,7 @@ def strip_labels(rgb, dens, z, y0, ny_strip, threshold, bg_label, flat, n, sigma
         m -= k0
     if y0 + ny_strip < ny:
         # the layer goes on in another strip, into these arrays: stage what waits (m < RB)
-        for k in range(staged, m):
-            p = idx[k] - shift
-            if uniform:
-                G[K_TARGET * RS + k] = dens[p]
-            else:
-                stage_voxel(col, G, k, rgb[p, 0], rgb[p, 1], rgb[p, 2], dens[p])
+        _stage(rgb, dens, idx, 0, staged, m, shift, uniform, col, G)
         staged = m
     else:
         counts[bg_label] += n_bg
