@@ -15,9 +15,9 @@ exactly (four ``exp``, and six for the constants) at one anchor, the lowest corn
 3-sigma box on the job's grid, and every other voxel is reached from it by multiplications
 along one fixed path: up in z along the box's corner column, then in y, then in x.  A row
 costs no ``exp`` (the previous rasteriser paid two per Gaussian-row: 61 % of a 1e6-Gaussian
-job, a Gaussian being ~5 voxels wide in x and ~400 rows).  A layer's rows are walked side
-by side (:func:`_column`: independent recurrences, a vectorised loop) over the box's
-columns (over the rows' runs in boxes wider than SCAN_X),
+job, a Gaussian being ~5 voxels wide in x and ~400 rows).  A tile's layers and the rows of
+their marginal ellipses are walked side by side (:func:`_column`: independent recurrences, a
+vectorised loop) over the box's columns (over the rows' runs in boxes wider than SCAN_X),
 and every voxel is added as ``G`` where ``G >= exp(-9/2)`` (``q <= 9`` up to rounding), as
 0 elsewhere: no branch to mispredict, and adding 0.0 leaves a sum's bits as they were.
 Rounding: each product carries a relative error of one ulp and the ratios' errors add up
@@ -30,10 +30,18 @@ convex: the largest value of the walk) exceeds ``Q_WALK`` (thin, tilted Gaussian
 would visit values near the float64 range's end), or a step constant's exponent exceeds
 ``K_WALK`` in magnitude (a Gaussian much thinner than a voxel).
 
-Tiles.  The slab is cut into TILE_Z x TILE_Y x TILE_X voxels; each Gaussian is binned into
-the tiles its box overlaps, and a tile sums its Gaussians into a float64 accumulator small
-enough to stay in cache (channel, layer, column, row: a column's rows contiguous for
-:func:`_column`), then writes colour / density once, over each column's touched rows.
+Tiles.  The slab is cut into tiles of TILE_Y x TILE_X voxels and at most TILE_Z layers (the
+slab's layers in equal parts: a 9-layer slab in tiles of 5 and 4); each Gaussian is binned
+into the tiles its box overlaps, and a tile sums its Gaussians into a float64 accumulator
+small enough to stay in cache (channel, column, row, layer: a column's rows and their layers
+contiguous for :func:`_column`), then writes colour / density once, over each column's touched
+rows.  A Gaussian walks all the tile's layers together: their corner columns' values come up
+the z chain, go down the y chain a row at a time for every layer at once, and one x step
+serves every row and layer, where walking layer by layer paid the y chain's serial steps, the
+rows' bounds and the x loop's set-up once per layer (a 1e6-Gaussian job, 1e9 voxels,
+``bench_splat_raster.py``: 11.5 -> 8.1 CPU ns per voxel; the 9k-Gaussian sample 12.8 -> 11.9;
+the same values bit for bit: the same products along the same path, and rows a layer's
+ellipse misses add 0.0).
 The Gaussians' parameters are gathered once per slab into one record each (:func:`_setup`).
 
 Determinism: a voxel's value depends only on its position, the Gaussians whose support holds
@@ -52,23 +60,19 @@ from numba import njit
 from dreamprint_gui.core.kernels.vec16 import prefetch
 from dreamprint_gui.io.volumes.base import SlabBuffers
 
-__all__ = ["rasterise_splats", "pack_gaussians", "TILE_X", "TILE_Y", "TILE_Z", "CUT_Q", "Q_WALK",
-           "K_WALK"]
+__all__ = ["rasterise_splats", "pack_gaussians", "tile_layers", "TILE_X", "TILE_Y", "TILE_Z",
+           "CUT_Q", "Q_WALK", "K_WALK"]
 
-# 128 columns x 64 rows: a 1e6-Gaussian scene's Gaussians span ~14 rows, a real scene's ~90
-# rows and ~30 columns; smaller tiles cut them into several, each walking its rows and columns
-# from the box's corner again (16 rows: 1e9-voxel jobs rasterised at 11.2 CPU ns per voxel, 64
-# rows 10.0; the INRIA sample 13.8 -> 11.5 -> 128 columns ~10.5 -> 9.7, the 1e6 scene the same).
-# The accumulator, 2 MB, is a core's L2.
+# 128 columns x 64 rows x 8 layers: a 1e6-Gaussian scene's Gaussians span ~14 rows and ~30
+# layers, a real scene's ~90 rows, ~30 columns and ~200 layers; smaller tiles cut them into
+# several, each walking its rows and columns from the box's corner again. Layer by layer, 16
+# rows: 1e9-voxel jobs rasterised at 11.2 CPU ns per voxel, 64 rows 10.0; the INRIA sample
+# 13.8 -> 11.5 -> 128 columns ~10.5 -> 9.7. With the layers walked together, 64-256 columns x
+# 32-128 rows measured alike. The accumulator, 2 MB, is a core's L2. A job's slabs have 8-9
+# layers at 1e9 voxels, 1-2 at 1e10 (job/plan.py): tiles as tall as the slab, up to 8.
 TILE_X = 128
 TILE_Y = 64
 TILE_Z = 8
-# A layer's rows are walked in whole groups of this many (:func:`_column`): the rows past the
-# Gaussian's have G = 0 and add 0.0 (the weights are finite: the readers drop non-finite
-# Gaussians) to the cells after the column's rows, the next column's, layer's or channel's,
-# or `flat`'s spare end. Compiled for 512-bit vectors, the loop over a 1e6 scene's ~14 rows ran
-# 1.06 ns per row and column, padded to 16 rows 0.60 (256-bit: 0.89 and 0.82).
-ROW_GROUP = 8
 # A tile's Gaussians are scattered over the slab's records (256 bytes each, ~18 000 of them in
 # a slab of a 1e6-Gaussian scene: more than the L2 cache), so the walk asks for the record of
 # the Gaussian this many on while it walks one (a hint, no value changes): a 1e6-Gaussian job
@@ -81,9 +85,15 @@ Q_WALK = 1000.0    # walked Gaussians: q <= this at every point of the walk (G >
 K_WALK = 300.0     # and each step constant's exponent within +-this (no over/underflow)
 _G_CUT = math.exp(-0.5 * CUT_Q)
 _CH = TILE_Z * TILE_X * TILE_Y     # one channel of the flat accumulator
-_CH_U = np.uint64(_CH)
-_CH_U2 = np.uint64(2 * _CH)
-_CH_U3 = np.uint64(3 * _CH)
+# The channels' cells of one slot 512 bytes past a multiple of 4096 apart: 4096 exactly, a
+# channel's load waited on the one before's store (the addresses alias in the load's check):
+# 1e6 Gaussians 12.6 -> 12.0 CPU ns per voxel with the bench's overhead. With the
+# accumulator and slot arrays starting on a cache line (:func:`_aligned`; a vector never
+# straddles two lines), the loop alone 0.75 -> 0.40 ns per slot.
+_CHS = _CH + 64
+_CH_U = np.uint64(_CHS)
+_CH_U2 = np.uint64(2 * _CHS)
+_CH_U3 = np.uint64(3 * _CHS)
 
 
 @njit(cache=True, nogil=True, inline='always')
@@ -251,25 +261,24 @@ def _setup(idx, gs, origin, pitch, shape, z0, z1, walk, box, state):
 
 
 @njit(cache=True, nogil=True, inline='always')
-def _column(flat, base, gcol, rcol, nr, w0, w1, w2, w3, k_xx):
-    """One column of a layer's rows side by side (row r: G and its x ratio ``gcol[r]``,
-    ``rcol[r]``): add ``G`` (0 below the cut: no branch) times the four weights to the
-    accumulator (channel c, row r at ``flat[base + c _CH + r]``), then step every row one
-    voxel along x. The rows' recurrences are independent and their accumulator cells
-    contiguous, so the loop is vectorised (indices unsigned: no negative-index wrap). ``nr``
-    is a multiple of :data:`ROW_GROUP` (rows past the Gaussian's with G = 0 add 0.0, which
-    leaves a sum's bits as they were)."""
+def _column(flat, base, gcol, rcol, n, w0, w1, w2, w3, k_xx):
+    """One column of a tile's rows, each row's ``nl`` layers side by side (slot s: G and its
+    x ratio ``gcol[s]``, ``rcol[s]``): add ``G`` (0 below the cut: no branch) times the four
+    weights to the accumulator (channel c, slot s at ``flat[base + c _CHS + s]``), then step
+    every slot one voxel along x. The slots' recurrences are independent and their
+    accumulator cells contiguous, so the loop is vectorised (indices unsigned: no
+    negative-index wrap)."""
     b = np.uint64(base)
-    for r in range(nr):
-        g = gcol[r]
+    for s in range(n):
+        g = gcol[s]
         v = g if g >= _G_CUT else 0.0
-        u = b + np.uint64(r)
+        u = b + np.uint64(s)
         flat[u] += v * w0
         flat[u + _CH_U] += v * w1
         flat[u + _CH_U2] += v * w2
         flat[u + _CH_U3] += v * w3
-        gcol[r] = g * rcol[r]
-        rcol[r] *= k_xx
+        gcol[s] = g * rcol[s]
+        rcol[s] *= k_xx
 
 
 @njit(cache=True, nogil=True, inline='always')
@@ -296,14 +305,17 @@ def _chunk_columns(st, j0, n, dz, origin, pitch, xa, xb):
 
 
 @njit(cache=True, nogil=True, inline='always')
-def _walk_tile(flat, clo, chi, gcol, rcol, st, bx0, by0, kz0, xa, xb, ya, yb, ka, kb, x0, y0,
-               z0t, origin, pitch):
+def _walk_tile(flat, clo, chi, gcol, rcol, lane, nl, st, bx0, by0, kz0, xa, xb, ya, yb, ka, kb,
+               x0, y0, z0t, origin, pitch):
     """Add one walked Gaussian (its record ``st``, :func:`_setup`) to the tile's
-    accumulator over x [xa, xb), y [ya, yb), layers [ka, kb) (module docstring): per layer,
-    the rows of the marginal ellipse come down the y chain from the box's corner column into
-    ``gcol``, ``rcol`` and are walked along x side by side (:func:`_column`) over the box's
-    width (over the rows' runs, :func:`_chunk_columns`, in a box wider than SCAN_X).
-    ``clo``, ``chi``: each column's touched rows."""
+    accumulator over x [xa, xb), y [ya, yb), layers [ka, kb) (module docstring). The tile's
+    ``nl`` layers are walked together: G, Rx, Ry of each layer's corner column (x lo,
+    y lo of the box) come up the z chain into ``lane`` (0 in layers the Gaussian misses), go
+    down the y chain, all layers at once, over the rows of the layers' marginal ellipses
+    into ``gcol``, ``rcol`` (row r, layer l at r nl + l), and are walked along x side by
+    side (:func:`_column`) over the box's width (over the rows' runs, :func:`_chunk_columns`,
+    in a box wider than SCAN_X): every layer walks the rows of all, and a row beyond a layer's
+    ellipse (G below the cut there) adds 0.0. ``clo``, ``chi``: each column's touched rows."""
     gz, rxz, ryz, rzz = st[0], st[1], st[2], st[3]
     k_xx, k_yy, k_zz, k_xy, k_xz, k_yz = st[4], st[5], st[6], st[7], st[8], st[9]
     gamma, alpha, beta, ok = st[10], st[11], st[12], st[13] > 0.0
@@ -316,44 +328,67 @@ def _walk_tile(flat, clo, chi, gcol, rcol, st, bx0, by0, kz0, xa, xb, ya, yb, ka
     inv_hy = 1.0 / pitch[1]
     my, mz = st[15], st[16]
     w0, w1, w2, w3 = st[23], st[24], st[25], st[26]
+    lane[:] = 0.0
+    ja = yb
+    jb = ya
     for k in range(ka, kb):
         kk = k - z0t
+        lane[kk] = gz
+        lane[TILE_Z + kk] = rxz
+        lane[2 * TILE_Z + kk] = ryz
         dz = _centre(origin[2], pitch[2], k) - mz
-        ja, jb = _rows(my, gamma, alpha, beta, ok, dz, ys0, inv_hy, ya, yb)
-        gy = gz
-        rxy = rxz
-        ryy = ryz
-        for _ in range(by0, ja):
-            gy, rxy, ryy = gy * ryy, rxy * k_xy, ryy * k_yy
-        nr = max(jb - ja, 0)
-        for r in range(nr):
-            gcol[r] = gy
-            rcol[r] = rxy
-            gy, rxy, ryy = gy * ryy, rxy * k_xy, ryy * k_yy
-        nw = (nr + ROW_GROUP - 1) // ROW_GROUP * ROW_GROUP
-        for r in range(nr, nw):
-            gcol[r] = 0.0
-            rcol[r] = 0.0
-        c0, c1 = xa, xb
-        if xb - xa > SCAN_X:
-            c0, c1 = _chunk_columns(st, ja, nr, dz, origin, pitch, xa, xb)
-        for _ in range(bx0, c0):
-            for r in range(nr):
-                gcol[r] *= rcol[r]
-                rcol[r] *= k_xx
-        for i in range(c0 - x0, c1 - x0 if nr else c0 - x0):
-            _column(flat, ((kk * TILE_X) + i) * TILE_Y + ja - y0, gcol, rcol, nw, w0, w1, w2,
-                    w3, k_xx)
-            clo[kk, i] = min(clo[kk, i], ja - y0)
-            chi[kk, i] = max(chi[kk, i], jb - y0)
+        ra, rb = _rows(my, gamma, alpha, beta, ok, dz, ys0, inv_hy, ya, yb)
+        if rb > ra:
+            ja = min(ja, ra)
+            jb = max(jb, rb)
         gz *= rzz
         rxz *= k_xz
         ryz *= k_yz
         rzz *= k_zz
+    if jb <= ja:
+        return
+    for _ in range(by0, ja):
+        for lz in range(nl):
+            g, rx, ry = lane[lz], lane[TILE_Z + lz], lane[2 * TILE_Z + lz]
+            lane[lz] = g * ry
+            lane[TILE_Z + lz] = rx * k_xy
+            lane[2 * TILE_Z + lz] = ry * k_yy
+    nr = jb - ja
+    for r in range(nr):
+        for lz in range(nl):
+            g, rx, ry = lane[lz], lane[TILE_Z + lz], lane[2 * TILE_Z + lz]
+            gcol[r * nl + lz] = g
+            rcol[r * nl + lz] = rx
+            lane[lz] = g * ry
+            lane[TILE_Z + lz] = rx * k_xy
+            lane[2 * TILE_Z + lz] = ry * k_yy
+    c0, c1 = xa, xb
+    if xb - xa > SCAN_X:
+        c0 = xb
+        c1 = xa
+        for k in range(ka, kb):
+            dz = _centre(origin[2], pitch[2], k) - mz
+            ra, rb = _rows(my, gamma, alpha, beta, ok, dz, ys0, inv_hy, ya, yb)
+            if rb > ra:
+                u0, u1 = _chunk_columns(st, ra, rb - ra, dz, origin, pitch, xa, xb)
+                if u1 > u0:
+                    c0 = min(c0, u0)
+                    c1 = max(c1, u1)
+        if c1 <= c0:
+            return
+    n = nr * nl
+    for _ in range(bx0, c0):
+        for s in range(n):
+            gcol[s] *= rcol[s]
+            rcol[s] *= k_xx
+    for i in range(c0 - x0, c1 - x0):
+        _column(flat, ((i * TILE_Y) + ja - y0) * nl, gcol, rcol, n, w0, w1, w2, w3, k_xx)
+        clo[i] = min(clo[i], ja - y0)
+        chi[i] = max(chi[i], jb - y0)
 
 
 @njit(cache=True, nogil=True, inline='always')
-def _exact_tile(flat, clo, chi, st, xa, xb, ya, yb, ka, kb, x0, y0, z0t,
+def _exact_tile(flat, clo, chi, nl, st, xa, xb, ya, yb, ka, kb, x0, y0, z0t,
                 origin, pitch):
     """Add one Gaussian to the tile's accumulator row by row: q tested voxel by voxel (boxes
     up to SCAN_X wide) or the row's run solved in closed form and its ends checked; ``exp`` at
@@ -407,19 +442,28 @@ def _exact_tile(flat, clo, chi, st, xa, xb, ya, yb, ka, kb, x0, y0, z0t,
             kk = k - z0t
             jj = j - y0
             for i in range(lo - x0, hi - x0):
-                o = ((kk * TILE_X) + i) * TILE_Y + jj
+                o = ((i * TILE_Y) + jj) * nl + kk
                 flat[o] += w * st[23]
-                flat[o + _CH] += w * st[24]
-                flat[o + 2 * _CH] += w * st[25]
-                flat[o + 3 * _CH] += w * st[26]
-                clo[kk, i] = min(clo[kk, i], jj)
-                chi[kk, i] = max(chi[kk, i], jj + 1)
+                flat[o + _CHS] += w * st[24]
+                flat[o + 2 * _CHS] += w * st[25]
+                flat[o + 3 * _CHS] += w * st[26]
+                clo[i] = min(clo[i], jj)
+                chi[i] = max(chi[i], jj + 1)
                 w *= r
                 r *= step
 
 
 @njit(cache=True, nogil=True)
-def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, sigma_out):
+def tile_layers(nz: int) -> int:
+    """Layers of a tile in a slab of ``nz`` layers: the slab cut into equal parts of at most
+    TILE_Z (9 -> 5, and a last tile of 4)."""
+    n_tiles = (nz + TILE_Z - 1) // TILE_Z
+    return (nz + n_tiles - 1) // n_tiles
+
+
+@njit(cache=True, nogil=True)
+def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, flat, gcol, rcol,
+                  rgb_out, sigma_out):
     nx, ny = shape[0], shape[1]
     nz = z1 - z0
     n = idx.shape[0]
@@ -428,13 +472,14 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
     _setup(idx, gs, origin, pitch, shape, z0, z1, walk, box, state)
     ntx = (nx + TILE_X - 1) // TILE_X
     nty = (ny + TILE_Y - 1) // TILE_Y
-    ntz = (nz + TILE_Z - 1) // TILE_Z
+    nl = tile_layers(nz)
+    ntz = (nz + nl - 1) // nl
     n_tiles = ntx * nty * ntz
     start = np.zeros(n_tiles + 1, np.int64)
     for t in range(n):
         if box[t, 0] >= box[t, 1]:
             continue
-        for tz in range((box[t, 4] - z0) // TILE_Z, (box[t, 5] - 1 - z0) // TILE_Z + 1):
+        for tz in range((box[t, 4] - z0) // nl, (box[t, 5] - 1 - z0) // nl + 1):
             for ty in range(box[t, 2] // TILE_Y, (box[t, 3] - 1) // TILE_Y + 1):
                 for tx in range(box[t, 0] // TILE_X, (box[t, 1] - 1) // TILE_X + 1):
                     start[(tz * nty + ty) * ntx + tx + 1] += 1
@@ -445,7 +490,7 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
     for t in range(n):                           # ascending t: each tile's list stays sorted
         if box[t, 0] >= box[t, 1]:
             continue
-        for tz in range((box[t, 4] - z0) // TILE_Z, (box[t, 5] - 1 - z0) // TILE_Z + 1):
+        for tz in range((box[t, 4] - z0) // nl, (box[t, 5] - 1 - z0) // nl + 1):
             for ty in range(box[t, 2] // TILE_Y, (box[t, 3] - 1) // TILE_Y + 1):
                 for tx in range(box[t, 0] // TILE_X, (box[t, 1] - 1) // TILE_X + 1):
                     tile = (tz * nty + ty) * ntx + tx
@@ -456,15 +501,12 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
     boxes = box.reshape(-1)
     n_rec = state.shape[1]
     n_box = box.shape[1]
-    # channel, layer, column, row
-    flat = np.zeros(4 * _CH + ROW_GROUP, np.float64)   # + the last column's padding rows
-    clo = np.full((TILE_Z, TILE_X), TILE_Y, np.int64)     # touched rows of each column
-    gcol = np.empty(TILE_Y)                               # a layer's rows, walked together
-    rcol = np.empty(TILE_Y)
-    chi = np.zeros((TILE_Z, TILE_X), np.int64)
+    clo = np.full(TILE_X, TILE_Y, np.int64)     # touched rows of each column
+    chi = np.zeros(TILE_X, np.int64)
+    lane = np.empty(3 * TILE_Z)                  # G, Rx, Ry of the layers' corner column
     for tz in range(ntz):
-        z0t = z0 + tz * TILE_Z                   # global layers
-        z1t = min(z0t + TILE_Z, z1)
+        z0t = z0 + tz * nl                       # global layers
+        z1t = min(z0t + nl, z1)
         for ty in range(nty):
             y0 = ty * TILE_Y
             y1 = min(y0 + TILE_Y, ny)
@@ -490,33 +532,42 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, rgb_out, s
                     ka = max(box[t, 4], z0t)
                     kb = min(box[t, 5], z1t)
                     if state[t, 0] > 0.0:
-                        _walk_tile(flat, clo, chi, gcol, rcol, state[t], box[t, 0], box[t, 2],
-                                   box[t, 4], xa, xb, ya, yb, ka, kb, x0, y0, z0t, origin,
-                                   pitch)
+                        _walk_tile(flat, clo, chi, gcol, rcol, lane, nl, state[t], box[t, 0],
+                                   box[t, 2], box[t, 4], xa, xb, ya, yb, ka, kb, x0, y0, z0t,
+                                   origin, pitch)
                     else:
-                        _exact_tile(flat, clo, chi, state[t], xa, xb, ya, yb, ka, kb, x0,
+                        _exact_tile(flat, clo, chi, nl, state[t], xa, xb, ya, yb, ka, kb, x0,
                                     y0, z0t, origin, pitch)
-                for kk in range(z1t - z0t):
-                    for i in range(x1 - x0):
-                        lo = clo[kk, i]
-                        hi = min(chi[kk, i], y1 - y0)
-                        if lo >= hi:
-                            continue
-                        o = (kk * TILE_X + i) * TILE_Y
-                        for jj in range(lo, hi):
-                            dd = flat[o + jj]
+                nzt = z1t - z0t
+                for i in range(x1 - x0):
+                    lo = clo[i]
+                    hi = chi[i]
+                    if lo >= hi:
+                        continue
+                    for jj in range(lo, hi):
+                        o = (i * TILE_Y + jj) * nl
+                        for kk in range(nzt):
+                            dd = flat[o + kk]
                             if dd > 0.0:
                                 sigma_out[z0t - z0 + kk, y0 + jj, x0 + i] = np.float32(
                                     dd * scale)
                                 inv = 1.0 / dd
                                 for ch in range(3):
-                                    v = flat[o + jj + (ch + 1) * _CH] * inv
+                                    v = flat[o + kk + (ch + 1) * _CHS] * inv
                                     rgb_out[z0t - z0 + kk, y0 + jj, x0 + i, ch] = np.float32(
                                         min(max(v, 0.0), 1.0))
-                        for ch in range(4):
-                            flat[o + ch * _CH + lo: o + ch * _CH + chi[kk, i]] = 0.0
-                        clo[kk, i] = TILE_Y
-                        chi[kk, i] = 0
+                    o = (i * TILE_Y + lo) * nl
+                    for ch in range(4):
+                        flat[o + ch * _CHS: o + ch * _CHS + (hi - lo) * nl] = 0.0
+                    clo[i] = TILE_Y
+                    chi[i] = 0
+
+
+def _aligned(n: int) -> np.ndarray:
+    """``n`` zeros from a cache line's start (whole vectors never straddle two lines)."""
+    raw = np.zeros(n + 8)
+    a = (-(raw.ctypes.data // 8)) % 8
+    return raw[a: a + n]
 
 
 def rasterise_splats(idx: np.ndarray, gaussians: np.ndarray, origin, pitch, shape_xyz, z0: int,
@@ -548,10 +599,13 @@ def rasterise_splats(idx: np.ndarray, gaussians: np.ndarray, origin, pitch, shap
         if not out.colour_where_dense:
             rgb_out.fill(0.0)
     if len(idx) and all(shape):
+        flat = _aligned(4 * _CHS)                   # channel, column, row, layer
+        gcol = _aligned(TILE_Y * TILE_Z)            # a column's rows x layers, walked together
+        rcol = _aligned(TILE_Y * TILE_Z)
         _splat_kernel(np.ascontiguousarray(idx, np.int64), gaussians,
                       np.asarray(origin, np.float64), np.asarray(pitch, np.float64),
                       np.asarray(shape_xyz, np.int64), int(z0), int(z1), bool(walk),
-                      float(scale), rgb_out, sigma_out)
+                      float(scale), flat, gcol, rcol, rgb_out, sigma_out)
     return rgb_out, sigma_out
 
 

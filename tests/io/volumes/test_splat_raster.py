@@ -16,6 +16,7 @@ from dreamprint_gui.io.volumes.splat_raster import (
     TILE_Y,
     TILE_Z,
     rasterise_splats,
+    tile_layers,
 )
 from dreamprint_gui.io.volumes.splats import GaussianCloud, peak_density
 
@@ -81,8 +82,9 @@ def test_support_and_values_match_a_direct_sum(voxel_x, scan):
 
 
 def test_gaussians_across_tile_boundaries_match_a_direct_sum():
-    # A grid of 2.5 tiles along every axis, whatever the tile sizes: Gaussians whose boxes
-    # cross tile boundaries are walked from their box's corner again in every tile they reach
+    # A grid of 2.5 tiles along every axis, whatever the tile sizes (in z: 3 tiles of 7 layers,
+    # the slab in equal parts): Gaussians whose boxes cross tile boundaries are walked from
+    # their box's corner again in every tile they reach
     cloud = _cloud(40, 7)
     s = GaussianCloud("c", "t", *cloud, bounds=((-1, -1, -1), (1, 1, 1)))
     tiles = np.array([TILE_X, TILE_Y, TILE_Z]) * 2.5
@@ -91,7 +93,9 @@ def test_gaussians_across_tile_boundaries_match_a_direct_sum():
     pitch = 2.0 / tiles
     lo_v = np.floor((s.mean - s.half + 1) / pitch)
     hi_v = np.floor((s.mean + s.half + 1) / pitch)
-    for axis, tile in enumerate((TILE_X, TILE_Y, TILE_Z)):
+    tz = tile_layers(int(g.shape_xyz[2]))
+    assert tz == 7
+    for axis, tile in enumerate((TILE_X, TILE_Y, tz)):
         assert np.sum(lo_v[:, axis] // tile != hi_v[:, axis] // tile) >= 5
     rgb, d = s.sample_slab(g, 0, g.shape_xyz[2])
     hi, col = _direct(*cloud, g, 9.0 + 1e-9)
@@ -105,7 +109,7 @@ def test_bit_identical_across_slab_boundaries_and_threads():
     g = grid_for_source(s, (0.01, 0.03, 0.01), size_mm=(2, 2, 2))   # 200 x 67 x 200
     nz = g.shape_xyz[2]
     whole = s.sample_slab(g, 0, nz)
-    for size in (1, 7, 13):
+    for size in (1, 7, 9, 13, 16, 17):         # tiles of 1, 7, 5 + 4, 7 + 6, 8 + 8, 6 + 6 + 5
         parts = [s.sample_slab(g, z, min(z + size, nz)) for z in range(0, nz, size)]
         for i in range(2):
             assert np.array_equal(np.concatenate([p[i] for p in parts]), whole[i])
