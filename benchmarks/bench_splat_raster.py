@@ -56,12 +56,14 @@ from dreamprint_gui.io.volumes.splats import GaussianCloud  # noqa: E402
 DEFAULT_SLAB_VOXELS = 4_000_000  # job/plan.py's slab size
 
 
-def job_slabs(shape_xyz: tuple[int, int, int], workers: int = 2) -> list[tuple[int, int]]:
-    """The job's slabs (``job.plan._slabs`` with default settings)."""
-    nx, ny, nz = shape_xyz
-    step = max(1, DEFAULT_SLAB_VOXELS // max(1, nx * ny))
-    step = min(step, max(1, -(-nz // max(32, 4 * workers))))
-    return [(z, min(nz, z + step)) for z in range(0, nz, step)]
+def job_slabs(shape_xyz: tuple[int, int, int], workers: int = 2,
+              src: object = None) -> list[tuple[int, int]]:
+    """The job's slabs (``job.plan._slabs`` with default settings, for ``src``)."""
+    from types import SimpleNamespace
+
+    from dreamprint_gui.job.plan import _slabs
+    return _slabs(SimpleNamespace(shape_xyz=shape_xyz, source=src,
+                                  settings=SimpleNamespace(slab_layers=None)), workers)
 
 
 def reference_raster(rev: str):
@@ -169,7 +171,7 @@ def run_kind(kind: str, n_voxels: float, n_slabs: int, repeat: int, ref) -> None
     src = open_source(path)
     grid = grid_for_source(src, VOXEL, height_mm=height_for(path, n_voxels))
     nx, ny, nz = (int(v) for v in grid.shape_xyz)
-    slabs = job_slabs((nx, ny, nz))
+    slabs = job_slabs((nx, ny, nz), src=src)
     pick = sorted(set(np.linspace(0, len(slabs) - 1, min(n_slabs, len(slabs))).round()
                       .astype(int).tolist()))
     buf = SlabBuffers()

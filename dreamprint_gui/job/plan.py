@@ -49,6 +49,7 @@ __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "c
            "fitted_bounds"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
+MAX_SLAB_VOXELS = 16_000_000     # a source's slab_layers (:func:`_slabs`): ~260 MB per worker
 
 
 class JobCancelled(Exception):
@@ -403,6 +404,13 @@ def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
         # >= 4 slabs per worker to balance, and >= 32 (if there are as many layers) so that
         # the progress moves with the slabs: a slab costs one call and no new memory.
         step = min(step, max(1, -(-nz // max(32, 4 * workers))))
+        # A sampler that works a few layers at a time (Gaussian splats: set up once per slab,
+        # walked 8 layers together) gets them where layers are big, up to MAX_SLAB_VOXELS
+        # and still >= 4 slabs per worker
+        want = int(getattr(ctx.source, "slab_layers", 1))
+        if want > step:
+            step = max(step, min(want, MAX_SLAB_VOXELS // max(1, nx * ny),
+                                 -(-nz // (4 * workers))))
     return [(z, min(nz, z + step)) for z in range(0, nz, step)]
 
 

@@ -38,7 +38,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import splat_formats
 from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
 from dreamprint_gui.io.volumes.dense import bounds_list
-from dreamprint_gui.io.volumes.splat_raster import pack_gaussians, rasterise_splats
+from dreamprint_gui.io.volumes.splat_raster import TILE_Z, pack_gaussians, rasterise_splats
 
 __all__ = ["GaussianCloud", "peak_density", "open_path", "SH_C0"]
 
@@ -110,6 +110,9 @@ class GaussianCloud:
         self.name = name
         self.format = fmt
         self.colour_encoding = "srgb"
+        # a slab's Gaussians are set up once and walked TILE_Z layers together: at 1e10 voxels
+        # (1-layer slabs by size) 7-layer slabs converted a 1e6-Gaussian job ~1.7x faster
+        self.slab_layers = TILE_Z
         self.sh_degree = int(sh_degree)
         means = np.asarray(means, float).reshape(-1, 3)
         sigmas = np.asarray(sigmas, float).reshape(-1, 3)
