@@ -53,8 +53,6 @@ from dreamprint_gui.io.volumes.base import SlabBuffers, voxel_centres  # noqa: E
 from dreamprint_gui.io.volumes.splat_raster import pack_gaussians  # noqa: E402
 from dreamprint_gui.io.volumes.splats import GaussianCloud  # noqa: E402
 
-DEFAULT_SLAB_VOXELS = 4_000_000  # job/plan.py's slab size
-
 
 def job_slabs(shape_xyz: tuple[int, int, int], workers: int = 2,
               src: object = None) -> list[tuple[int, int]]:

@@ -72,7 +72,7 @@ class ConvertSettings:
     background: str = "clear"             # "clear" | "empty"
     density_threshold: float | None = None  # 1/mm; None: half the density of pure Clear
     overwrite: bool = False
-    slab_layers: int | None = None        # None: ~DEFAULT_SLAB_VOXELS per slab
+    slab_layers: int | None = None        # None: ~DEFAULT_SLAB_VOXELS per slab (_slabs)
     objective: str | None = None          # gamut table objective (None: profile's/default)
     intent: str | None = None             # rendering intent (None: profile's/colorimetric)
     table_size: int = 100
@@ -405,8 +405,8 @@ def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
         # the progress moves with the slabs: a slab costs one call and no new memory.
         step = min(step, max(1, -(-nz // max(32, 4 * workers))))
         # A sampler that works a few layers at a time (Gaussian splats: set up once per slab,
-        # walked 8 layers together) gets them where layers are big, up to MAX_SLAB_VOXELS
-        # and still >= 4 slabs per worker
+        # walked 8 layers together) gets them where layers are big, up to MAX_SLAB_VOXELS,
+        # and in short jobs (fewer than 32 slabs then: ~4 per worker, rounded up)
         want = int(getattr(ctx.source, "slab_layers", 1))
         if want > step:
             step = max(step, min(want, MAX_SLAB_VOXELS // max(1, nx * ny),

@@ -37,3 +37,18 @@ def test_a_source_asking_for_layers_gets_them_within_the_memory_cap():
     # already as many layers by size: unchanged; a fixed --slab-layers wins
     assert _steps(_slabs(_ctx((386, 1209, 2146), want=8), 2), 2146) == {8}
     assert _steps(_slabs(_ctx((831, 2604, 4624), want=8, fixed=2), 2), 4624) == {2}
+
+
+def test_slabs_tile_the_job_within_the_cap_for_any_shape():
+    # contiguous, non-empty, and no larger than by size or MAX_SLAB_VOXELS, whatever the
+    # layer size, height and workers
+    for nx, ny in ((1, 1), (300, 700), (831, 2604), (2000, 2500), (6000, 5000)):
+        for nz in (1, 7, 9, 47, 255, 4624):
+            for workers in (1, 2, 64):
+                plain = _slabs(_ctx((nx, ny, nz)), workers)
+                asked = _slabs(_ctx((nx, ny, nz), want=8), workers)
+                _steps(asked, nz)
+                assert all(z1 > z0 for z0, z1 in asked)
+                size = (asked[0][1] - asked[0][0]) * nx * ny
+                assert size <= max(MAX_SLAB_VOXELS, (plain[0][1] - plain[0][0]) * nx * ny)
+                assert asked[0][1] - asked[0][0] <= max(8, plain[0][1] - plain[0][0])

@@ -30,8 +30,8 @@ convex: the largest value of the walk) exceeds ``Q_WALK`` (thin, tilted Gaussian
 would visit values near the float64 range's end), or a step constant's exponent exceeds
 ``K_WALK`` in magnitude (a Gaussian much thinner than a voxel).
 
-Tiles.  The slab is cut into tiles of TILE_Y x TILE_X voxels and at most TILE_Z layers (the
-slab's layers in equal parts: a 9-layer slab in tiles of 5 and 4); each Gaussian is binned
+Tiles.  The slab is cut into tiles of TILE_Y x TILE_X voxels and at most TILE_Z layers
+(:func:`tile_layers`: a 9-layer slab in tiles of 5 and 4); each Gaussian is binned
 into the tiles its box overlaps, and a tile sums its Gaussians into a float64 accumulator
 small enough to stay in cache (channel, column, row, layer: a column's rows and their layers
 contiguous for :func:`_column`), then writes colour / density once, over each column's
@@ -72,8 +72,9 @@ __all__ = ["rasterise_splats", "pack_gaussians", "tile_layers", "TILE_X", "TILE_
 # several, each walking its rows and columns from the box's corner again. Layer by layer, 16
 # rows: 1e9-voxel jobs rasterised at 11.2 CPU ns per voxel, 64 rows 10.0; the INRIA sample
 # 13.8 -> 11.5 -> 128 columns ~10.5 -> 9.7. With the layers walked together, 64-256 columns x
-# 32-128 rows measured alike. The accumulator, 2 MB, is a core's L2. A job's slabs have 8-9
-# layers at 1e9 voxels, 1-2 at 1e10 (job/plan.py): tiles as tall as the slab, up to 8.
+# 32-128 rows measured alike. The accumulator, 2 MB, is a core's L2. A splat job's slabs have
+# 8 layers at 1e9 voxels and 7 at 1e10 (the 1e6-Gaussian scene; GaussianCloud.slab_layers
+# within job/plan.py's MAX_SLAB_VOXELS): one tile as tall as the slab.
 TILE_X = 128
 TILE_Y = 64
 TILE_Z = 8
@@ -459,8 +460,9 @@ def _exact_tile(flat, clo, chi, nl, st, xa, xb, ya, yb, ka, kb, x0, y0, z0t,
 
 @njit(cache=True, nogil=True)
 def tile_layers(nz: int) -> int:
-    """Layers of a tile in a slab of ``nz`` layers: the slab cut into equal parts of at most
-    TILE_Z (9 -> 5, and a last tile of 4)."""
+    """Layers of a tile in a slab of ``nz`` layers: ``ceil(nz / n)`` for the fewest tiles n of
+    at most TILE_Z layers; the last tile holds the rest (9 -> 5 + 4, 25 -> 7 + 7 + 7 + 4,
+    57 -> 7 x 8 + 1)."""
     n_tiles = (nz + TILE_Z - 1) // TILE_Z
     return (nz + n_tiles - 1) // n_tiles
 

@@ -82,8 +82,8 @@ def test_support_and_values_match_a_direct_sum(voxel_x, scan):
 
 
 def test_gaussians_across_tile_boundaries_match_a_direct_sum():
-    # A grid of 2.5 tiles along every axis, whatever the tile sizes (in z: 3 tiles of 7 layers,
-    # the slab in equal parts): Gaussians whose boxes cross tile boundaries are walked from
+    # A grid of 2.5 tiles along every axis, whatever the tile sizes (in z: tiles of 7, 7 and 6
+    # layers, tile_layers): Gaussians whose boxes cross tile boundaries are walked from
     # their box's corner again in every tile they reach
     cloud = _cloud(40, 7)
     s = GaussianCloud("c", "t", *cloud, bounds=((-1, -1, -1), (1, 1, 1)))
@@ -210,3 +210,32 @@ def test_splat_job_identical_with_one_or_two_workers(shared_data, tmp_path):
         out[workers] = (h.hexdigest(), m["voxel_counts"], m["mean_concentration"])
     assert out[1] == out[2]
     assert sum(out[1][1].values() if isinstance(out[1][1], dict) else out[1][1]) > 0
+
+
+@pytest.mark.parametrize("walk", [True, False])
+def test_accumulator_left_clean_and_channel_gaps_untouched(walk):
+    """Slabs of 3-17 layers (tiles of unequal height, lanes past a tile's layers), Gaussians
+    starting and ending inside tiles: each tile clears exactly the cells it touched (the
+    accumulator is all zero after the slab), and no write lands in the 64 cells between two
+    channels or outside the accumulator."""
+    from dreamprint_gui.io.volumes import splat_raster as sr
+
+    s = GaussianCloud("c", "t", *_needles(30, 4), bounds=((-1, -1, -1), (1, 1, 1)))
+    g = grid_for_source(s, (0.01, 0.03, 0.02), size_mm=(2, 2, 2))    # 200 x 67 x 100
+    pitch = np.array([float(v) / g.mm_per_unit for v in g.voxel_mm])
+    shape = np.asarray(g.shape_xyz, np.int64)
+    guard = 4096
+    for z0, z1 in ((40, 43), (40, 49), (41, 54), (38, 55)):
+        room = np.zeros(4 * sr._CHS + 2 * guard)
+        flat = room[guard: guard + 4 * sr._CHS]
+        gcol = np.zeros(TILE_Y * TILE_Z)
+        rcol = np.zeros(TILE_Y * TILE_Z)
+        rgb = np.zeros((z1 - z0, shape[1], shape[0], 3), np.float32)
+        d = np.zeros((z1 - z0, shape[1], shape[0]), np.float32)
+        sr._splat_kernel(np.arange(len(s.mean)), s._packed, np.asarray(g.origin, float), pitch,
+                         shape, z0, z1, walk, 1.0, flat, gcol, rcol, rgb, d)
+        assert np.count_nonzero(d) > 1000
+        assert not room.any()
+        expect = rasterise_splats(np.arange(len(s.mean)), s._packed, g.origin, pitch, shape,
+                                  z0, z1, 1.0, walk=walk)
+        assert np.array_equal(d, expect[1]) and np.array_equal(rgb, expect[0])
