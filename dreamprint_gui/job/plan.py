@@ -49,7 +49,7 @@ __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "c
            "fitted_bounds"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
-MAX_SLAB_VOXELS = 16_000_000     # a source's slab_layers (:func:`_slabs`): ~260 MB per worker
+MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
 
 
 class JobCancelled(Exception):
@@ -405,12 +405,13 @@ def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
         # the progress moves with the slabs: a slab costs one call and no new memory.
         step = min(step, max(1, -(-nz // max(32, 4 * workers))))
         # A sampler that works a few layers at a time (Gaussian splats: set up once per slab,
-        # walked 8 layers together) gets them where layers are big, up to MAX_SLAB_VOXELS,
-        # and in short jobs (fewer than 32 slabs then: ~4 per worker, rounded up)
+        # walked 8 layers together) gets them where layers are big and in short jobs (fewer
+        # than 32 slabs then), with >= 4 slabs per worker and all workers' slabs together
+        # within MAX_SLAB_VOXELS (or DEFAULT_SLAB_VOXELS each, as by size, on many workers)
         want = int(getattr(ctx.source, "slab_layers", 1))
         if want > step:
-            step = max(step, min(want, MAX_SLAB_VOXELS // max(1, nx * ny),
-                                 -(-nz // (4 * workers))))
+            cap = max(DEFAULT_SLAB_VOXELS, MAX_SLAB_VOXELS // workers)
+            step = max(step, min(want, cap // max(1, nx * ny), nz // (4 * workers)))
     return [(z, min(nz, z + step)) for z in range(0, nz, step)]
 
 

@@ -25,15 +25,19 @@ def test_a_plain_source_gets_slabs_by_size():
 
 
 def test_a_source_asking_for_layers_gets_them_within_the_memory_cap():
-    # 1e10 voxels: 2.16e6 a layer, 1 layer by size; asked for 8, 7 fit in MAX_SLAB_VOXELS
+    # 1e10 voxels: 2.16e6 a layer, 1 layer by size; asked for 8, 7 fit in 2 workers' share
     steps = _steps(_slabs(_ctx((831, 2604, 4624), want=8), 2), 4624)
-    assert steps == {MAX_SLAB_VOXELS // (831 * 2604)} == {7}
+    assert steps == {MAX_SLAB_VOXELS // 2 // (831 * 2604)} == {7}
     # layers of 5e6 voxels: 3 fit
     assert _steps(_slabs(_ctx((2000, 2500, 600), want=8), 2), 600) == {3}
     # a layer beyond the cap: one layer a slab, as by size
     assert _steps(_slabs(_ctx((5000, 5000, 300), want=8), 2), 300) == {1}
+    # many workers share the cap (down to DEFAULT_SLAB_VOXELS each): memory stays bounded
+    assert _steps(_slabs(_ctx((831, 2604, 4624), want=8), 8), 4624) == {1}
+    assert _steps(_slabs(_ctx((831, 2604, 4624), want=8), 4), 4624) == {3}
     # small jobs keep >= 4 slabs per worker
     assert len(_slabs(_ctx((181, 356, 47), want=8), 2)) >= 8
+    assert len(_slabs(_ctx((181, 356, 9), want=8), 2)) >= 8
     # already as many layers by size: unchanged; a fixed --slab-layers wins
     assert _steps(_slabs(_ctx((386, 1209, 2146), want=8), 2), 2146) == {8}
     assert _steps(_slabs(_ctx((831, 2604, 4624), want=8, fixed=2), 2), 4624) == {2}
@@ -50,5 +54,7 @@ def test_slabs_tile_the_job_within_the_cap_for_any_shape():
                 _steps(asked, nz)
                 assert all(z1 > z0 for z0, z1 in asked)
                 size = (asked[0][1] - asked[0][0]) * nx * ny
-                assert size <= max(MAX_SLAB_VOXELS, (plain[0][1] - plain[0][0]) * nx * ny)
+                assert size <= max(MAX_SLAB_VOXELS // workers, DEFAULT_SLAB_VOXELS,
+                                   (plain[0][1] - plain[0][0]) * nx * ny)
+                assert len(asked) >= min(len(plain), 4 * workers)
                 assert asked[0][1] - asked[0][0] <= max(8, plain[0][1] - plain[0][0])

@@ -196,8 +196,8 @@ class VolumeSource(Protocol):
         ...
 
     # Optional: ``slab_layers``, the layers a slab should hold for ``sample_slab`` to work at
-    # its best (default 1; the job gives them where that keeps a slab <= job.plan's
-    # MAX_SLAB_VOXELS).
+    # its best (default 1; the job gives them where that keeps all workers' slabs within
+    # job.plan's MAX_SLAB_VOXELS).
     # Optional: ``layer_plan(grid, z0, z1, *, density_scale=1.0)`` -> the arguments of the
     # compiled call named by the source's ``layer_kind`` (default "dense":
     # ``job.sample_label.dense_job.dense_slab_labels``; "leaf_grid":
