@@ -470,6 +470,13 @@ def tile_layers(nz: int) -> int:
 @njit(cache=True, nogil=True)
 def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, flat, gcol, rcol,
                   rgb_out, sigma_out):
+    """Density and colour of Gaussians ``gs[idx]`` in layers [z0, z1) (module docstring):
+    set-up (:func:`_setup`), binning into tiles (each tile's list in ascending ``idx`` order),
+    then per tile the sum of its Gaussians in the accumulator ``flat`` (walked,
+    :func:`_walk_tile`, or exact, :func:`_exact_tile`) and its output: density ``sum s G``
+    times ``scale`` and colour ``sum s G rgb / sum s G`` clipped to [0, 1] where the density
+    is > 0. ``flat`` (zeros), ``gcol``, ``rcol``: cache-line aligned scratch
+    (:func:`rasterise_splats`); ``flat`` is zero again on return."""
     nx, ny = shape[0], shape[1]
     nz = z1 - z0
     n = idx.shape[0]
