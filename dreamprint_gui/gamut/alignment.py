@@ -42,6 +42,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dreamprint_gui.core.kernels.aligned import zeros_line_aligned
 from dreamprint_gui.core.kernels.vec16 import prefetch, transpose16x13, weighted_sum16
 from dreamprint_gui.core.kernels.vector_math import exp2_f32, log2_f32
 from dreamprint_gui.core.profile import INKS, InkProfile, default_profile
@@ -243,16 +244,6 @@ _PADDED: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 _PADDED_LOCK = threading.Lock()
 
 
-def _zeros_line_aligned(shape: tuple[int, ...]) -> np.ndarray:
-    """float32 zeros starting on a 64-byte boundary. NumPy's large allocations start 16 bytes
-    into a page, so every 64-byte node would straddle two cache lines: two loads instead of one
-    per node (the interpolation measured 17.8 -> 14.8 ns per voxel aligned)."""
-    size = int(np.prod(shape))
-    raw = np.zeros(size + 16, np.float32)
-    start = (-raw.ctypes.data % 64) // 4
-    return raw[start:start + size].reshape(shape)
-
-
 def kernel_table(tables: ColourTables) -> np.ndarray:
     """The tables' ``packed`` fields as the kernel reads them: :data:`LANES` float32 per node
     (concentrations normalised, sigma at the Clear knots, grey sigma, and the rho_K of the grey
@@ -272,7 +263,7 @@ def kernel_table(tables: ColourTables) -> np.ndarray:
         p = tables.packed
         n = p.shape[0]
         nk = len(CLEAR_KNOTS)
-        flat = _zeros_line_aligned((n, n, n, LANES))
+        flat = zeros_line_aligned((n, n, n, LANES), np.float32)
         c = np.maximum(p[..., F_CONC].astype(np.float64), 0.0)
         flat[..., K_CONC:K_CONC + N_COLOUR_INKS] = c / c.sum(-1, keepdims=True)
         flat[..., K_SIG:K_SIG + nk] = p[..., F_SIGMA:F_SIGMA + nk]

@@ -61,6 +61,7 @@ import math
 import numpy as np
 from numba import njit
 
+from dreamprint_gui.core.kernels.aligned import zeros_line_aligned
 from dreamprint_gui.core.kernels.vec16 import prefetch
 from dreamprint_gui.io.volumes.base import SlabBuffers
 
@@ -93,7 +94,7 @@ _CH = TILE_Z * TILE_X * TILE_Y     # one channel of the flat accumulator
 # The channels' cells of one slot 512 bytes past a multiple of 4096 apart: 4096 exactly, a
 # channel's load waited on the one before's store (the addresses alias in the load's check):
 # 1e6 Gaussians 12.6 -> 12.0 CPU ns per voxel with the bench's overhead. With the
-# accumulator and slot arrays starting on a cache line (:func:`_aligned`; a vector never
+# accumulator and slot arrays starting on a cache line (:func:`.zeros_line_aligned`; a vector never
 # straddles two lines), the loop alone 0.75 -> 0.40 ns per slot.
 _CHS = _CH + 64
 _CH_U = np.uint64(_CHS)
@@ -336,6 +337,8 @@ def _walk_tile(flat, clo, chi, gcol, rcol, lane, nl, st, bx0, by0, kz0, xa, xb, 
     lane[:] = 0.0
     ja = yb
     jb = ya
+    wide = xb - xa > SCAN_X
+    c0, c1 = (xb, xa) if wide else (xa, xb)
     for k in range(ka, kb):
         kk = k - z0t
         lane[kk] = gz
@@ -346,11 +349,16 @@ def _walk_tile(flat, clo, chi, gcol, rcol, lane, nl, st, bx0, by0, kz0, xa, xb, 
         if rb > ra:
             ja = min(ja, ra)
             jb = max(jb, rb)
+            if wide:
+                u0, u1 = _chunk_columns(st, ra, rb - ra, dz, origin, pitch, xa, xb)
+                if u1 > u0:
+                    c0 = min(c0, u0)
+                    c1 = max(c1, u1)
         gz *= rzz
         rxz *= k_xz
         ryz *= k_yz
         rzz *= k_zz
-    if jb <= ja:
+    if jb <= ja or c1 <= c0:
         return
     for _ in range(by0, ja):
         for lz in range(nl):
@@ -367,20 +375,6 @@ def _walk_tile(flat, clo, chi, gcol, rcol, lane, nl, st, bx0, by0, kz0, xa, xb, 
             lane[lz] = g * ry
             lane[TILE_Z + lz] = rx * k_xy
             lane[2 * TILE_Z + lz] = ry * k_yy
-    c0, c1 = xa, xb
-    if xb - xa > SCAN_X:
-        c0 = xb
-        c1 = xa
-        for k in range(ka, kb):
-            dz = _centre(origin[2], pitch[2], k) - mz
-            ra, rb = _rows(my, gamma, alpha, beta, ok, dz, ys0, inv_hy, ya, yb)
-            if rb > ra:
-                u0, u1 = _chunk_columns(st, ra, rb - ra, dz, origin, pitch, xa, xb)
-                if u1 > u0:
-                    c0 = min(c0, u0)
-                    c1 = max(c1, u1)
-        if c1 <= c0:
-            return
     n = nr * nl
     for _ in range(bx0, c0):
         for s in range(n):
@@ -584,13 +578,6 @@ def _splat_kernel(idx, gs, origin, pitch, shape, z0, z1, walk, scale, flat, gcol
                     chi[i] = 0
 
 
-def _aligned(n: int) -> np.ndarray:
-    """``n`` zeros from a cache line's start (whole vectors never straddle two lines)."""
-    raw = np.zeros(n + 8)
-    a = (-(raw.ctypes.data // 8)) % 8
-    return raw[a: a + n]
-
-
 def rasterise_splats(idx: np.ndarray, gaussians: np.ndarray, origin, pitch, shape_xyz, z0: int,
                      z1: int, scale: float, out: SlabBuffers | None = None, *,
                      walk: bool = True) -> tuple[np.ndarray, np.ndarray]:
@@ -620,9 +607,9 @@ def rasterise_splats(idx: np.ndarray, gaussians: np.ndarray, origin, pitch, shap
         if not out.colour_where_dense:
             rgb_out.fill(0.0)
     if len(idx) and all(shape):
-        flat = _aligned(4 * _CHS)                   # channel, column, row, layer
-        gcol = _aligned(TILE_Y * TILE_Z)            # a column's rows x layers, walked together
-        rcol = _aligned(TILE_Y * TILE_Z)
+        flat = zeros_line_aligned(4 * _CHS)         # channel, column, row, layer
+        gcol = zeros_line_aligned(TILE_Y * TILE_Z)  # a column's rows x layers, walked together
+        rcol = zeros_line_aligned(TILE_Y * TILE_Z)
         _splat_kernel(np.ascontiguousarray(idx, np.int64), gaussians,
                       np.asarray(origin, np.float64), np.asarray(pitch, np.float64),
                       np.asarray(shape_xyz, np.int64), int(z0), int(z1), bool(walk),
