@@ -56,11 +56,11 @@ from dreamprint_gui.io.volumes.splats import GaussianCloud  # noqa: E402
 
 def job_slabs(shape_xyz: tuple[int, int, int], workers: int = 2,
               src: object = None) -> list[tuple[int, int]]:
-    """The job's slabs (``job.plan._slabs`` with default settings, for ``src``)."""
+    """The job's slabs (``job.plan.slab_plan`` with default settings, for ``src``)."""
     from types import SimpleNamespace
 
-    from dreamprint_gui.job.plan import _slabs
-    return _slabs(SimpleNamespace(shape_xyz=shape_xyz, source=src,
+    from dreamprint_gui.job.plan import slab_plan
+    return slab_plan(SimpleNamespace(shape_xyz=shape_xyz, source=src,
                                   settings=SimpleNamespace(slab_layers=None)), workers)
 
 

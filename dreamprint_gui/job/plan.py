@@ -9,7 +9,7 @@ Defines
   grid (over the occupied or the declared bounds, ``--fit``; :func:`fitted_bounds`), the colour
   tables (paper section 4.1-4.2), the halftoner and the printer; refuse a job larger than the
   tray before any work.
-- :func:`_slabs`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan), and
+- :func:`slab_plan`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan), and
   :func:`_scheduler_kind`: which Dask scheduler runs them (:mod:`.run`).
 """
 
@@ -46,7 +46,7 @@ from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
            "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
-           "fitted_bounds"]
+           "fitted_bounds", "slab_plan", "MAX_SLAB_VOXELS"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
@@ -72,7 +72,7 @@ class ConvertSettings:
     background: str = "clear"             # "clear" | "empty"
     density_threshold: float | None = None  # 1/mm; None: half the density of pure Clear
     overwrite: bool = False
-    slab_layers: int | None = None        # None: ~DEFAULT_SLAB_VOXELS per slab (_slabs)
+    slab_layers: int | None = None        # None: ~DEFAULT_SLAB_VOXELS per slab (slab_plan)
     objective: str | None = None          # gamut table objective (None: profile's/default)
     intent: str | None = None             # rendering intent (None: profile's/colorimetric)
     table_size: int = 100
@@ -395,7 +395,7 @@ def prepare_job(settings: ConvertSettings,
 
 
 # ----------------------------------------------------------------------------- scheduling
-def _slabs(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
+def slab_plan(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
     nx, ny, nz = ctx.shape_xyz
     if ctx.settings.slab_layers:
         step = int(ctx.settings.slab_layers)

@@ -24,14 +24,16 @@ How each figure is estimated
   interpolated in the table like the kernel does).
 - Out of gamut: the tables' per-node dE2000 (reproduction vs target) at the nearest node of
   each sampled printed voxel's colour; out of gamut means dE2000 > ``IN_GAMUT_DE2000``.
-- Disk and time: up to 16 full layers (evenly spaced, at most ~8e6 voxels) sampled, labelled
-  and PNG-encoded exactly as the job's slabs are; their mean size times the layer count, plus
-  the manifest; their time per voxel (the first layer's left out: it warms the caches) times
-  the job's voxels, plus the time to write each slice file (the layers' PNGs written beside the
-  job, removed at once) times the layer count, shared by the workers at
-  :data:`PARALLEL_EFFICIENCY`, plus :data:`CONVERT_OVERHEAD_S`. Timing the job's own source
-  and kernels makes the estimate follow the source kind (a splat scene's sampling costs
-  several times a dense grid's per voxel), the printer's grid, the file system and the
+- Disk and time: 4 to 16 of the job's own slabs (the middle one of each of n equal runs of
+  the job's slabs, n as ~:data:`TIMED_SECONDS` allows; after the middle slab, which warms the
+  caches) sampled, labelled and PNG-encoded exactly as the job does them
+  (:func:`.slab.encode_slab`: a splat job's several-layer slabs and its set-up per slab
+  included); their layers' mean size times the layer count, plus the manifest; their time per
+  voxel times the job's voxels, plus the time to write each slice file (the layers' PNGs
+  written into a temporary folder, removed at once) times the layer count, shared by the
+  workers at :data:`PARALLEL_EFFICIENCY`, plus :data:`CONVERT_OVERHEAD_S`. Timing the job's
+  own source and kernels makes the estimate follow the source kind (a splat scene's sampling
+  costs several times a dense grid's per voxel), the printer's grid, the file system and the
   machine. First-use builds (compiled kernels, colour tables, blue-noise mask) happen in the
   preparation, before the pre-flight, and are announced there with their own estimate
   (:func:`...job.plan.prepare_job`).
@@ -60,10 +62,9 @@ from dreamprint_gui.gamut.forward import forward_model, mixtures_lab
 from dreamprint_gui.gamut.mapping import intent_map
 from dreamprint_gui.gamut.optimise import srgb_to_xyz
 from dreamprint_gui.gamut.tables import F_CONC, F_GREY, F_SIGMA, interpolate_fields
-from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
-from dreamprint_gui.job.plan import ConvertSettings, JobContext, prepare_job
+from dreamprint_gui.job.plan import ConvertSettings, JobContext, prepare_job, slab_plan
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
-from dreamprint_gui.job.slab import _oriented, _slab_into, _write_new
+from dreamprint_gui.job.slab import _write_new, encode_slab
 from dreamprint_gui.physics.colorimetry import delta_E2000
 
 __all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measured_rate",
@@ -298,32 +299,41 @@ def _node_fields(tables, rgb: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndar
     return reach, de
 
 
-def _layer_estimate(ctx, nz: int) -> tuple[int, float, int, float]:
-    """(bytes of the job's slices, seconds per voxel on one worker, layers timed, seconds to
-    write one slice file): up to 16 evenly spaced full layers (at most ~8e6 voxels in all)
-    sampled, labelled and PNG-encoded as the job's slabs do, their mean size times nz, and their
-    time per voxel (without the first layer's when there are several: it warms the source's and
-    the kernels' caches); their PNGs written as the slabs write slices, into a hidden temporary
-    folder beside the job's (same file system), removed at once."""
-    nx, ny, _ = ctx.shape_xyz
-    n_layers = max(1, min(16, nz, 8_000_000 // max(1, nx * ny)))  # ~8e6 voxels at most
-    zs = sorted({int(round(v)) for v in np.linspace(0, nz - 1, n_layers + 2)[1:-1]} or {0})
-    total = 0
-    timed = 0.0
-    pngs = []
-    for i, z in enumerate(zs):
+def _slab_estimate(ctx, workers: int) -> tuple[int, float, int, int, float]:
+    """(bytes of the job's slices, seconds per voxel on one worker, slabs and layers timed,
+    seconds to write one slice file).
+
+    Timed on the job's own slabs (:func:`...plan.slab_plan` for ``workers``), each sampled,
+    labelled and PNG-encoded by the job's :func:`.slab.encode_slab`: a sampler's set-up per slab (a
+    Gaussian-splat job's slabs are several layers thick, and it bins and sets up its Gaussians
+    once per slab) and the fused samplers' per-call costs count as in the job. The middle slab
+    goes first, to warm the source's and the kernels' caches and to size the sample: then
+    ``n`` slabs (4 to 16, or all, as many as :data:`TIMED_SECONDS` allows at the middle slab's
+    speed), the middle one of each of ``n`` equal runs of slabs, are timed: the sparse ends of
+    an object count as much as its dense middle. The slices' size is the timed layers' mean
+    PNG size times the layer count; their PNGs are written as the slabs write slices
+    (:func:`_write_seconds`)."""
+    nx, ny, nz = ctx.shape_xyz
+    slabs = slab_plan(ctx, workers)
+
+    def convert(z0: int, z1: int) -> tuple[float, list[bytes]]:
         t0 = time.perf_counter()
-        labels = np.empty((1, ny, nx), np.uint8)
-        _slab_into(ctx, ctx.grid, z, z + 1, labels, np.zeros(7, np.int64), np.zeros((1, 7)),
-                   np.zeros(4))
-        pngs.append(encode_labels_pngs(_oriented(ctx, labels), ctx.palette,
-                                       ctx.printer.png_mode)[0])
-        total += len(pngs[-1])
-        if i > 0 or len(zs) == 1:
-            timed += time.perf_counter() - t0
-    n_timed = max(1, len(zs) - 1)
-    spv = timed / (n_timed * nx * ny)
-    return int(total / len(zs) * nz) + 16_384, spv, n_timed, _write_seconds(pngs)
+        pngs = encode_slab(ctx, z0, z1)[0]
+        return time.perf_counter() - t0, pngs
+
+    t_mid, _ = convert(*slabs[len(slabs) // 2])
+    n = min(len(slabs), max(4, min(16, int(TIMED_SECONDS / max(t_mid, 1e-6)))))
+    picks = {int((i + 0.5) * len(slabs) / n) for i in range(n)}  # one per stratum
+    timed = 0.0
+    voxels = 0
+    pngs: list[bytes] = []
+    for i in sorted(picks):
+        t, p = convert(*slabs[i])
+        timed += t
+        pngs += p
+        voxels += len(p) * nx * ny
+    disk = int(sum(len(p) for p in pngs) / len(pngs) * nz) + 16_384
+    return disk, timed / voxels, len(picks), len(pngs), _write_seconds(pngs)
 
 
 def _write_seconds(pngs: list[bytes]) -> float:
@@ -345,12 +355,14 @@ def _write_seconds(pngs: list[bytes]) -> float:
 
 
 # Share of the workers' time that is useful work when a job's slabs run on every core (slab
-# scheduling, the writer thread, the source's hash; the cores' shared memory bandwidth):
-# measured by benchmarks/bench_preflight.py on the sample files (2 cores).
-PARALLEL_EFFICIENCY = 0.75
-# Fixed cost of a conversion besides its slabs: the scheduler's start, the manifest (a 4.5e6-voxel
-# job converted in 0.06 s, bench_preflight --samples --cold).
-CONVERT_OVERHEAD_S = 0.05
+# scheduling, the writer thread, the source's hash; the cores' shared memory bandwidth), and
+# the fixed cost of a conversion besides its slabs (the scheduler's start, each worker's first
+# slab buffers, the manifest): fitted to benchmarks/bench_preflight.py --samples at 30 and
+# 60 mm on the sample files (2 cores, 2e8-4e9 voxels; actual / estimated 0.9-1.15 with them).
+PARALLEL_EFFICIENCY = 0.88
+CONVERT_OVERHEAD_S = 0.15
+# About the seconds the pre-flight spends timing the job's slabs (at least four slabs)
+TIMED_SECONDS = 0.3
 
 
 def _context(source, grid, profile, *, density_scale, content, background, printer,
@@ -443,12 +455,13 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
             up = float(s.density_scale * np.min(reach[pos] / ftarget[pos]))
     oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
     worst = float(de.max()) if len(de) else 0.0
-    disk, spv, n_timed, write_s = _layer_estimate(ctx, nz)
-    workers = max(1, min(int(s.workers or os.cpu_count() or 1), nz))
+    job_workers = int(s.workers or os.cpu_count() or 1)  # as the job cuts its slabs
+    disk, spv, n_slabs, n_layers, write_s = _slab_estimate(ctx, job_workers)
+    workers = max(1, min(job_workers, nz))
     seconds = CONVERT_OVERHEAD_S + (spv * total + write_s * nz) / (workers * PARALLEL_EFFICIENCY)
     rate = total / seconds
-    rate_source = (f"timed on {n_timed} full layer{'s' if n_timed > 1 else ''} of this job, "
-                   f"{workers} worker{'s' if workers > 1 else ''}")
+    rate_source = (f"timed on {n_slabs} of this job's slabs, {n_layers} layer"
+                   f"{'s' if n_layers > 1 else ''}, {workers} worker{'s' if workers > 1 else ''}")
     content_json = (ctx.content.to_json() if ctx.content is not None
                     else {"mode": "fog", "requested": s.content, "reason": ""})
     vx, vy, vz = ctx.printer.voxel_mm

@@ -35,9 +35,9 @@ from dreamprint_gui.job.plan import (
     JobCancelled,
     JobContext,
     _scheduler_kind,
-    _slabs,
     check_settings,
     prepare_job,
+    slab_plan,
 )
 from dreamprint_gui.job.preflight import preflight as estimate
 from dreamprint_gui.job.preflight import record_rate
@@ -283,7 +283,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     t_prep = time.perf_counter() - started
     kind = _scheduler_kind(settings)
     workers = settings.workers or os.cpu_count() or 1
-    slabs = _slabs(ctx, workers)
+    slabs = slab_plan(ctx, workers)
     nx, ny, nz = ctx.shape_xyz
     # Per-layer sums, added exactly (math.fsum) once all are in: the total is then the same
     # whatever the slab size, the number of workers or the order in which slabs finish.

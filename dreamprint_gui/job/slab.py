@@ -45,7 +45,7 @@ from dreamprint_gui.job.sample_label.leaf_grid_job import (
 )
 from dreamprint_gui.job.write import slice_name
 
-__all__ = ["run_slab", "halftone_layer"]
+__all__ = ["run_slab", "encode_slab", "halftone_layer"]
 
 # A source's ``layer_kind`` -> the compiled call that samples and labels its layers (the
 # arguments: the source's ``layer_plan``, one layer's rgb and density arrays, z0, the kernel's).
@@ -157,13 +157,13 @@ class _Workspace(threading.local):
 _WORKSPACE = _Workspace()
 
 
-def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
-             cancel: threading.Event | None = None) -> dict[str, Any]:
-    """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings."""
-
-    nx, ny, nz = ctx.shape_xyz
-    if _cancelled(slices_dir, cancel):
-        raise JobCancelled()
+def encode_slab(ctx: JobContext, z0: int, z1: int
+                ) -> tuple[list[bytes], np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+    """The PNG slices of layers ``[z0, z1)`` (labelled into this thread's reused buffer), the
+    labels' counts, per-layer concentration sums and clamp stats (as :func:`_labels_of_slab`),
+    and the seconds per stage (``png`` included): a slab's work before its files are written,
+    as the job and the pre-flight's timing do it."""
+    nx, ny, _ = ctx.shape_xyz
     labels = _WORKSPACE.labels_for(z1 - z0, ny, nx)
     counts = np.zeros(7, dtype=np.int64)
     sums = np.zeros((z1 - z0, 7), dtype=np.float64)
@@ -172,6 +172,18 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
     t2 = time.perf_counter()
     pngs = encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode,
                               ctx.printer.pixels_per_metre())
+    seconds["png"] = time.perf_counter() - t2
+    return pngs, counts, sums, stats, seconds
+
+
+def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
+             cancel: threading.Event | None = None) -> dict[str, Any]:
+    """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings."""
+
+    nz = ctx.shape_xyz[2]
+    if _cancelled(slices_dir, cancel):
+        raise JobCancelled()
+    pngs, counts, sums, stats, seconds = encode_slab(ctx, z0, z1)
     t3 = time.perf_counter()
     # The cancel marker (other processes, cluster workers) is looked for once per slab here,
     # the in-process event at every layer: a stat per slice cost as much as writing it on
@@ -185,7 +197,7 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
         # Never create folders here: after a cancel the job's temporary folder is removed and
         # a straggling task must fail rather than recreate it.
         _write_new(prefix + slice_name(z0 + k, nz), png)
-    seconds.update(png=t3 - t2, write=time.perf_counter() - t3)
+    seconds["write"] = time.perf_counter() - t3
     return {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
             "clamped": _clamp_report(stats), "seconds": seconds}
 

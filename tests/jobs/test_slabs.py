@@ -3,7 +3,7 @@ source asks for (``slab_layers``) where its layers are big, within MAX_SLAB_VOXE
 
 from types import SimpleNamespace
 
-from dreamprint_gui.job.plan import DEFAULT_SLAB_VOXELS, MAX_SLAB_VOXELS, _slabs
+from dreamprint_gui.job.plan import DEFAULT_SLAB_VOXELS, MAX_SLAB_VOXELS, slab_plan
 
 
 def _ctx(shape, want=None, fixed=None):
@@ -19,28 +19,28 @@ def _steps(slabs, nz):
 
 
 def test_a_plain_source_gets_slabs_by_size():
-    assert _steps(_slabs(_ctx((831, 2604, 4624)), 2), 4624) == {1}      # 1e10 voxels
-    assert _steps(_slabs(_ctx((386, 1209, 2146)), 2), 2146) == {DEFAULT_SLAB_VOXELS
+    assert _steps(slab_plan(_ctx((831, 2604, 4624)), 2), 4624) == {1}      # 1e10 voxels
+    assert _steps(slab_plan(_ctx((386, 1209, 2146)), 2), 2146) == {DEFAULT_SLAB_VOXELS
                                                                // (386 * 1209)}   # 1e9
 
 
 def test_a_source_asking_for_layers_gets_them_within_the_memory_cap():
     # 1e10 voxels: 2.16e6 a layer, 1 layer by size; asked for 8, 7 fit in 2 workers' share
-    steps = _steps(_slabs(_ctx((831, 2604, 4624), want=8), 2), 4624)
+    steps = _steps(slab_plan(_ctx((831, 2604, 4624), want=8), 2), 4624)
     assert steps == {MAX_SLAB_VOXELS // 2 // (831 * 2604)} == {7}
     # layers of 5e6 voxels: 3 fit
-    assert _steps(_slabs(_ctx((2000, 2500, 600), want=8), 2), 600) == {3}
+    assert _steps(slab_plan(_ctx((2000, 2500, 600), want=8), 2), 600) == {3}
     # a layer beyond the cap: one layer a slab, as by size
-    assert _steps(_slabs(_ctx((5000, 5000, 300), want=8), 2), 300) == {1}
+    assert _steps(slab_plan(_ctx((5000, 5000, 300), want=8), 2), 300) == {1}
     # many workers share the cap (down to DEFAULT_SLAB_VOXELS each): memory stays bounded
-    assert _steps(_slabs(_ctx((831, 2604, 4624), want=8), 8), 4624) == {1}
-    assert _steps(_slabs(_ctx((831, 2604, 4624), want=8), 4), 4624) == {3}
+    assert _steps(slab_plan(_ctx((831, 2604, 4624), want=8), 8), 4624) == {1}
+    assert _steps(slab_plan(_ctx((831, 2604, 4624), want=8), 4), 4624) == {3}
     # small jobs keep >= 4 slabs per worker
-    assert len(_slabs(_ctx((181, 356, 47), want=8), 2)) >= 8
-    assert len(_slabs(_ctx((181, 356, 9), want=8), 2)) >= 8
+    assert len(slab_plan(_ctx((181, 356, 47), want=8), 2)) >= 8
+    assert len(slab_plan(_ctx((181, 356, 9), want=8), 2)) >= 8
     # already as many layers by size: unchanged; a fixed --slab-layers wins
-    assert _steps(_slabs(_ctx((386, 1209, 2146), want=8), 2), 2146) == {8}
-    assert _steps(_slabs(_ctx((831, 2604, 4624), want=8, fixed=2), 2), 4624) == {2}
+    assert _steps(slab_plan(_ctx((386, 1209, 2146), want=8), 2), 2146) == {8}
+    assert _steps(slab_plan(_ctx((831, 2604, 4624), want=8, fixed=2), 2), 4624) == {2}
 
 
 def test_slabs_tile_the_job_within_the_cap_for_any_shape():
@@ -49,8 +49,8 @@ def test_slabs_tile_the_job_within_the_cap_for_any_shape():
     for nx, ny in ((1, 1), (300, 700), (831, 2604), (2000, 2500), (6000, 5000)):
         for nz in (1, 7, 9, 47, 255, 4624):
             for workers in (1, 2, 64):
-                plain = _slabs(_ctx((nx, ny, nz)), workers)
-                asked = _slabs(_ctx((nx, ny, nz), want=8), workers)
+                plain = slab_plan(_ctx((nx, ny, nz)), workers)
+                asked = slab_plan(_ctx((nx, ny, nz), want=8), workers)
                 _steps(asked, nz)
                 assert all(z1 > z0 for z0, z1 in asked)
                 size = (asked[0][1] - asked[0][0]) * nx * ny
