@@ -1,6 +1,8 @@
 """The pre-flight times the job's own slabs: as thick as the job cuts them (a Gaussian-splat
 job's set-up is paid per slab), one from each of n equal runs of slabs, n by the time budget."""
 
+import threading
+
 import pytest
 
 from dreamprint_gui.job import preflight as pf_module
@@ -19,6 +21,9 @@ def _timed_slabs(monkeypatch, ctx):
     real = pf_module.encode_slab
 
     def spy(c, z0, z1):
+        # off the main thread, as the job's workers: a source that spreads a call over the
+        # cores from the main thread (InstantNGP) then runs as in the job
+        assert threading.current_thread() is not threading.main_thread()
         calls.append((z0, z1))
         return real(c, z0, z1)
 
