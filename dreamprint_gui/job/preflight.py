@@ -24,19 +24,20 @@ How each figure is estimated
   interpolated in the table like the kernel does).
 - Out of gamut: the tables' per-node dE2000 (reproduction vs target) at the nearest node of
   each sampled printed voxel's colour; out of gamut means dE2000 > ``IN_GAMUT_DE2000``.
-- Disk and time: 4 to 16 of the job's own slabs (the middle one of each of n equal runs of
-  the job's slabs, n as ~:data:`TIMED_SECONDS` allows; after the middle slab, which warms the
-  caches) sampled, labelled and PNG-encoded exactly as the job does them
-  (:func:`.slab.encode_slab`: a splat job's several-layer slabs and its set-up per slab
-  included); their layers' mean size times the layer count, plus the manifest; their time per
-  voxel times the job's voxels, plus the time to write each slice file (the layers' PNGs
-  written into a temporary folder, removed at once) times the layer count, shared by the
-  workers at :data:`PARALLEL_EFFICIENCY`, plus :data:`CONVERT_OVERHEAD_S`. Timing the job's
-  own source and kernels makes the estimate follow the source kind (a splat scene's sampling
-  costs several times a dense grid's per voxel), the printer's grid, the file system and the
-  machine. First-use builds (compiled kernels, colour tables, blue-noise mask) happen in the
-  preparation, before the pre-flight, and are announced there with their own estimate
-  (:func:`...job.plan.prepare_job`).
+- Disk and time: up to 16 of the job's own slabs (the middle one of each of n equal runs of
+  the job's slabs, n as ~:data:`TIMED_SECONDS` allows, at least 4 where they are quick; after
+  the middle slab, which warms the caches; in a thread of their own, as the job's workers)
+  sampled, labelled and PNG-encoded exactly as the job does them (:func:`.slab.encode_slab`: a
+  splat job's several-layer slabs and its set-up per slab included); their layers' mean size
+  times the layer count, plus the manifest; their time per voxel times the job's voxels, plus
+  the time to write each slice file (up to 64 of their PNGs written into a temporary folder,
+  removed at once) times the layer count, shared by the workers (no more than the job's slabs;
+  one with ``--scheduler sync``) at :data:`PARALLEL_EFFICIENCY`, plus
+  :data:`CONVERT_OVERHEAD_S`. Timing the job's own source and kernels makes the estimate
+  follow the source kind (a splat scene's sampling costs several times a dense grid's per
+  voxel), the printer's grid, the file system and the machine. First-use builds (compiled
+  kernels, colour tables, blue-noise mask) happen in the preparation, before the pre-flight,
+  and are announced there with their own estimate (:func:`...job.plan.prepare_job`).
 - :func:`record_rate` keeps the finished jobs' rates (``rates.json``) for the record; the
   estimate no longer uses them (they mixed source kinds and sizes: one rate for all misjudged
   a splat scene 12-fold).
@@ -49,8 +50,8 @@ import math
 import os
 import shutil
 import tempfile
+import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -110,7 +111,7 @@ class Preflight:
     worst_dE2000: float
     seconds: float                            # estimated conversion time (after preparing)
     rate_voxels_per_s: float
-    rate_source: str                          # "measured (...)" or "benchmark constant"
+    rate_source: str                          # what the time was measured on (slabs, workers)
     content: dict[str, Any]
     density_scale: float
     background: str
@@ -300,28 +301,41 @@ def _node_fields(tables, rgb: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndar
     return reach, de
 
 
-def _slab_estimate(ctx, workers: int) -> tuple[int, float, int, int, float]:
+def _slab_estimate(ctx, workers: int) -> tuple[int, float, int, int, float, int]:
     """(bytes of the job's slices, seconds per voxel on one worker, slabs and layers timed,
-    seconds to write one slice file).
+    seconds to write one slice file, the job's slab count).
 
     Timed on the job's own slabs (:func:`...plan.slab_plan` for ``workers``), each sampled,
     labelled and PNG-encoded by the job's :func:`.slab.encode_slab`: a sampler's set-up per slab (a
     Gaussian-splat job's slabs are several layers thick, and it bins and sets up its Gaussians
     once per slab) and the fused samplers' per-call costs count as in the job. The middle slab
     goes first, to warm the source's and the kernels' caches and to size the sample: then
-    ``n`` slabs (4 to 16, or all, as many as :data:`TIMED_SECONDS` allows at the middle slab's
-    speed), the middle one of each of ``n`` equal runs of slabs, are timed: the sparse ends of
-    an object count as much as its dense middle. The slices' size is the timed layers' mean
-    PNG size times the layer count; their PNGs are written as the slabs write slices
-    (:func:`_write_seconds`)."""
+    ``n`` slabs (as many as :data:`TIMED_SECONDS` allows at the middle slab's speed, at least 4
+    where 4 take at most ten times that, at most 16 and the job's count), the middle one of each
+    of ``n`` equal runs of slabs, are timed: the sparse ends of an object count as much as its
+    dense middle. The slices' size is the timed layers' mean PNG size times the layer count; up
+    to 64 of their PNGs are written as the slabs write slices (:func:`_write_seconds`)."""
     # In a thread of its own, as the job's workers run slabs: a source that spreads one call
     # over the cores when called from the main thread (InstantNGP) then runs one thread, as in
     # the job (timed on the main thread, a CLI's InstantNGP job was estimated 1.6x too fast).
-    with ThreadPoolExecutor(1) as pool:
-        return pool.submit(_time_slabs, ctx, workers).result()
+    # A daemon thread, so that an interrupted pre-flight (Ctrl-C) need not wait for its slabs.
+    box: dict[str, Any] = {}
+
+    def timing() -> None:
+        try:
+            box["result"] = _time_slabs(ctx, workers)
+        except BaseException as e:  # noqa: BLE001 - raised again in the caller
+            box["error"] = e
+
+    th = threading.Thread(target=timing, name="dreamprint-preflight-timing", daemon=True)
+    th.start()
+    th.join()
+    if "error" in box:
+        raise box["error"]
+    return box["result"]
 
 
-def _time_slabs(ctx, workers: int) -> tuple[int, float, int, int, float]:
+def _time_slabs(ctx, workers: int) -> tuple[int, float, int, int, float, int]:
     nx, ny, nz = ctx.shape_xyz
     slabs = slab_plan(ctx, workers)
 
@@ -331,18 +345,29 @@ def _time_slabs(ctx, workers: int) -> tuple[int, float, int, int, float]:
         return time.perf_counter() - t0, pngs
 
     t_mid, _ = convert(*slabs[len(slabs) // 2])
-    n = min(len(slabs), max(4, min(16, int(TIMED_SECONDS / max(t_mid, 1e-6)))))
+    n = _timed_count(len(slabs), t_mid)
     picks = {int((i + 0.5) * len(slabs) / n) for i in range(n)}  # one per stratum
     timed = 0.0
-    voxels = 0
-    pngs: list[bytes] = []
+    layers = 0
+    png_bytes = 0
+    sample: list[bytes] = []  # the PNGs whose writing is timed: at most 64
     for i in sorted(picks):
-        t, p = convert(*slabs[i])
+        t, pngs = convert(*slabs[i])
         timed += t
-        pngs += p
-        voxels += len(p) * nx * ny
-    disk = int(sum(len(p) for p in pngs) / len(pngs) * nz) + 16_384
-    return disk, timed / voxels, len(picks), len(pngs), _write_seconds(pngs)
+        layers += len(pngs)
+        png_bytes += sum(len(p) for p in pngs)
+        sample += pngs[:max(0, 64 - len(sample))]
+    disk = int(png_bytes / layers * nz) + 16_384
+    return disk, timed / (layers * nx * ny), len(picks), layers, _write_seconds(sample), len(slabs)
+
+
+def _timed_count(n_slabs: int, t_mid: float) -> int:
+    """How many of a job's ``n_slabs`` slabs the pre-flight times, the middle one having taken
+    ``t_mid`` s: as many as :data:`TIMED_SECONDS` allows, at least 4 where 4 take at most ten
+    times that (an InstantNGP job's slabs, or a user's thick ones, may take seconds each), at
+    most 16 and ``n_slabs``."""
+    fit = TIMED_SECONDS / max(t_mid, 1e-9)
+    return min(n_slabs, 16, max(1, int(fit), min(4, int(10 * fit))))
 
 
 def _write_seconds(pngs: list[bytes]) -> float:
@@ -465,8 +490,10 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
     oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
     worst = float(de.max()) if len(de) else 0.0
     job_workers = int(s.workers or os.cpu_count() or 1)  # as the job cuts its slabs
-    disk, spv, n_slabs, n_layers, write_s = _slab_estimate(ctx, job_workers)
-    workers = max(1, min(job_workers, nz))
+    disk, spv, n_slabs, n_layers, write_s, job_slabs = _slab_estimate(ctx, job_workers)
+    # the slabs that run at once: no more than the job has, one with --scheduler sync
+    sync = (s.scheduler or "").strip() == "sync"
+    workers = 1 if sync else max(1, min(job_workers, job_slabs))
     seconds = CONVERT_OVERHEAD_S + (spv * total + write_s * nz) / (workers * PARALLEL_EFFICIENCY)
     rate = total / seconds
     rate_source = (f"timed on {n_slabs} of this job's slabs, {n_layers} layer"

@@ -11,7 +11,8 @@ the same kernel, in one compiled call (:mod:`.sample_label.dense_job`; OpenVDB/N
 volumes densified over their leaves: :mod:`.sample_label.leaf_grid_job`). Then each layer is
 encoded to PNG (:mod:`.encode.png_slices`) and written into the job's slices folder.
 
-Defines :func:`run_slab` (one slab task, what :mod:`.run` schedules) and :func:`halftone_layer`
+Defines :func:`run_slab` (one slab task, what :mod:`.run` schedules), :func:`encode_slab` (its
+work before the files are written, which the pre-flight times) and :func:`halftone_layer`
 (the labels (ny, nx) of one layer, for the GUI's slice scrubber, byte-identical to the layer in
 an exported job).
 """

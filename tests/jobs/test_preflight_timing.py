@@ -35,7 +35,7 @@ def _timed_slabs(monkeypatch, ctx):
 def test_a_splat_job_is_timed_on_its_multi_layer_slabs(monkeypatch, splat_ctx):
     slabs = slab_plan(splat_ctx, 2)
     assert slabs[0][1] - slabs[0][0] > 1          # the sampler asked for several layers
-    monkeypatch.setattr(pf_module, "TIMED_SECONDS", 0.0)      # the fewest: 4 and the middle
+    monkeypatch.setattr(pf_module, "_timed_count", lambda n, t: min(4, n))
     pf, calls = _timed_slabs(monkeypatch, splat_ctx)
     assert calls[0] == slabs[len(slabs) // 2]     # the middle slab warms the caches first
     timed = calls[1:]
@@ -53,3 +53,24 @@ def test_the_time_budget_sets_how_many_slabs_are_timed(monkeypatch, splat_ctx):
     monkeypatch.setattr(pf_module, "TIMED_SECONDS", 1e9)
     _, calls = _timed_slabs(monkeypatch, splat_ctx)
     assert len(calls) - 1 == min(16, len(slabs)) == len(set(calls[1:]))
+
+
+def test_slow_slabs_are_timed_fewer():
+    budget = pf_module.TIMED_SECONDS
+    count = pf_module._timed_count
+    assert count(100, budget / 50) == 16             # quick slabs: the budget, up to 16
+    assert count(100, budget / 6.5) == 6
+    assert count(100, budget) == 4                   # at least 4 while 4 take <= 10 budgets
+    assert count(100, budget * 2.4) == 4
+    assert count(100, budget * 4) == 2               # slower: fewer, down to one
+    assert count(100, budget * 100) == 1
+    assert count(3, budget / 50) == 3                # never more than the job has
+
+
+def test_workers_are_the_slabs_that_run_at_once(shared_data):
+    ply = str(shared_data / "splats" / "inria3dgs_iter7000_sh3_9080.ply")
+    two = prepare_job(ConvertSettings(source=ply, height_mm=5.0, workers=8, slab_layers=100))
+    assert len(slab_plan(two, 8)) == 2
+    assert "2 workers" in preflight(two, sample_voxels=20_000).rate_source
+    sync = prepare_job(ConvertSettings(source=ply, height_mm=5.0, workers=2, scheduler="sync"))
+    assert "1 worker" in preflight(sync, sample_voxels=20_000).rate_source
