@@ -9,7 +9,8 @@ Defines
   grid (over the occupied or the declared bounds, ``--fit``; :func:`fitted_bounds`), the colour
   tables (paper section 4.1-4.2), the halftoner and the printer; refuse a job larger than the
   tray before any work.
-- :func:`slab_plan`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan), and
+- :func:`slab_plan`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan) for
+  :func:`job_workers` workers, and
   :func:`_scheduler_kind`: which Dask scheduler runs them (:mod:`.run`).
 """
 
@@ -46,7 +47,7 @@ from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
            "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
-           "fitted_bounds", "slab_plan", "MAX_SLAB_VOXELS"]
+           "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
@@ -395,6 +396,11 @@ def prepare_job(settings: ConvertSettings,
 
 
 # ----------------------------------------------------------------------------- scheduling
+def job_workers(settings: ConvertSettings) -> int:
+    """The workers a job's slabs are cut for (``--workers``, else every core)."""
+    return int(settings.workers or os.cpu_count() or 1)
+
+
 def slab_plan(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
     nx, ny, nz = ctx.shape_xyz
     if ctx.settings.slab_layers:

@@ -64,7 +64,14 @@ from dreamprint_gui.gamut.forward import forward_model, mixtures_lab
 from dreamprint_gui.gamut.mapping import intent_map
 from dreamprint_gui.gamut.optimise import srgb_to_xyz
 from dreamprint_gui.gamut.tables import F_CONC, F_GREY, F_SIGMA, interpolate_fields
-from dreamprint_gui.job.plan import ConvertSettings, JobContext, prepare_job, slab_plan
+from dreamprint_gui.job.plan import (
+    ConvertSettings,
+    JobContext,
+    _scheduler_kind,
+    job_workers,
+    prepare_job,
+    slab_plan,
+)
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
 from dreamprint_gui.job.slab import _write_new, encode_slab
 from dreamprint_gui.physics.colorimetry import delta_E2000
@@ -395,7 +402,7 @@ def _write_seconds(pngs: list[bytes]) -> float:
 # 60 mm on the sample files (2 cores, 2e8-4e9 voxels; actual / estimated 0.9-1.15 with them).
 PARALLEL_EFFICIENCY = 0.88
 CONVERT_OVERHEAD_S = 0.15
-# About the seconds the pre-flight spends timing the job's slabs (at least four slabs)
+# About the seconds the pre-flight spends timing the job's slabs (:func:`_timed_count`)
 TIMED_SECONDS = 0.3
 
 
@@ -489,11 +496,10 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
             up = float(s.density_scale * np.min(reach[pos] / ftarget[pos]))
     oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
     worst = float(de.max()) if len(de) else 0.0
-    job_workers = int(s.workers or os.cpu_count() or 1)  # as the job cuts its slabs
-    disk, spv, n_slabs, n_layers, write_s, job_slabs = _slab_estimate(ctx, job_workers)
+    n_workers = job_workers(s)
+    disk, spv, n_slabs, n_layers, write_s, job_slabs = _slab_estimate(ctx, n_workers)
     # the slabs that run at once: no more than the job has, one with --scheduler sync
-    sync = (s.scheduler or "").strip() == "sync"
-    workers = 1 if sync else max(1, min(job_workers, job_slabs))
+    workers = 1 if _scheduler_kind(s) == "sync" else max(1, min(n_workers, job_slabs))
     seconds = CONVERT_OVERHEAD_S + (spv * total + write_s * nz) / (workers * PARALLEL_EFFICIENCY)
     rate = total / seconds
     rate_source = (f"timed on {n_slabs} of this job's slabs, {n_layers} layer"

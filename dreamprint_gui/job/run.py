@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import os
 import queue
 import threading
 import time
@@ -36,6 +35,7 @@ from dreamprint_gui.job.plan import (
     JobContext,
     _scheduler_kind,
     check_settings,
+    job_workers,
     prepare_job,
     slab_plan,
 )
@@ -282,7 +282,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                               pf.short_line(), preflight=pf)
     t_prep = time.perf_counter() - started
     kind = _scheduler_kind(settings)
-    workers = settings.workers or os.cpu_count() or 1
+    workers = job_workers(settings)
     slabs = slab_plan(ctx, workers)
     nx, ny, nz = ctx.shape_xyz
     # Per-layer sums, added exactly (math.fsum) once all are in: the total is then the same
