@@ -100,10 +100,10 @@ def test_calibrate_chart_reports_cross_validated_de(tmp_path, capsys):
     K = base.K * np.exp(0.1 * rng.standard_normal((6, 1)))
     R = reflectance_infinite(*mix(c, K, base.S))
     (tmp_path / "recipes.csv").write_text(
-        "C,M,Y,K,W\n" + "\n".join(",".join(repr(x) for x in row[:5]) for row in c) + "\n")
+        "C,M,Y,K,W\n" + "\n".join(",".join(repr(float(x)) for x in row[:5]) for row in c) + "\n")
     (tmp_path / "spectra.csv").write_text(
         ",".join(f"{w:g}" for w in base.wavelengths_nm) + "\n"
-        + "\n".join(",".join(repr(x) for x in row) for row in R) + "\n")
+        + "\n".join(",".join(repr(float(x)) for x in row) for row in R) + "\n")
     out = tmp_path / "chart.json"
     code, stdout, err = run(capsys, "calibrate", "--chart", str(tmp_path / "recipes.csv"),
                             "--reflectance", str(tmp_path / "spectra.csv"), "-o", str(out),
