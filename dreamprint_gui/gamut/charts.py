@@ -1,4 +1,4 @@
-"""Pictures of the printable gamut (matplotlib, Agg backend; no screen needed).
+"""Pictures of the printable gamut (matplotlib, Agg canvas; no screen needed).
 
 Defines
 -------
@@ -45,13 +45,16 @@ def hexagon_cells(rings: int = 12) -> tuple[NDArray, NDArray]:
     return xy, np.stack([hue, sat], axis=1)
 
 
-def _agg():
-    import matplotlib
+def _figure(width_in: float, height_in: float):
+    """A figure drawn on its own Agg canvas: matplotlib's object interface, not pyplot, whose
+    global figure list is not thread-safe (the GUI draws these charts in worker threads) and
+    whose ``matplotlib.use`` would switch the backend of the whole process."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = Figure(figsize=(width_in, height_in), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def hexagon_chart(tables: ColourTables, profile: InkProfile, path: str | os.PathLike,
@@ -60,13 +63,13 @@ def hexagon_chart(tables: ColourTables, profile: InkProfile, path: str | os.Path
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import hsv_to_rgb
 
-    plt = _agg()
     model = forward_model(profile)
     xy, hs = hexagon_cells(rings)
     size = 1.0 / (1.5 * rings)
     ang = np.deg2rad(np.arange(6) * 60 + 30)
     hexagon = np.stack([np.cos(ang), np.sin(ang)], axis=1) * size * 1.0
-    fig, axes = plt.subplots(2, 3, figsize=(12, 8.4), constrained_layout=True)
+    fig = _figure(12, 8.4)
+    axes = fig.subplots(2, 3)
     stats = {}
     for row, value in enumerate((1.0, 0.5)):
         hsv = np.concatenate([hs, np.full((hs.shape[0], 1), value)], axis=1)
@@ -97,7 +100,6 @@ def hexagon_chart(tables: ColourTables, profile: InkProfile, path: str | os.Path
     fig.suptitle(f"Printable colours vs sRGB (objective {tables.objective}, intent "
                  f"{getattr(tables, 'intent', 'colorimetric')}, table {tables.size}^3)")
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return stats
 
 
@@ -105,13 +107,13 @@ def gamut_plot(profile: InkProfile, path: str | os.PathLike) -> None:
     """Write the CIELAB gamut picture (printable vs sRGB) to ``path`` (PNG)."""
     from scipy.spatial import ConvexHull
 
-    plt = _agg()
     lab_p = printable_lab(profile, steps=16)
     model = forward_model(profile)
     lab_s = srgb_lab(profile)
     srgb_faces = np.clip(model_srgb_of_lab(model, lab_s), 0, 1)
     conc_colours = np.clip(model_srgb_of_lab(model, lab_p), 0, 1)
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5.6), constrained_layout=True)
+    fig = _figure(12, 5.6)
+    axes = fig.subplots(1, 2)
     ax = axes[0]
     ax.scatter(lab_p[:, 1], lab_p[:, 2], c=conc_colours, s=4, linewidths=0)
     hull = ConvexHull(lab_s[:, 1:])
@@ -137,7 +139,6 @@ def gamut_plot(profile: InkProfile, path: str | os.PathLike) -> None:
     ax.set_title("CIELAB C*-L* (faint: sRGB surface)")
     fig.suptitle(f"Printable gamut vs sRGB, profile {profile.name}")
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def model_srgb_of_lab(model, lab: NDArray) -> NDArray:

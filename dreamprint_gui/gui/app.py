@@ -91,6 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     from dreamprint_gui.core.errors import DreamPrintError
     from dreamprint_gui.core.resources import resource_path
     from dreamprint_gui.gui.crash import install_exception_hook, log_file
+    from dreamprint_gui.gui.gc_guard import GuiThreadCollector
     from dreamprint_gui.gui.main_window import MainWindow
     from dreamprint_gui.gui.workers import wait_all
 
@@ -102,7 +103,14 @@ def main(argv: list[str] | None = None) -> int:
         app.setWindowIcon(QIcon(str(resource_path("icons", "dreamprint.svg"))))
     except DreamPrintError:
         pass
-    app.aboutToQuit.connect(lambda: wait_all(30000))  # no worker thread outlives the app
+    # cycles holding Qt or VTK objects are collected here, never in a worker (gc_guard.py)
+    collector = GuiThreadCollector(parent=app)
+
+    def before_quit() -> None:
+        wait_all(30000)  # no worker thread outlives the app
+        collector.stop()
+
+    app.aboutToQuit.connect(before_quit)
     headless = args.screenshot is not None or args.quit_after is not None
     install_exception_hook(interactive=not headless)
     log.info("dreamprint-gui starting; log file %s", log_file())

@@ -35,16 +35,21 @@ def _table_cache(tmp_path_factory):
 
 
 @pytest.fixture(autouse=True)
-def _isolated(_qt_platform, tmp_path_factory, monkeypatch, _table_cache):
-    """Settings and log of each test in a private folder; colour tables cached per session."""
+def _isolated(_qt_platform, qapp, tmp_path_factory, monkeypatch, _table_cache):
+    """Settings and log of each test in a private folder; colour tables cached per session;
+    cyclic garbage collected on the GUI thread only, as in the application (gc_guard.py)."""
+    from dreamprint_gui.gui.gc_guard import GuiThreadCollector
+    from dreamprint_gui.gui.workers import wait_all
+
     d = tmp_path_factory.mktemp("gui-home")
     monkeypatch.setenv("XDG_CACHE_HOME", str(_table_cache))
     monkeypatch.setenv("DREAMPRINT_SETTINGS", str(d / "settings.ini"))
     monkeypatch.setenv("DREAMPRINT_LOG_DIR", str(d / "log"))
+    collector = GuiThreadCollector()
     yield d
-    from dreamprint_gui.gui.workers import wait_all
-
     wait_all(120000)  # no worker thread outlives its test
+    collector.stop()
+    collector.deleteLater()
 
 
 @pytest.fixture

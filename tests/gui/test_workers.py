@@ -98,3 +98,36 @@ def test_abandonable_returns_at_once_on_cancel():
 
     with pytest.raises(DreamPrintError, match="bad chart"):
         abandonable(broken, threading.Event())
+
+
+def test_cycles_are_collected_on_the_gui_thread(qtbot):
+    """A worker that leaves cyclic garbage does not collect it (a cycle holding a Qt object
+    must not be destroyed there); the GUI thread's collector does (gui/gc_guard.py)."""
+    import threading
+
+    from dreamprint_gui.gui.gc_guard import GuiThreadCollector
+
+    where: list[int] = []
+
+    class Cycle:
+        def __init__(self) -> None:
+            self.me = self
+
+        def __del__(self) -> None:
+            where.append(threading.get_ident())
+
+    def churn() -> None:
+        for _ in range(5000):  # several times generation 0's threshold (700)
+            Cycle()
+
+    collector = GuiThreadCollector(interval_ms=20)
+    try:
+        worker = threading.Thread(target=churn)
+        worker.start()
+        worker.join()
+        assert where == []  # automatic collection would have run in the worker
+        qtbot.waitUntil(lambda: len(where) == 5000, timeout=5000)
+        assert set(where) == {threading.get_ident()}
+        assert collector.collections >= 1
+    finally:
+        collector.stop()
