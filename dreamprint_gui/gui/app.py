@@ -108,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
 
     def before_quit() -> None:
         wait_all(30000)  # no worker thread outlives the app
-        collector.stop()
+        collector.stop(enable=False)  # a thread that did may still run: never collect there
 
     app.aboutToQuit.connect(before_quit)
     headless = args.screenshot is not None or args.quit_after is not None

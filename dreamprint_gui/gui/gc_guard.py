@@ -27,9 +27,7 @@ __all__ = ["GuiThreadCollector"]
 class GuiThreadCollector(QObject):
     """Disables automatic collection and collects from a timer on the creating (GUI) thread.
 
-    ``stop()`` (or the object's destruction with its parent) turns automatic collection back on
-    if it was on before.
-    """
+    :meth:`stop` ends it (the object's destruction with its parent only stops the timer)."""
 
     def __init__(self, interval_ms: int = 250, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -55,9 +53,11 @@ class GuiThreadCollector(QObject):
             self.collections += 1
         return gen
 
-    def stop(self) -> None:
-        """Stop the timer; collect what is left here; automatic collection back as it was."""
+    def stop(self, enable: bool = True) -> None:
+        """Stop the timer and collect what is left, here. Automatic collection is then back as
+        it was before, unless ``enable`` is false: an application about to exit keeps it off,
+        as threads that outlive the wait for them (an abandoned engine call) may still run."""
         self._timer.stop()
         gc.collect()
-        if self._was_enabled:
+        if enable and self._was_enabled:
             gc.enable()

@@ -46,10 +46,12 @@ def _isolated(_qt_platform, qapp, tmp_path_factory, monkeypatch, _table_cache):
     monkeypatch.setenv("DREAMPRINT_SETTINGS", str(d / "settings.ini"))
     monkeypatch.setenv("DREAMPRINT_LOG_DIR", str(d / "log"))
     collector = GuiThreadCollector()
-    yield d
-    wait_all(120000)  # no worker thread outlives its test
-    collector.stop()
-    collector.deleteLater()
+    try:
+        yield d
+        wait_all(120000)  # no worker thread outlives its test
+    finally:
+        collector.stop()
+        collector.deleteLater()
 
 
 @pytest.fixture

@@ -127,7 +127,28 @@ def test_cycles_are_collected_on_the_gui_thread(qtbot):
         worker.join()
         assert where == []  # automatic collection would have run in the worker
         qtbot.waitUntil(lambda: len(where) == 5000, timeout=5000)
-        assert set(where) == {threading.get_ident()}
-        assert collector.collections >= 1
+        assert set(where) == {threading.get_ident()}  # by this timer or the fixture's
+    finally:
+        collector.stop()
+
+
+def test_collector_takes_the_generations_past_their_thresholds(qtbot):
+    """``check`` collects as CPython would after an allocation: nothing below generation 0's
+    threshold, the oldest generation whose count passed its threshold above it."""
+    import gc
+
+    from dreamprint_gui.gui.gc_guard import GuiThreadCollector
+
+    collector = GuiThreadCollector(interval_ms=3_600_000)  # checked by hand only
+    try:
+        gc.collect()
+        assert collector.check() == -1 and collector.collections == 0
+        kept = [[[] for _ in range(2 * collector.thresholds[0])]]  # allocated, not freed
+        assert collector.check() == 0 and collector.collections == 1
+        gens = []
+        for _ in range(collector.thresholds[1] + 1):
+            kept.append([[] for _ in range(collector.thresholds[0] + 10)])
+            gens.append(collector.check())
+        assert gens[:-1] == [0] * collector.thresholds[1] and gens[-1] == 1
     finally:
         collector.stop()
