@@ -85,8 +85,9 @@ def sample_with(raster, src: GaussianCloud, grid, z0: int, z1: int, out: SlabBuf
     signature). Packed Gaussians (since issue 25): exactly as ``sample_slab`` calls it, the
     cloud's own records in its height order (until 2026-11-29 this packed every Gaussian in
     the file's order for each slab, which read the rasteriser against itself as 3.9x faster on
-    a 1e6-Gaussian scene). Voxel centres ``xs, ys, zs`` (before issue 25): the Gaussians in
-    the file's order, as that rasteriser had them."""
+    a 1e6-Gaussian scene; one thread at a time: :func:`compare_jobs` patches its jobs once).
+    Voxel centres ``xs, ys, zs`` (before issue 25): the Gaussians in the file's order, as that
+    rasteriser had them."""
     params = inspect.signature(raster).parameters
     if "gaussians" in params:
         from dreamprint_gui.io.volumes import splats
@@ -135,13 +136,20 @@ def compare_jobs(kind: str, n_voxels: float, ref, block=(8, 64, 64)) -> None:
     path = source_path(kind)
     height = height_for(path, n_voxels)
     new, m = job_labels(path, height)
-    plain = GaussianCloud.sample_slab
-    GaussianCloud.sample_slab = (lambda self, grid, z0, z1, *, density_scale=1.0, out=None:
-                                 sample_with(ref, self, grid, z0, z1, out, density_scale))
+    # patched once around the whole job, here: the job's worker threads must not each swap
+    # (and restore) the module's rasteriser at once
+    from dreamprint_gui.io.volumes import splats
+
+    plain = GaussianCloud.sample_slab, splats.rasterise_splats
+    if "gaussians" in inspect.signature(ref).parameters:
+        splats.rasterise_splats = ref
+    else:
+        GaussianCloud.sample_slab = (lambda self, grid, z0, z1, *, density_scale=1.0, out=None:
+                                     sample_with(ref, self, grid, z0, z1, out, density_scale))
     try:
         old, m_ref = job_labels(path, height)
     finally:
-        GaussianCloud.sample_slab = plain
+        GaussianCloud.sample_slab, splats.rasterise_splats = plain
     names = list(m["labels"])
     differ = int(np.count_nonzero(new != old))
     shape = tuple(s // b * b for s, b in zip(new.shape, block, strict=True))
