@@ -11,8 +11,9 @@ worker, which Qt does not allow: the test suite crashed so (a segmentation fault
 chart task, "Garbage-collecting", on a fresh machine, 2026-11-29). The remedy is the one
 Kovid Goyal gave on the PyQt list in 2011 and Qt applications still use; the ``qtpygc``
 package wraps it with QtPy and heapdict for a priority scheme DreamPrint does not need, so it
-is written here (30 lines). Objects freed by reference counting are not concerned; only
-cyclic garbage waits up to ``interval_ms`` longer.
+is written here (30 lines). Objects freed by reference counting are not concerned; cyclic
+garbage waits for the next tick (at most one collection a tick, so a cycle that reached the
+oldest generation, collected every ~120th, may wait ~30 s, as under CPython's own rule).
 """
 
 from __future__ import annotations
