@@ -25,6 +25,7 @@ from typing import Any
 from PySide6.QtCore import QObject, QThread, Signal
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.threads import DaemonCall
 
 __all__ = ["Task", "Cancelled", "run_task", "generator_job", "abandonable", "wait_all"]
 
@@ -69,24 +70,13 @@ def abandonable(fn: Callable[[], Any], cancel: threading.Event, poll_s: float = 
     to its end in the background and its result or error is dropped. Being a daemon thread it
     never holds up quitting the application.
     """
-    box: dict[str, Any] = {}
-
-    def target() -> None:
-        try:
-            box["value"] = fn()
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller below
-            box["error"] = exc
-
-    thread = threading.Thread(target=target, name=name, daemon=True)
-    thread.start()
-    while thread.is_alive():
+    call = DaemonCall(fn, name)
+    while call.is_alive():
         if cancel.is_set():
             log.info("%s abandoned while running; its result will be dropped", name)
             raise Cancelled()
-        thread.join(poll_s)
-    if "error" in box:
-        raise box["error"]
-    return box["value"]
+        call.join(poll_s)
+    return call.result()
 
 
 class Task(QObject):

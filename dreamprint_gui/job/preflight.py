@@ -50,7 +50,6 @@ import math
 import os
 import shutil
 import tempfile
-import threading
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -59,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from dreamprint_gui.core.profile import INKS, load_profile
+from dreamprint_gui.core.threads import DaemonCall
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 from dreamprint_gui.gamut.forward import forward_model, mixtures_lab
 from dreamprint_gui.gamut.mapping import intent_map
@@ -326,20 +326,7 @@ def _slab_estimate(ctx, workers: int) -> tuple[int, float, int, int, float, int]
     # over the cores when called from the main thread (InstantNGP) then runs one thread, as in
     # the job (timed on the main thread, a CLI's InstantNGP job was estimated 1.6x too fast).
     # A daemon thread, so that an interrupted pre-flight (Ctrl-C) need not wait for its slabs.
-    box: dict[str, Any] = {}
-
-    def timing() -> None:
-        try:
-            box["result"] = _time_slabs(ctx, workers)
-        except BaseException as e:  # noqa: BLE001 - raised again in the caller
-            box["error"] = e
-
-    th = threading.Thread(target=timing, name="dreamprint-preflight-timing", daemon=True)
-    th.start()
-    th.join()
-    if "error" in box:
-        raise box["error"]
-    return box["result"]
+    return DaemonCall(lambda: _time_slabs(ctx, workers), "dreamprint-preflight-timing").result()
 
 
 def _time_slabs(ctx, workers: int) -> tuple[int, float, int, int, float, int]:

@@ -28,6 +28,7 @@ import numpy as np
 from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.core.threads import DaemonCall
 from dreamprint_gui.job.plan import (
     ConvertProgress,
     ConvertSettings,
@@ -223,24 +224,17 @@ def _prepare(settings: ConvertSettings, started: float
     """:func:`.plan.prepare_job` in a thread, its notices (first-use builds and their progress)
     yielded as "preparing" progress while it runs; returns the context or raises its error."""
     notices: queue.Queue = queue.Queue()
-    box: dict[str, Any] = {}
 
-    def work() -> None:
+    def work() -> JobContext:
         try:
-            box["ctx"] = prepare_job(settings, notify=notices.put)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the caller's thread
-            box["error"] = exc
+            return prepare_job(settings, notify=notices.put)
         finally:
             notices.put(None)
 
-    th = threading.Thread(target=work, name="dreamprint-prepare", daemon=True)
-    th.start()
+    call = DaemonCall(work, "dreamprint-prepare")
     while (msg := notices.get()) is not None:
         yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None, msg)
-    th.join()
-    if "error" in box:
-        raise box["error"]
-    return box["ctx"]
+    return call.result()
 
 
 def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,
