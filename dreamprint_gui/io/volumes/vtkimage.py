@@ -144,12 +144,17 @@ def _read_capturing(pv, path: Path):
             os.close(saved[1])
         sink.seek(0)
         raw = sink.read().decode("utf-8", "replace")
-    problems = [e.alert.strip().splitlines()[-1] for e in vtk_errors.events if e.alert.strip()]
-    problems += [str(w.message).strip().splitlines()[-1] for w in caught
-                 if "error" in str(w.message).lower()]
-    problems += [re.sub(r"\x1b\[[0-9;]*m", "", line).strip() for line in raw.splitlines()
+    problems = [_one_line(e.alert) for e in vtk_errors.events if e.alert.strip()]
+    problems += [_one_line(str(w.message)) for w in caught if "error" in str(w.message).lower()]
+    problems += [_one_line(re.sub(r"\x1b\[[0-9;]*m", "", line)) for line in raw.splitlines()
                  if re.search(r"error|fail|not read completely|cannot", line, re.I)]
     return mesh, list(dict.fromkeys(problems))
+
+
+def _one_line(message: str) -> str:
+    """The last line of a reader's complaint, without its indentation and quotes (VTK quotes
+    MetaIO's message on a tab-indented line of its own)."""
+    return message.strip().splitlines()[-1].strip().strip('"').strip()
 
 
 def _arrays(mesh):

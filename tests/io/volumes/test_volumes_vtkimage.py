@@ -208,8 +208,11 @@ def test_truncated_data_is_refused_not_zero_padded(shared_data, tmp_path, name):
         (tmp_path / "short.raw").write_bytes((src.parent / "HeadMRVolume.raw").read_bytes()[:50000])
     else:
         (tmp_path / name).write_bytes(src.read_bytes()[:30000])
-    with pytest.raises(DreamPrintError, match="damaged or truncated"):
+    with pytest.raises(DreamPrintError, match="damaged or truncated") as e:
         open_source(tmp_path / name)
+    # the reader's own words, as one clean line (MetaIO's came tab-indented and quoted)
+    reason = str(e.value).split("damaged or truncated file: ", 1)[1]
+    assert reason and reason == reason.strip().strip('"') and "\t" not in reason
 
 
 def test_garbled_metaimage_header_is_called_damaged(tmp_path):
