@@ -81,6 +81,7 @@ def _layer(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear, method, mask
     out = labels.reshape(-1)
     n_bg = 0
     m = 0
+    fl = np.empty(nx, np.uint8)
     if uniform and upto >= 2:  # the job's UNIFORM colour op: one lookup per layer
         uniform_lanes(flat, n, rgb[0, 0], rgb[0, 1], rgb[0, 2], col, W, off, A, G)
     for j in range(ny):
@@ -91,6 +92,7 @@ def _layer(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear, method, mask
         hi = -1
         for i in range(nx):
             f = dens[base + i] >= threshold
+            fl[i] = 1 if f else 0
             n_fg += 1 if f else 0
             lo = min(lo, i if f else nx)
             hi = max(hi, i if f else -1)
@@ -102,7 +104,7 @@ def _layer(rgb, dens, z, threshold, bg_label, flat, n, sigma_clear, method, mask
             for i in range(lo, hi + 1):
                 idx[m] = base + i
                 tq[m] = trow[i]
-                m += 1 if dens[base + i] >= threshold else 0
+                m += np.int64(fl[i])
         elif n_fg > 0:
             for i in range(lo, hi + 1):
                 if dens[base + i] >= threshold:
