@@ -77,3 +77,19 @@ def test_exp2_f32_matches_numpy_and_clamps_nonsense():
     res = np.empty(3, np.float32)
     _exp2_all32(odd, res)
     assert np.all(np.isfinite(res))
+
+
+def test_numpy_array_versions_give_the_compiled_bits():
+    """log2_f64_array / exp2_f64_array (tables built once, e.g. the sRGB encoding's segment
+    lines) repeat the compiled functions' steps: the same bits, not numpy's CPU-dispatched
+    log2 / exp2."""
+    from dreamprint_gui.core.kernels.vector_math import exp2_f64_array, log2_f64_array
+
+    rng = np.random.default_rng(11)
+    x = np.concatenate([10.0 ** rng.uniform(-300, 300, 20000), [1.0, 2.0, 0.5, np.sqrt(2.0)]])
+    y = np.concatenate([rng.uniform(-1100, 1100, 20000), [0.0, -0.5, 0.5, 1023.0, -1022.0]])
+    want_log, want_exp = np.empty_like(x), np.empty_like(y)
+    _log2_all(x, want_log)
+    _exp2_all(y, want_exp)
+    np.testing.assert_array_equal(log2_f64_array(x).view(np.int64), want_log.view(np.int64))
+    np.testing.assert_array_equal(exp2_f64_array(y).view(np.int64), want_exp.view(np.int64))

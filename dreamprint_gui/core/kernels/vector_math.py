@@ -36,7 +36,8 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
-__all__ = ["log2_f64", "exp2_f64", "log2_f32", "exp2_f32"]
+__all__ = ["log2_f64", "exp2_f64", "log2_f32", "exp2_f32", "bits_f32", "log2_f64_array",
+           "exp2_f64_array"]
 
 _LN2 = math.log(2.0)
 _INV_LN2_2 = 2.0 / _LN2
@@ -96,6 +97,10 @@ def _from_bits32(typingctx, b):
 
     return types.float32(b), codegen
 
+
+# The bits of a float32 as an int32, in compiled code (the index of a table over float32 bit
+# patterns: ..io.volumes.srgb_encode).
+bits_f32 = _bits32
 
 _MANT32 = np.int32(0x007FFFFF)
 _ONE_BITS32 = np.int32(0x3F800000)
@@ -176,3 +181,32 @@ def exp2_f64(y):
     p = _E[1] + f * p
     p = _E[0] + f * p
     return p * _from_bits((np.int64(n) + np.int64(1023)) << np.int64(52))
+
+
+def log2_f64_array(x: np.ndarray) -> np.ndarray:
+    """:func:`log2_f64` of a float64 array in numpy, the same steps in the same order: the same
+    bits (numpy's own ``log2`` is dispatched by CPU). For tables built once, not per voxel."""
+    x = np.asarray(x, np.float64)
+    bits = x.view(np.int64)
+    e = (((bits >> np.int64(52)) & _EXP_BITS) - np.int64(1023)).astype(np.float64)
+    m = ((bits & _MANT) | _ONE_BITS).view(np.float64)
+    big = m > _SQRT2
+    m = np.where(big, m * 0.5, m)
+    e = np.where(big, e + 1.0, e)
+    s = (m - 1.0) / (m + 1.0)
+    s2 = s * s
+    series = 1.0 + s2 * (1.0 / 3.0 + s2 * (1.0 / 5.0 + s2 * (1.0 / 7.0 + s2 * (
+        1.0 / 9.0 + s2 * (1.0 / 11.0)))))
+    return e + _INV_LN2_2 * s * series
+
+
+def exp2_f64_array(y: np.ndarray) -> np.ndarray:
+    """:func:`exp2_f64` of a float64 array in numpy, the same steps: the same bits."""
+    y = np.clip(np.asarray(y, np.float64), -1022.0, 1023.0)
+    n = np.floor(y)
+    f = y - n
+    p = np.full_like(f, _E[12])
+    for k in range(11, -1, -1):
+        p = _E[k] + f * p
+    return p * ((n.astype(np.int64) + np.int64(1023)) << np.int64(52)).view(np.float64)
+

@@ -7,19 +7,23 @@ staged colours of a block of foreground voxels: the fused job paths, :data:`AS_I
 :data:`CLIP`, :data:`ENCODE`) and :func:`encode_inplace` (a whole array).
 
 The encoding is IEC 61966-2-1's: ``12.92 x`` for ``x <= 0.0031308``, else
-``1.055 x^(1/2.4) - 0.055``, after clipping ``x`` to [0, 1] (NaN stays NaN), in float32 steps
-(``x * 12.92``; ``p = x^(1/2.4)``, ``p * 1.055``, ``- 0.055``, each rounded to float32, the
-constants float32 too). ``p`` is ``exp2_f32(log2_f32(x) e)`` with ``e`` = float32(1/2.4), from
-:mod:`...core.kernels.vector_math`: float32 arithmetic, 8 values per AVX2 instruction. Against
-a correctly rounded reference (float64 ``**`` rounded to float32) the encoded value is within
-2^-23 (1.2e-7; every float32 of (0.0031308, 1] compared, 35 % of them differ, by 1-8 units in
-the last place), a thousandth of the 100^3 colour table's node spacing
-(tests/io/volumes/test_srgb_encode.py). Speed: ~1.7 ns per value in the cache (5.2 ns per
-voxel's three; with float64 ``exp2(log2)`` correctly rounded but for 6 in a million values, as
-until issue 25: 10.4).
+``1.055 x^(1/2.4) - 0.055``, after clipping ``x`` to [0, 1] (NaN stays NaN; 1 encodes to
+``1.055 - 0.055`` in float32). Above 0.0031308 the curve is a line per segment of float32 bit
+patterns, ``a_i + b_i x`` (float32, rounded once each): a segment is the values sharing the
+exponent and the first 8 mantissa bits (256 per octave, 2151 segments down to 0.0031308, 17 kB
+in the L1 cache), its line the minimax line of the curve there (the secant's slope, moved up by
+half the curve's largest gap above the secant). Against a correctly rounded reference (float64
+``**``) the encoded value is within 2.4e-7 (2^-22; every float32 of (0.0031308, 1] compared in
+tests/io/volumes/test_srgb_encode.py), a forty-thousandth of the 100^3 colour table's node
+spacing. Speed: 3.0 ns per value in the cache on an AVX2 Zen 1 core, against 5.8 for the
+``exp2(log2(x) / 2.4)`` of float32 series that it replaces (``bench_label.py``'s ``Cd`` and
+linear radiance kinds; docs/print-jobs.md).
 
-Why not ``np.power(x, 1/2.4, dtype=np.float32)`` (what the slab path used before): numpy
-dispatches float32 ``power`` by CPU. On an AVX-512 CPU it runs Intel's SVML, elsewhere the C
+The segment lines are computed once, at import (under a millisecond), in float64 by
+:mod:`...core.kernels.vector_math`'s ``log2_f64_array`` / ``exp2_f64_array`` (plain IEEE
+arithmetic) and then rounded: the same table on every machine. Why not ``np.power(x, 1/2.4,
+dtype=np.float32)`` (what the slab path used before), or numpy's float64 ``**`` for the table:
+numpy dispatches ``power`` by CPU. On an AVX-512 CPU it runs Intel's SVML, elsewhere the C
 library's ``powf``, and the two disagree in the last bit for 20 % of the values in
 (0.0031308, 1] (all 70,439,397 float32 values there compared on the project's VM, numpy 2.4).
 A Dask cluster of mixed machines would then label some voxels of a linear-colour source
@@ -33,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.core.kernels.vector_math import exp2_f32, log2_f32
+from dreamprint_gui.core.kernels.vector_math import bits_f32, exp2_f64_array, log2_f64_array
 
 __all__ = ["srgb_encode32", "encode_where", "clip_where", "prepare_staged", "encode_inplace",
            "AS_IS", "CLIP", "ENCODE"]
@@ -41,11 +45,47 @@ __all__ = ["srgb_encode32", "encode_where", "clip_where", "prepare_staged", "enc
 # What :func:`prepare_staged` does to a colour: nothing, clip to [0, 1], sRGB-encode.
 AS_IS, CLIP, ENCODE = 0, 1, 2
 
-_E = np.float32(1 / 2.4)
+_E = float(np.float32(1 / 2.4))
 _LOW = np.float32(0.0031308)
 _SLOPE = np.float32(12.92)
 _A = np.float32(1.055)
 _B = np.float32(0.055)
+_ONE = _A - _B           # the encoding of 1, float32 steps
+# A segment: float32 values equal in all but their last _SEG_SHIFT bits (8 mantissa bits kept).
+_SEG_SHIFT = 15
+
+
+def _curve(x: np.ndarray) -> np.ndarray:
+    """1.055 x^(1/2.4) - 0.055 in float64 (relative error ~1e-10), plain IEEE steps."""
+    return 1.055 * exp2_f64_array(log2_f64_array(x) * _E) - 0.055
+
+
+def _from_segment(seg: np.ndarray) -> np.ndarray:
+    """The smallest float32 of each segment ``seg`` (bit patterns ``>> _SEG_SHIFT``), float64."""
+    return (np.asarray(seg, np.int64) << _SEG_SHIFT).astype(np.int32).view(np.float32) \
+        .astype(np.float64)
+
+
+def _segment_lines(first: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b) float64 (n,) of segments ``first .. first + n - 1``: the minimax line ``a + b x``
+    of :func:`_curve` (concave) on each segment's [x0, x1]."""
+    seg = np.arange(first, first + n)
+    x0, x1 = _from_segment(seg), _from_segment(seg + 1)
+    y0 = _curve(x0)
+    b = (_curve(x1) - y0) / (x1 - x0)
+    # the curve's largest gap above the secant, where its slope 1.055 E x^(E - 1) is b
+    xm = exp2_f64_array(log2_f64_array(b / (1.055 * _E)) / (_E - 1.0))
+    gap = _curve(xm) - (y0 + b * (xm - x0))
+    return y0 - b * x0 + 0.5 * gap, b
+
+
+_SEG_FIRST = int(np.asarray(_LOW).view(np.int32)) >> _SEG_SHIFT
+_SEG_LAST = int(np.asarray(np.float32(1.0)).view(np.int32)) >> _SEG_SHIFT
+_LINES = tuple(v.astype(np.float32) for v in _segment_lines(_SEG_FIRST,
+                                                            _SEG_LAST - _SEG_FIRST + 1))
+_SEG_A, _SEG_B = _LINES
+_SEG_FIRST32 = np.int32(_SEG_FIRST)
+_SEG_TOP = np.int32(_SEG_LAST - _SEG_FIRST)
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -57,8 +97,11 @@ def srgb_encode32(x):
     c = c if c < one else one
     c = x if x != x else c                              # NaN stays NaN, as np.clip
     lin = c * _SLOPE
-    p = exp2_f32(log2_f32(c if c > _LOW else one) * _E)
-    enc = p * _A - _B
+    i = (bits_f32(c) >> np.int32(_SEG_SHIFT)) - _SEG_FIRST32
+    i = i if i > np.int32(0) else np.int32(0)           # (below 0.0031308 or NaN: unused)
+    i = i if i < _SEG_TOP else _SEG_TOP
+    enc = _SEG_A[i] + _SEG_B[i] * c
+    enc = _ONE if c == one else enc
     return lin if (c <= _LOW or c != c) else enc
 
 
