@@ -87,7 +87,8 @@ def test_numpy_array_versions_give_the_compiled_bits():
 
     rng = np.random.default_rng(11)
     x = np.concatenate([10.0 ** rng.uniform(-300, 300, 20000), [1.0, 2.0, 0.5, np.sqrt(2.0)]])
-    y = np.concatenate([rng.uniform(-1100, 1100, 20000), [0.0, -0.5, 0.5, 1023.0, -1022.0]])
+    y = np.concatenate([rng.uniform(-1100, 1100, 20000),
+                        [0.0, -0.5, 0.5, 1023.0, -1022.0, np.nan, np.inf, -np.inf]])
     want_log, want_exp = np.empty_like(x), np.empty_like(y)
     _log2_all(x, want_log)
     _exp2_all(y, want_exp)

@@ -8,6 +8,9 @@ Defines
   instruction), to float32's precision: log2's series to s^9 (truncation < 2e-9), exp2's
   argument reduced to f in [-1/2, 1/2] (n = round(y)) and its Taylor series to degree 7
   (truncation < 6e-9).
+- :func:`log2_f64_array`, :func:`exp2_f64_array`: :func:`log2_f64`, :func:`exp2_f64` of numpy
+  arrays, the same steps and bits, for tables built once (the sRGB encoding's segment lines).
+- :data:`bits_f32`: a float32's bits as an int32 in compiled code (a table index).
 
 Why not ``math.log2`` / ``2.0 ** x``: inside a numba loop those are calls into the C library,
 which stop LLVM from vectorising the loop (one voxel at a time, ~20 ns each), and a vector maths
@@ -202,7 +205,9 @@ def log2_f64_array(x: np.ndarray) -> np.ndarray:
 
 def exp2_f64_array(y: np.ndarray) -> np.ndarray:
     """:func:`exp2_f64` of a float64 array in numpy, the same steps: the same bits."""
-    y = np.clip(np.asarray(y, np.float64), -1022.0, 1023.0)
+    y = np.asarray(y, np.float64)
+    y = np.where(y > -1022.0, y, -1022.0)  # NaN -> -1022, as the compiled selects
+    y = np.where(y < 1023.0, y, 1023.0)
     n = np.floor(y)
     f = y - n
     p = np.full_like(f, _E[12])

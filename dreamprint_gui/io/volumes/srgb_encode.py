@@ -13,11 +13,11 @@ patterns, ``a_i + b_i x`` (float32, rounded once each): a segment is the values 
 exponent and the first 8 mantissa bits (256 per octave, 2151 segments down to 0.0031308, 17 kB
 in the L1 cache), its line the minimax line of the curve there (the secant's slope, moved up by
 half the curve's largest gap above the secant). Against a correctly rounded reference (float64
-``**``) the encoded value is within 2.4e-7 (2^-22; every float32 of (0.0031308, 1] compared in
-tests/io/volumes/test_srgb_encode.py), a forty-thousandth of the 100^3 colour table's node
-spacing. Speed: 3.0 ns per value in the cache on an AVX2 Zen 1 core, against 5.8 for the
-``exp2(log2(x) / 2.4)`` of float32 series that it replaces (``bench_label.py``'s ``Cd`` and
-linear radiance kinds; docs/print-jobs.md).
+``**``, rounded in float32 steps) the encoded value is within 3e-7, 2.7e-8 on average
+(every float32 of (0.0031308, 1] compared in tests/io/volumes/test_srgb_encode.py), a
+thirty-thousandth of the 100^3 colour table's node spacing. Speed: 3.0 ns per value in the
+cache on an AVX2 Zen 1 core, against 5.8 for the ``exp2(log2(x) / 2.4)`` of float32 series
+that it replaces (docs/print-jobs.md, "On an AVX2 Zen 1 core").
 
 The segment lines are computed once, at import (under a millisecond), in float64 by
 :mod:`...core.kernels.vector_math`'s ``log2_f64_array`` / ``exp2_f64_array`` (plain IEEE

@@ -154,7 +154,10 @@ def _read_capturing(pv, path: Path):
 def _one_line(message: str) -> str:
     """The last line of a reader's complaint, without its indentation and quotes (VTK quotes
     MetaIO's message on a tab-indented line of its own)."""
-    return message.strip().splitlines()[-1].strip().strip('"').strip()
+    line = message.strip().splitlines()[-1].strip()
+    if len(line) > 1 and line[0] == line[-1] == '"':
+        line = line[1:-1].strip()
+    return line
 
 
 def _arrays(mesh):

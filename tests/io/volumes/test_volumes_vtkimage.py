@@ -220,3 +220,14 @@ def test_garbled_metaimage_header_is_called_damaged(tmp_path):
     f.write_bytes(np.random.default_rng(0).integers(0, 256, 3000, dtype=np.uint8).tobytes())
     with pytest.raises(DreamPrintError, match="rand.mhd: damaged"):
         open_source(f)
+
+
+def test_reader_complaint_made_one_line():
+    """A reader's complaint reaches the operator as its last line, without indentation or the
+    quotes VTK wraps MetaIO's message in; a quoted name inside the message keeps its quotes."""
+    from dreamprint_gui.io.volumes.vtkimage import _one_line
+
+    assert _one_line('ERROR: In vtkMetaImageReader\n\t"MetaImage cannot read data from file."'
+                     ) == "MetaImage cannot read data from file."
+    assert _one_line('cannot open "a b.raw"\n') == 'cannot open "a b.raw"'
+    assert _one_line('  "a"b"  ') == 'a"b'
