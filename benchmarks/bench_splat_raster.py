@@ -30,6 +30,7 @@ blocks of 8 layers x 64 x 64 voxels, and the mean concentrations.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
 import inspect
 import os
@@ -76,7 +77,23 @@ def reference_raster(rev: str):
     return mod.rasterise_splats
 
 
-_SAMPLE_SLAB = GaussianCloud.sample_slab  # compare_jobs patches the class's method
+def _packed(raster) -> bool:
+    """Whether ``raster`` takes packed Gaussians (since issue 25), not voxel centres."""
+    return "gaussians" in inspect.signature(raster).parameters
+
+
+@contextlib.contextmanager
+def rasteriser(raster):
+    """The splat module's ``rasterise_splats`` (packed signature) is ``raster`` inside: one
+    thread at a time (a job's workers must not each swap and restore it)."""
+    from dreamprint_gui.io.volumes import splats
+
+    plain = splats.rasterise_splats
+    splats.rasterise_splats = raster
+    try:
+        yield
+    finally:
+        splats.rasterise_splats = plain
 
 
 def sample_with(raster, src: GaussianCloud, grid, z0: int, z1: int, out: SlabBuffers | None,
@@ -85,19 +102,11 @@ def sample_with(raster, src: GaussianCloud, grid, z0: int, z1: int, out: SlabBuf
     signature). Packed Gaussians (since issue 25): exactly as ``sample_slab`` calls it, the
     cloud's own records in its height order (until 2026-11-29 this packed every Gaussian in
     the file's order for each slab, which read the rasteriser against itself as 3.9x faster on
-    a 1e6-Gaussian scene; one thread at a time: :func:`compare_jobs` patches its jobs once).
-    Voxel centres ``xs, ys, zs`` (before issue 25): the Gaussians in the file's order, as that
-    rasteriser had them."""
-    params = inspect.signature(raster).parameters
-    if "gaussians" in params:
-        from dreamprint_gui.io.volumes import splats
-
-        plain = splats.rasterise_splats
-        splats.rasterise_splats = raster
-        try:
-            return _SAMPLE_SLAB(src, grid, z0, z1, density_scale=density_scale, out=out)
-        finally:
-            splats.rasterise_splats = plain
+    a 1e6-Gaussian scene). Voxel centres ``xs, ys, zs`` (before issue 25): the Gaussians in
+    the file's order, as that rasteriser had them."""
+    if _packed(raster):
+        with rasteriser(raster):
+            return src.sample_slab(grid, z0, z1, density_scale=density_scale, out=out)
     zs = voxel_centres(grid, 2, z0, z1)
     mz, hz = src.mean[:, 2], src.half[:, 2]
     cand = np.flatnonzero((mz - hz <= zs[-1]) & (mz + hz >= zs[0]))   # in file order
@@ -136,20 +145,16 @@ def compare_jobs(kind: str, n_voxels: float, ref, block=(8, 64, 64)) -> None:
     path = source_path(kind)
     height = height_for(path, n_voxels)
     new, m = job_labels(path, height)
-    # patched once around the whole job, here: the job's worker threads must not each swap
-    # (and restore) the module's rasteriser at once
-    from dreamprint_gui.io.volumes import splats
-
-    plain = GaussianCloud.sample_slab, splats.rasterise_splats
-    if "gaussians" in inspect.signature(ref).parameters:
-        splats.rasterise_splats = ref
-    else:
+    # patched once around the whole job, here, not by each of its worker threads
+    plain = GaussianCloud.sample_slab
+    if not _packed(ref):
         GaussianCloud.sample_slab = (lambda self, grid, z0, z1, *, density_scale=1.0, out=None:
                                      sample_with(ref, self, grid, z0, z1, out, density_scale))
     try:
-        old, m_ref = job_labels(path, height)
+        with rasteriser(ref) if _packed(ref) else contextlib.nullcontext():
+            old, m_ref = job_labels(path, height)
     finally:
-        GaussianCloud.sample_slab, splats.rasterise_splats = plain
+        GaussianCloud.sample_slab = plain
     names = list(m["labels"])
     differ = int(np.count_nonzero(new != old))
     shape = tuple(s // b * b for s, b in zip(new.shape, block, strict=True))

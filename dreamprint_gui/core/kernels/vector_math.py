@@ -214,4 +214,3 @@ def exp2_f64_array(y: np.ndarray) -> np.ndarray:
     for k in range(11, -1, -1):
         p = _E[k] + f * p
     return p * ((n.astype(np.int64) + np.int64(1023)) << np.int64(52)).view(np.float64)
-

@@ -81,9 +81,8 @@ def _segment_lines(first: int, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 _SEG_FIRST = int(np.asarray(_LOW).view(np.int32)) >> _SEG_SHIFT
 _SEG_LAST = int(np.asarray(np.float32(1.0)).view(np.int32)) >> _SEG_SHIFT
-_LINES = tuple(v.astype(np.float32) for v in _segment_lines(_SEG_FIRST,
-                                                            _SEG_LAST - _SEG_FIRST + 1))
-_SEG_A, _SEG_B = _LINES
+_SEG_A, _SEG_B = (v.astype(np.float32) for v in _segment_lines(_SEG_FIRST,
+                                                               _SEG_LAST - _SEG_FIRST + 1))
 _SEG_FIRST32 = np.int32(_SEG_FIRST)
 _SEG_TOP = np.int32(_SEG_LAST - _SEG_FIRST)
 
