@@ -124,7 +124,7 @@ def choose_content(source) -> tuple[str, str]:
         elif "instantngp" in low:  # snapshots and the exported RGBA volumes / PNG slices
             kind = "a radiance field (InstantNGP)"
         elif "demo" in low or "procedural" in low:
-            kind = "a procedural cloud"
+            kind = "the demo (densities made for printing as a fog)"
         else:
             kind = "a scalar volume (more than two values)"
     return "fog", kind

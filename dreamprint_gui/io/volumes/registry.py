@@ -108,7 +108,7 @@ def inspect_source(path_or_name: str | os.PathLike) -> tuple[dict, VolumeSource 
 
 
 def open_source(path_or_name: str | os.PathLike, **options) -> VolumeSource:
-    """Open a volume file (or ``"demo"``, the built-in procedural cloud) as a source.
+    """Open a volume file (or ``"demo"``, the built-in procedural planet) as a source.
 
     ``options`` are passed to the format's reader (e.g. ``density_grid="density"``,
     ``window=(lo, hi)``, ``level_set="solid"``); unknown options are refused by the reader.
