@@ -11,6 +11,7 @@ Defines
 - :func:`build_tables`, :func:`get_tables` (cached in the platformdirs user cache, keyed by the
   profile's fingerprint, objective, rendering intent, size and :data:`TABLE_VERSION`),
   :func:`lookup` (tetrahedral, :func:`tetrahedral_nodes`).
+- :func:`printed_xyz`: the colour a job prints for RGB colours (lookup, then eq. 7).
 - :func:`mixture_sigma`: the exact scalar sigma of six-ink mixtures, as ``predict`` computes it.
 - :func:`resolve_choice`: the objective and intent to use (explicit choice, else the profile's
   ``table`` settings, else the defaults).
@@ -40,7 +41,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dreamprint_gui.core.profile import INKS, InkProfile
-from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_lab
+from dreamprint_gui.gamut.forward import (
+    N_COLOUR_INKS,
+    ForwardModel,
+    forward_model,
+    mixtures_lab,
+    mixtures_xyz,
+)
 from dreamprint_gui.gamut.grey import brightness_table, grey_concentrations, rho_k_for
 from dreamprint_gui.gamut.mapping import DEFAULT_INTENT, canonical_intent, intent_map
 from dreamprint_gui.gamut.optimise import (
@@ -54,7 +61,8 @@ from dreamprint_gui.physics.colorimetry import delta_E2000
 from dreamprint_gui.physics.density import scalar_sigma
 from dreamprint_gui.physics.kubelka_munk import mix
 
-__all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "interpolate_fields",
+__all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "printed_xyz",
+           "interpolate_fields",
            "tetrahedral_nodes", "mixture_sigma",
            "DEFAULT_OBJECTIVE", "DEFAULT_INTENT", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS",
            "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice"]
@@ -380,3 +388,11 @@ def lookup(tables: ColourTables, rgb: ArrayLike) -> NDArray[np.float64]:
     return out.reshape(rgb.shape[:-1] + (N_COLOUR_INKS,))
 
 
+
+
+def printed_xyz(tables: ColourTables, model: ForwardModel, rgb: ArrayLike) -> NDArray[np.float64]:
+    """XYZ (D65, white Y = 1) of what a job prints for encoded sRGB ``rgb`` (..., 3): the
+    table's mixture (:func:`lookup`, the table's intent) and its colour at the profile's
+    reference thickness (eq. 7 on R + T, :func:`.forward.mixtures_xyz`), as ``dreamprint
+    lookup`` reports it."""
+    return mixtures_xyz(model, lookup(tables, rgb))
