@@ -13,7 +13,7 @@ APT_PACKAGES=(
   libxcb-image0 libxcb-randr0 libxcb-render0 libxcb-render-util0 libxcb-shape0 libxcb-shm0
   libxcb-sync1 libxcb-xfixes0 libxcb-xkb1 libxcb-glx0 libxcb-util1 libdbus-1-3 libfontconfig1
   libfreetype6 libglib2.0-0 xvfb xauth python3-openvdb libnanovdb-tools python3-venv python3-pip
-  appstream desktop-file-utils
+  appstream desktop-file-utils liblcms2-2 argyll
 )
 
 missing=()

@@ -25,7 +25,8 @@ Defines
 
 - :func:`check_profile`: read the bytes back with LittleCMS and compare with DreamPrint's
   prediction (A2B vs the print; B2A then A2B on printable colours), the figures the CLI prints.
-- :func:`write_icc`: write bytes to a file atomically (temporary file, then rename).
+- :func:`check_target`: refuse an output path that cannot be written, before any work.
+- :func:`write_atomically`: write bytes to a file atomically (temporary file, then rename).
 
 Version: 2.4 by default (``lut16Type`` tables, ``textDescriptionType``): every tool the issue
 names reads it, and version 2 LUT output profiles are what print RIPs and paper makers still
@@ -56,8 +57,8 @@ from dreamprint_gui.gamut.print_pcs import xyz_d50 as lab_to_xyz_d50
 from dreamprint_gui.gamut.tables import ColourTables
 from dreamprint_gui.physics.colorimetry import delta_E2000
 
-__all__ = ["build_icc", "check_profile", "write_icc", "ICC_VERSIONS", "DEFAULT_VERSION",
-           "DEFAULT_A2B_GRID", "DEFAULT_B2A_GRID", "rgb_cube"]
+__all__ = ["build_icc", "check_profile", "write_atomically", "check_target",
+           "ICC_VERSIONS", "DEFAULT_VERSION", "DEFAULT_A2B_GRID", "DEFAULT_B2A_GRID", "rgb_cube"]
 
 ICC_VERSIONS = {2: 2.4, 4: 4.3}
 DEFAULT_VERSION = 2
@@ -170,12 +171,21 @@ def _stats(de: NDArray) -> dict:
             "max": float(np.max(de))}
 
 
-def write_icc(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename, so
-    a failure never leaves a half-written profile."""
+def check_target(path: str | os.PathLike) -> None:
+    """Refuse an output path that cannot be written (a folder, a missing folder), naming it."""
     p = Path(path)
     if p.is_dir():
         raise DreamPrintError("is a folder; give a file name such as printer.icc", p)
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise DreamPrintError("the folder does not exist", parent)
+
+
+def write_atomically(path: str | os.PathLike, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename, so
+    a failure never leaves a half-written file."""
+    p = Path(path)
+    check_target(p)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
     except FileNotFoundError:

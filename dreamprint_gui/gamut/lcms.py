@@ -325,8 +325,9 @@ def transform(data: bytes, values: ArrayLike, intent: str, direction: str = "to_
 
 
 def read_tag_pipeline_eval(data: bytes, tag: str, values: ArrayLike) -> NDArray[np.float64]:
-    """Evaluate a LUT tag of the profile on ``values`` in LittleCMS's float encoding (0..1 per
-    channel of the tag's stored encoding, after LittleCMS's own v2/v4 normalisation)."""
+    """Evaluate a LUT tag of the profile on ``values``: each channel as a fraction 0..1 of the
+    tag's own 16-bit encoding (``cmsReadTag``'s pipeline, before the v2/v4 Lab normalisation
+    LittleCMS adds for transforms)."""
     v = np.asarray(values, dtype=np.float32)
     with _Opened(data) as p:
         lut = p.lib.cmsReadTag(p.h, sig(tag))
