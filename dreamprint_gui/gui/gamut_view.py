@@ -19,6 +19,10 @@ selector (colorimetric / perceptual) above the picker chooses the rendering inte
 already have that intent, else that intent's tables (``gamut.get_tables``, cached on disk)
 loaded or built on a worker.
 
+"Export ICC profile" under the intent selector writes the ICC output profile of the active
+profile's print under the intent shown (:class:`.icc_export.IccExportBox`, as ``dreamprint
+icc``).
+
 The page can be put on hold (:meth:`GamutPage.set_hold`): the main window holds it while the
 preview starts up, so the two pages do not compete for the cores; and it draws into its 3D
 view (created on first use) only while it is visible.
@@ -51,6 +55,7 @@ from PySide6.QtWidgets import (
 
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.gui.gamut_data import pick_colour, printable_gamut_mesh, srgb_gamut_mesh
+from dreamprint_gui.gui.icc_export import IccExportBox, IccRequest
 from dreamprint_gui.gui.volume_view import ViewHost
 from dreamprint_gui.gui.workers import Task, run_task
 
@@ -251,9 +256,13 @@ class GamutPage(QWidget):
         self.intent.currentIndexChanged.connect(self._intent_changed)
         intent_row = QFormLayout()
         intent_row.addRow("Rendering intent", self.intent)
+        # the ICC profile of this profile's print under the intent shown (issue 48)
+        self.printer_name = ""  # the main window's printer, named in the ICC description
+        self.icc = IccExportBox(self._icc_request, getattr(parent, "settings", None), self)
         right = QWidget()
         rl = QVBoxLayout(right)
         rl.addLayout(intent_row)
+        rl.addWidget(self.icc)
         rl.addWidget(QLabel("<b>Colour picker</b>"))
         rl.addWidget(picker, 1)
         right.setMinimumWidth(300)
@@ -267,6 +276,16 @@ class GamutPage(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(split)
         self._spins_changed()
+
+    def _icc_request(self) -> IccRequest | None:
+        """The active profile's print under the intent shown, for "Export ICC profile"."""
+        if self.profile is None:
+            return None
+        want = str(self.intent.currentData())
+        tables = self.tables if getattr(self.tables, "intent", None) == want else None
+        main = self._main_tables
+        return IccRequest(self.profile, tables, want, None if main is None else main.size,
+                          self.printer_name)
 
     @property
     def plotter(self):
@@ -552,4 +571,5 @@ class GamutPage(QWidget):
         for t in (self._task, self._chart_task, self._intent_task):
             if t is not None:
                 t.cancel()
+        self.icc.shutdown()
         self.view.close_view()

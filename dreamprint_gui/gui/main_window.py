@@ -367,6 +367,8 @@ class MainWindow(QMainWindow):
         """A printer with another layer thickness needs other tables (sigma is per layer)."""
         old = self._ensure_printer()
         self.printer = printer
+        if self.gamut is not None:
+            self.gamut.printer_name = printer.display_name
         if self.profile is not None and old.layer_thickness_mm != printer.layer_thickness_mm:
             self.tables = None
             self.preview.set_inputs(profile=self.profile, profile_path=self.profile_path,
@@ -388,6 +390,7 @@ class MainWindow(QMainWindow):
         self.profileChanged.emit(profile)
         self.preview.set_inputs(profile=profile, profile_path=path)
         if self.gamut is not None:
+            self.gamut.printer_name = self._ensure_printer().display_name
             self.gamut.set_profile(profile.with_settings(
                 layer_thickness_mm=self._ensure_printer().layer_thickness_mm))
         self._build_tables(profile)

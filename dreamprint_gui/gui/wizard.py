@@ -58,6 +58,7 @@ from PySide6.QtWidgets import (
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.gui.icc_export import IccExportBox, IccRequest
 from dreamprint_gui.gui.settings import AppSettings
 from dreamprint_gui.gui.workers import Task, abandonable, run_task
 
@@ -1094,11 +1095,23 @@ class SavePage(QWizardPage):
         self.error = QLabel("")
         self.error.setStyleSheet(ERROR_STYLE)
         self.error.setWordWrap(True)
+        # the ICC output profile of the print with the profile just fitted (issue 48)
+        self.icc = IccExportBox(self._icc_request, wizard.settings, self)
+        self.icc.setToolTip("For soft proofs in other applications: the print with the fitted "
+                            "inks, the colour table built first (about half a minute)")
         form = QFormLayout(self)
         form.addRow("Name", self.name_edit)
         form.addRow("File", row)
         form.addRow(self.error)
+        form.addRow("ICC profile", self.icc)
         self.setFinalPage(True)
+
+    def _icc_request(self) -> IccRequest | None:
+        fit = self.wiz.fit_page.result
+        if fit is None:
+            return None
+        name = self.name_edit.text().strip() or self.wiz.default_name
+        return IccRequest(fit[0].with_settings(name=name))
 
     def _browse(self) -> None:
         path, _ = QFileDialog.getSaveFileName(self, "Save ink profile", self.path_edit.text(),
@@ -1165,4 +1178,5 @@ class CalibrationWizard(QWizard):
         running."""
         self.fit_page.stop()
         self.chart_proof_page.stop()
+        self.save_page.icc.shutdown()  # an ICC export under way finishes its file unseen
         super().done(result)
