@@ -4,7 +4,8 @@ Run under a virtual screen:  xvfb-run -a -s "-screen 0 1280x800x24" \
     .venv/bin/python scripts/gui_screenshots.py [--table-size 100]
 
 Drives the application as an operator would: the main window on the default profile and the demo
-volume (preview), the gamut page with a picked colour and the hexagon chart, the print proof
+volume (preview), the gamut page with a picked colour, the hexagon chart and an ICC export, the
+print proof
 tab (one small view of the demo) and its appearance compensation, a voxel model (the
 sample .vox: preview, export dialog with its pre-flight, the finished job's summary), and the
 calibration wizard's measurements page and its fit of a two-thickness calibration set (ink
@@ -94,6 +95,12 @@ def main() -> int:
     w.gamut.pages.setCurrentIndex(1)
     settle(600)
     grab_window(w, str(out / "gamut-chart.png"))
+    # "Export ICC profile" (issue 48): the status line after the export, with its figures
+    w.gamut.pages.setCurrentIndex(0)
+    w.gamut.icc.export_to(str(Path(tempfile.mkdtemp()) / "dreamprint-j850.icc"))
+    wait(w.gamut.icc.exported)
+    settle()
+    grab_window(w, str(out / "gamut-icc.png"))
 
     # the print proof tab: one small view of the demo (Mitsuba; about a minute)
     w.tabs.setCurrentWidget(w.proof)

@@ -19,7 +19,7 @@ selector (colorimetric / perceptual) above the picker chooses the rendering inte
 already have that intent, else that intent's tables (``gamut.get_tables``, cached on disk)
 loaded or built on a worker.
 
-"Export ICC profile" under the intent selector writes the ICC output profile of the active
+"Export ICC profile" under the gamut views writes the ICC output profile of the active
 profile's print under the intent shown (:class:`.icc_export.IccExportBox`, as ``dreamprint
 icc``).
 
@@ -258,17 +258,23 @@ class GamutPage(QWidget):
         intent_row.addRow("Rendering intent", self.intent)
         # the ICC profile of this profile's print under the intent shown (issue 48)
         self.printer_name = ""  # the main window's printer, named in the ICC description
-        self.icc = IccExportBox(self._icc_request, getattr(parent, "settings", None), self)
+        self.icc = IccExportBox(self._icc_request, getattr(parent, "settings", None), self,
+                                horizontal=True)
+        self.icc.setContentsMargins(6, 2, 6, 2)
+        left = QWidget()
+        ll = QVBoxLayout(left)
+        ll.setContentsMargins(0, 0, 0, 0)
+        ll.addWidget(self.pages, 1)
+        ll.addWidget(self.icc)
         right = QWidget()
         rl = QVBoxLayout(right)
         rl.addLayout(intent_row)
-        rl.addWidget(self.icc)
         rl.addWidget(QLabel("<b>Colour picker</b>"))
         rl.addWidget(picker, 1)
         right.setMinimumWidth(300)
 
         split = QSplitter()
-        split.addWidget(self.pages)
+        split.addWidget(left)
         split.addWidget(right)
         split.setStretchFactor(0, 3)
         split.setStretchFactor(1, 1)

@@ -1,13 +1,14 @@
 """"Export ICC profile": the button, its file dialog and the export on a worker (issue 48).
 
-Defines :class:`IccExportBox`: a button and a status line. The button asks for a file name
-(``*.icc``; "also write the characterisation file" writes ``NAME.ti3`` beside it), then runs
-the engine's :func:`dreamprint_gui.gamut.icc_export.export_icc` (what ``dreamprint icc`` runs)
-on a worker thread, the colour tables loaded or built first when the page has none. The status
-line says what it is doing, then the file written and the figures of its check (Little CMS's
-read-back against DreamPrint's prediction), or the problem in one line. Used beside the gamut
-view (the active profile, the intent shown there) and on the calibration wizard's last page
-(the profile just fitted).
+Defines :class:`IccExportBox`: a button, a check box and a status line (in a row or a
+column). The button asks for a file name (``*.icc``; "also write the characterisation file"
+writes ``NAME.ti3`` beside it), then runs the engine's
+:func:`dreamprint_gui.gamut.icc_export.export_icc` (what ``dreamprint icc`` runs) on a worker
+thread, the colour tables loaded or built first when the page has none. The status line says
+what it is doing, then the file written and the figures of its check (Little CMS's read-back
+against DreamPrint's prediction), or the problem in one line. Used under the gamut views (the
+active profile, the intent shown there) and on the calibration wizard's last page (the profile
+just fitted).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from PySide6.QtCore import Signal
 from PySide6.QtWidgets import (
     QCheckBox,
     QFileDialog,
+    QHBoxLayout,
     QLabel,
     QPushButton,
     QVBoxLayout,
@@ -70,7 +72,7 @@ class IccExportBox(QWidget):
     failed = Signal(str)
 
     def __init__(self, request: Callable[[], IccRequest | None], settings=None,
-                 parent: QWidget | None = None) -> None:
+                 parent: QWidget | None = None, horizontal: bool = False) -> None:
         super().__init__(parent)
         self._request = request
         self._settings = settings
@@ -86,11 +88,11 @@ class IccExportBox(QWidget):
         self.status = QLabel("")
         self.status.setObjectName("iccStatus")
         self.status.setWordWrap(True)
-        lay = QVBoxLayout(self)
+        lay = QHBoxLayout(self) if horizontal else QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(self.button)
         lay.addWidget(self.cgats)
-        lay.addWidget(self.status)
+        lay.addWidget(self.status, 1)
 
     @property
     def running(self) -> bool:
