@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dreamprint_gui.core.profile import InkProfile
 from dreamprint_gui.gamut.icc import rgb_cube, write_atomically
 from dreamprint_gui.gamut.print_pcs import PrintPCS, lab_d50
 from dreamprint_gui.gamut.tables import lookup
@@ -45,7 +46,8 @@ def _num(v: float) -> str:
     return f"{v:.6f}"
 
 
-def characterisation_text(pcs: PrintPCS, profile, patches: int = 9, layout: str = "argyll",
+def characterisation_text(pcs: PrintPCS, profile: InkProfile, patches: int = 9,
+                          layout: str = "argyll",
                           description: str = "DreamPrint predicted print") -> str:
     """The file's text (module doc) for an ``patches``^3 lattice of RGB."""
     rgb = rgb_cube(patches)
@@ -83,7 +85,7 @@ def characterisation_text(pcs: PrintPCS, profile, patches: int = 9, layout: str 
     return "\n".join(lines) + "\n"
 
 
-def write_characterisation(path: str | os.PathLike, pcs: PrintPCS, profile,
+def write_characterisation(path: str | os.PathLike, pcs: PrintPCS, profile: InkProfile,
                            patches: int = 9, description: str = "DreamPrint predicted print"
                            ) -> str:
     """Write the file (layout from the name, :func:`layout_for`) atomically; the layout."""

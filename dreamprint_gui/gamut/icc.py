@@ -6,9 +6,10 @@ Defines
   RGB a job takes, PCS CIELAB D50, device class output (``prtr``):
 
   - ``A2B0``, ``A2B1``, ``A2B2`` (device -> PCS, one table for every intent: a printer prints
-    what it prints): on an n^3 lattice of RGB, the media-relative CIELAB of the print
-    (:class:`.print_pcs.PrintPCS`: the table's inks under its intent, eq. 7 colour at the
-    profile's reference thickness, Bradford-adapted to D50, divided by the media white).
+    what it prints; A2B0 is not rescaled to version 4's perceptual reference medium): on an
+    n^3 lattice of RGB, the media-relative CIELAB of the print (:class:`.print_pcs.PrintPCS`:
+    the table's inks under its intent, eq. 7 colour at the profile's reference thickness,
+    Bradford-adapted to D50, divided by the media white).
     A CMM interpolates it tetrahedrally, as DreamPrint's own table lookup.
   - ``B2A1`` (PCS -> device, media-relative colorimetric; ICC-absolute colorimetric is the
     CMM's scaling by ``wtpt``): for every node of an n^3 lattice of the PCS encoding, the RGB

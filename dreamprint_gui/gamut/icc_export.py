@@ -31,14 +31,13 @@ from dreamprint_gui.gamut.icc import (
 )
 from dreamprint_gui.gamut.print_pcs import PrintPCS
 from dreamprint_gui.gamut.tables import ColourTables
+from dreamprint_gui.io.volumes.demo import demo_gaussians
 
 __all__ = ["export_icc", "check_colours"]
 
 
 def check_colours() -> NDArray[np.float64]:
     """The 9^3 lattice of the RGB cube and the colours of the demo cloud's blobs."""
-    from dreamprint_gui.io.volumes.demo import demo_gaussians
-
     return np.concatenate([rgb_cube(9), np.asarray(demo_gaussians().rgb, np.float64)])
 
 
