@@ -140,11 +140,12 @@ def build_icc(profile: InkProfile, tables: ColourTables, *, printer: str = "",
         w.measurement(_MEAS_OBSERVER_1931, (0.0, 0.0, 0.0), _MEAS_GEOMETRY_UNKNOWN, 0.0,
                       _MEAS_ILLUMINANT_D65)
         w.signature("tech", "ijet")
-        for tag in ("A2B0", "A2B1", "A2B2"):
-            w.clut(tag, a2b)
+        w.clut("A2B0", a2b)
+        w.link("A2B1", "A2B0")  # the same numbers: stored once
+        w.link("A2B2", "A2B0")
         w.clut("B2A1", device(rgb_col))
         w.clut("B2A0", device(rgb_per))
-        w.clut("B2A2", device(rgb_per))
+        w.link("B2A2", "B2A0")
         w.clut("gamt", gamt)
         return w.to_bytes()
 

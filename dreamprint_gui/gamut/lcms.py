@@ -126,6 +126,7 @@ def library() -> ctypes.CDLL:
         "cmsMLUfree": ([p], None),
         "cmsMLUgetASCII": ([p, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, u32], u32),
         "cmsWriteTag": ([p, u32, p], i32),
+        "cmsLinkTag": ([p, u32, u32], i32),
         "cmsReadTag": ([p, u32], p),
         "cmsIsTag": ([p, u32], i32),
         "cmsSaveProfileToMem": ([p, p, ctypes.POINTER(u32)], i32),
@@ -249,6 +250,11 @@ class ProfileWriter:
             _check(lib.cmsWriteTag(self._h, sig(tag), lut), f"write the {tag} tag")
         finally:
             lib.cmsPipelineFree(lut)
+
+    def link(self, tag: str, to: str) -> None:
+        """Tag ``tag`` sharing ``to``'s data (one copy in the file; ICC.1 7.3.5 allows tags to
+        share data)."""
+        _check(self._lib.cmsLinkTag(self._h, sig(tag), sig(to)), f"link {tag} to {to}")
 
     def to_bytes(self) -> bytes:
         """The profile as LittleCMS serialises it (header, tag table, tags; MD5 profile ID
