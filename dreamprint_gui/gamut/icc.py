@@ -30,10 +30,11 @@ Defines
 - :func:`write_atomically`: write bytes to a file atomically (temporary file, then rename).
 
 Version: 2.4 by default (``lut16Type`` tables, ``textDescriptionType``): every tool the issue
-names reads it, and version 2 LUT output profiles are what print RIPs and paper makers still
-ship because older Photoshop, GIMP 2.8 and many RIPs and viewers mishandle version 4 LUT
-profiles; ``version=4`` writes a version 4.3 profile (``lutAtoBType``/``lutBtoAType``, ``mluc``,
-profile ID), the current standard. Both hold the same numbers in their own PCS encoding.
+names reads it, version 2 LUT output profiles are what print RIPs and paper makers still ship,
+and version 4 LUT profiles are not read everywhere (Debian's ArgyllCMS 2.3.1: "ICC V4 not
+supported"); ``version=4`` writes a version 4.3 profile (``lutAtoBType``/``lutBtoAType``,
+``mluc``, profile ID), the current standard. Both hold the same numbers in their own PCS
+encoding.
 """
 
 from __future__ import annotations
