@@ -31,7 +31,7 @@ from dreamprint_gui.cli.gamut import (
 @click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True,
               help="Nodes per axis of DreamPrint's colour table (as convert uses).")
 @click.option("--icc-version", type=click.Choice(["2", "4"]), default="2", show_default=True,
-              help="ICC version: 2 (2.4, lut16 tables: read by every tool, old ones too) or 4 "
+              help="ICC version: 2 (2.4, lut16 tables; Debian's ArgyllCMS reads only this) or 4 "
                    "(4.3, the current standard).")
 @click.option("--grid", type=click.IntRange(9, 65), default=33, show_default=True,
               help="Nodes per axis of the profile's A2B and B2A tables.")
