@@ -2,7 +2,7 @@
 
 Writes the ICC profile of the default ink profile's print (``dreamprint icc``'s code,
 :func:`dreamprint_gui.gamut.icc.build_icc`, the colorimetric 100^3 table), then one PNG of four
-panels of the demo cloud seen along z (its colours composited over white):
+panels of the demo seen from the front (its colours composited over white):
 
 1. the source's sRGB colours;
 2. DreamPrint's own prediction of their print (table lookup, eq. 7 colour, as the preview and
@@ -33,21 +33,21 @@ sys.path.insert(0, str(ROOT))
 
 
 def demo_image(n: int = 128):
-    """(n, n, 3) sRGB of the demo cloud composited front to back along z over white, and the
-    mask of the pixels it covers."""
+    """(n, n, 3) sRGB of the demo seen from the front (composited along y over white, z up),
+    and the mask of the pixels it covers."""
     import numpy as np
 
     from dreamprint_gui.io.volumes.demo import _baked
 
-    grid = np.asarray(_baked(400, 7, n), dtype=np.float64)
+    grid = np.asarray(_baked(7, n), dtype=np.float64)
     dens = grid[..., 0]
     col = np.where(dens[..., None] > 1e-9, grid[..., 1:] / np.maximum(dens, 1e-9)[..., None], 0)
-    alpha = 1.0 - np.exp(-dens * (8.0 / n) * 6.0)
+    alpha = 1.0 - np.exp(-dens / n)  # the optical depth of a cell at the design height
     out = np.zeros((n, n, 3))
     trans = np.ones((n, n))
     for z in range(n):
-        a = alpha[:, :, z]
-        out += (trans * a)[..., None] * col[:, :, z]
+        a = alpha[::-1, z, :]
+        out += (trans * a)[..., None] * col[::-1, z, :]
         trans *= 1.0 - a
     out += trans[..., None] * 1.0
     return np.clip(out, 0.0, 1.0), trans < 0.9
@@ -94,7 +94,7 @@ def main() -> None:
                       "prelinearisation)", proofs[0]), ("NOOPTIMIZE", exact)):
         lab_lcms = obs.XYZ_to_Lab(obs.sRGB_to_XYZ(np.asarray(im)[mask] / 255.0))
         de = delta_E2000(lab_own, lab_lcms)
-        print(f"{mask.sum()} pixels of the demo cloud, Little CMS soft proof (absolute, "
+        print(f"{mask.sum()} pixels of the demo, Little CMS soft proof (absolute, "
               f"{what}) vs DreamPrint's own prediction: dE2000 mean {de.mean():.3f}, p95 "
               f"{np.percentile(de, 95):.3f}, max {de.max():.3f} (8-bit sRGB both)")
     scale, pad, head = 2, 12, 40

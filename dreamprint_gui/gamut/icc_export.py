@@ -31,14 +31,14 @@ from dreamprint_gui.gamut.icc import (
 )
 from dreamprint_gui.gamut.print_pcs import PrintPCS
 from dreamprint_gui.gamut.tables import ColourTables
-from dreamprint_gui.io.volumes.demo import demo_gaussians
+from dreamprint_gui.io.volumes.demo import demo_colours
 
 __all__ = ["export_icc", "check_colours"]
 
 
 def check_colours() -> NDArray[np.float64]:
-    """The 9^3 lattice of the RGB cube and the colours of the demo cloud's blobs."""
-    return np.concatenate([rgb_cube(9), np.asarray(demo_gaussians().rgb, np.float64)])
+    """The 9^3 lattice of the RGB cube and 400 of the colours the demo holds."""
+    return np.concatenate([rgb_cube(9), demo_colours(400)])
 
 
 def export_icc(path: str | os.PathLike, profile: InkProfile, tables: ColourTables, *,

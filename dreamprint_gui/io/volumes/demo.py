@@ -34,7 +34,8 @@ from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume
 from dreamprint_gui.io.volumes.sampling import rasterise_gaussians
 from dreamprint_gui.io.volumes.splats import GaussianCloud
 
-__all__ = ["DemoCloud", "demo_fields", "PALETTE", "PRINTABLE_WHITE", "DESIGN_HEIGHT_MM"]
+__all__ = ["DemoCloud", "demo_fields", "demo_colours", "PALETTE", "PRINTABLE_WHITE",
+           "DESIGN_HEIGHT_MM"]
 
 DESIGN_HEIGHT_MM = 40.0
 
@@ -134,6 +135,15 @@ def demo_fields(resolution: int = 128, seed: int = 7) -> tuple[np.ndarray, np.nd
         s[(x - .5) ** 2 + (y - .5) ** 2 + (c[k] - .5) ** 2 > 0.45 ** 2] = 0.0
         sigma[k] = s
     return sigma, rgb
+
+
+def demo_colours(count: int = 400) -> np.ndarray:
+    """(count, 3) sRGB colours the demo holds: its occupied cells of a 32^3 evaluation, every
+    k-th in z, y, x order (deterministic), for checks that want the demo's colours."""
+    sigma, rgb = demo_fields(32)
+    cols = rgb[sigma > 0.05].astype(np.float64)
+    step = max(1, len(cols) // int(count))
+    return cols[::step][:int(count)]
 
 
 def _occupied_height(sigma: np.ndarray) -> float:
