@@ -40,11 +40,10 @@ from numpy.typing import ArrayLike, NDArray
 from dreamprint_gui.core.calibration_types import LayerMeasurement
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.physics import saunderson
-from dreamprint_gui.physics.calibration import invert_closed_form
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
-from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
+from dreamprint_gui.physics.kubelka_munk import invert_closed_form, reflectance_transmittance
 
-__all__ = ["SlabFit", "SlabResidual", "fit_slabs", "slab_forward", "simulate_slabs",
+__all__ = ["SlabOptions", "SlabFit", "SlabResidual", "fit_slabs", "slab_forward", "simulate_slabs",
            "MISFIT_DE2000",
            "MISFIT_CHI", "REFRACTIVE_INDEX"]
 
@@ -56,6 +55,23 @@ _PRIOR = 1e-3              # pull towards the start per unit of ln K, ln S (weig
 _K2_MAX = 0.9
 _ROBUST_SCALE = 3.0        # sigma: residuals beyond it weigh less (Cauchy loss), one bad slab
                            # does not drag the others off
+
+
+@dataclass(frozen=True)
+class SlabOptions:
+    """How slabs measured in air are fitted: the faces' refractive index, and whether k2 is
+    fitted (one per ink) or the diffuse value of that index. The CLI's ``calibrate --slabs``
+    and the wizard's slab page build it."""
+
+    refractive_index: float = REFRACTIVE_INDEX
+    fit_k2: bool = False
+
+    def fit(self, layers: list[LayerMeasurement], wavelengths_nm: ArrayLike) -> SlabFit:
+        return fit_slabs(layers, wavelengths_nm, refractive_index=self.refractive_index,
+                         fit_k2=self.fit_k2)
+
+    def record(self) -> dict[str, Any]:
+        return {"refractive_index": self.refractive_index, "fit_k2": self.fit_k2}
 
 
 def slab_forward(K: ArrayLike, S: ArrayLike, t: ArrayLike, k1: float, k2: float

@@ -88,7 +88,8 @@ def test_uncertainty_covers_the_error_of_a_faint_clear():
 
 def test_one_thickness_is_fitted_with_a_warning():
     K, S = WHITE
-    slabs = simulate_slabs("W", K, S, [1.0], 0.04, saunderson.diffuse_internal_k2(1.5), 0.0, np.random.default_rng(0))
+    k2 = saunderson.diffuse_internal_k2(1.5)
+    slabs = simulate_slabs("W", K, S, [1.0], 0.04, k2, 0.0, np.random.default_rng(0))
     f = fit_slabs(slabs, WL, fit_k2=True)
     assert not f.k2_fitted and f.k2 == pytest.approx(0.596, abs=1e-3)
     assert len(f.warnings) == 1 and "cannot separate the slab's faces from its bulk" in \
