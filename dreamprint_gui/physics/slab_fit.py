@@ -43,9 +43,9 @@ from dreamprint_gui.physics import saunderson
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
 from dreamprint_gui.physics.kubelka_munk import invert_closed_form, reflectance_transmittance
 
-__all__ = ["SlabOptions", "SlabFit", "SlabResidual", "fit_slabs", "slab_forward", "simulate_slabs",
-           "MISFIT_DE2000",
-           "MISFIT_CHI", "REFRACTIVE_INDEX"]
+__all__ = ["SlabOptions", "SlabFit", "SlabResidual", "fit_slabs", "slab_forward",
+           "simulate_slabs", "series_warnings", "MISFIT_DE2000", "MISFIT_CHI",
+           "REFRACTIVE_INDEX"]
 
 REFRACTIVE_INDEX = 1.5     # cured PolyJet photopolymers: about 1.49-1.53
 MISFIT_DE2000 = 1.0        # a slab whose fitted R or T colour is further off does not fit
@@ -131,7 +131,13 @@ class SlabFit:
     k2: float
     k2_fitted: bool
     slabs: list[SlabResidual]
+    rms_R: NDArray[np.float64]  # per wavelength, over the slabs that measured R (NaN: none)
+    rms_T: NDArray[np.float64]
     warnings: list[str] = field(default_factory=list)
+
+    def predict(self, thickness_mm: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """What the instrument reads from a slab of this ink (bulk and faces as fitted)."""
+        return slab_forward(self.K, self.S, thickness_mm, self.k1, self.k2)
 
     @property
     def method(self) -> str:
@@ -148,8 +154,9 @@ class SlabFit:
             x = x[np.isfinite(x)]
             return float(x.max()) if x.size else None
 
-        rel_K = self.sigma_K / np.where(self.K > 0, self.K, np.nan)
-        rel_S = self.sigma_S / np.where(self.S > 0, self.S, np.nan)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel_K = self.sigma_K / np.where(self.K > 0, self.K, np.nan)
+            rel_S = self.sigma_S / np.where(self.S > 0, self.S, np.nan)
         band = (self.wavelengths_nm >= 450) & (self.wavelengths_nm <= 700)
         rR = [s.rms_R for s in self.slabs if s.rms_R is not None]
         rT = [s.rms_T for s in self.slabs if s.rms_T is not None]
@@ -273,18 +280,9 @@ def fit_slabs(layers: list[LayerMeasurement], wavelengths_nm: ArrayLike, *,
     k2_value = saunderson.diffuse_internal_k2(refractive_index) if k2 is None else float(k2)
     if not 0.0 <= k2_value < 1.0:
         raise DreamPrintError(f"k2 must lie in [0, 1), got {k2_value:g}")
-    warnings: list[str] = []
-    thicknesses = sorted({float(x) for x in t if np.isfinite(x)})
-    if len(thicknesses) < 2:
-        held = f"k2 is held at {k2_value:.3f} (n {refractive_index:g})"
-        warnings.append(
-            f"ink {ink}: one thickness ({', '.join(f'{x:g}' for x in thicknesses)} mm) cannot "
-            f"separate the slab's faces from its bulk: {held}, any error in it goes into K and "
-            "S, and nothing checks the fit; measure two or more thicknesses (0.5-8 mm)")
+    warnings = series_warnings(layers, k2_value, refractive_index)
+    if len({float(x) for x in t if np.isfinite(x)}) < 2:
         fit_k2 = False
-    if not hasR.any():
-        warnings.append(f"ink {ink}: no reflectance measured; K and S are separated only by "
-                        "how T falls with thickness (see the uncertainty)")
     prob = _Problem(t, R, T, hasR, hasT, k1, rel_noise, abs_noise)
 
     def total_chi2(k2v: float) -> float:
@@ -305,13 +303,54 @@ def fit_slabs(layers: list[LayerMeasurement], wavelengths_nm: ArrayLike, *,
     K = np.where(K <= _FLOOR * 1.000001, 0.0, K)
     S = np.where(S <= _FLOOR * 1.000001, 0.0, S)
     slabs = _slab_residuals(layers, wl, K, S, t, R, T, hasR, hasT, prob, k1, k2_value)
+    Rm, Tm = slab_forward(K, S, t[:, None], k1, k2_value)
+    with np.errstate(invalid="ignore"):
+        rms_R = np.sqrt(np.nanmean(np.where(hasR, (Rm - R) ** 2, np.nan), axis=0)) \
+            if hasR.any() else np.full(n_wl, np.nan)
+        rms_T = np.sqrt(np.nanmean(np.where(hasT, (Tm - T) ** 2, np.nan), axis=0))
     bad = [s for s in slabs if not s.fits]
     for s in bad:
         warnings.append(f"ink {ink}: the {s.thickness_mm:g} mm slab does not fit (dE2000 R "
                         f"{_fmt(s.dE2000_R)}, T {_fmt(s.dE2000_T)}; {s.chi:.1f} sigma): "
                         f"remeasure it or check its thickness ({s.source})")
     return SlabFit(ink, wl, K, S, sK, sS, float(refractive_index), k1, k2_value, fit_k2,
-                   slabs, warnings)
+                   slabs, rms_R, rms_T, warnings)
+
+
+def series_warnings(layers: list[LayerMeasurement], k2: float,
+                    refractive_index: float) -> list[str]:
+    """What a thickness series of one ink cannot separate, before any fit (the fit, the CLI
+    and the wizard's slab page say the same)."""
+    if not layers:
+        return []
+    ink = layers[0].ink
+    out = []
+    thick = sorted({float(m.thickness_mm) for m in layers if math.isfinite(m.thickness_mm)})
+    if not any(m.T is not None for m in layers):
+        out.append(f"ink {ink}: no transmittance measured; K and S cannot be separated from "
+                   "reflectance alone")
+    if len(thick) < 2:
+        out.append(
+            f"ink {ink}: one thickness ({', '.join(f'{x:g}' for x in thick) or 'none'} mm) "
+            f"cannot separate the slab's faces from its bulk: k2 is held at {k2:.3f} (n "
+            f"{refractive_index:g}), any error in it goes into K and S, and nothing checks the "
+            "fit; measure two or more thicknesses (0.5-8 mm)")
+    if not any(m.R is not None for m in layers):
+        out.append(f"ink {ink}: no reflectance measured; K and S are separated only by how T "
+                   "falls with thickness (see the uncertainty)")
+    # what no slab in air of this index can read (the faces alone reflect k1, pass (1-k1)^2)
+    k1 = saunderson.fresnel_k1(refractive_index)
+    Rs = [float(np.median(m.R)) for m in layers if m.R is not None]
+    Ts = [float(np.median(m.T)) for m in layers if m.T is not None]
+    if Rs and min(Rs) < 0.8 * k1:
+        out.append(f"ink {ink}: R (median {min(Rs):.3f}) lies below the faces' own "
+                   f"reflectance k1 {k1:.3f}: measured without the specular component (SCE)? "
+                   "Slabs need it included (SCI, M0-M2 with gloss)")
+    if Ts and max(Ts) > 1.01 * (1.0 - k1) ** 2:
+        out.append(f"ink {ink}: T (median {max(Ts):.3f}) exceeds what the two faces of n "
+                   f"{refractive_index:g} pass ({(1.0 - k1) ** 2:.3f}): check the instrument's "
+                   "100 % baseline (air, not a blank slab) or the refractive index")
+    return out
 
 
 def _fmt(x: float | None) -> str:
