@@ -53,6 +53,7 @@ MISFIT_CHI = 3.0           # ... or whose rms residual exceeds 3 sigma of the no
 _FLOOR = 1e-9              # 1/mm: a coefficient below this is 0 at mm thicknesses
 _PRIOR = 1e-3              # pull towards the start per unit of ln K, ln S (weighted units)
 _K2_MAX = 0.9
+_K2_STEP = 0.02
 _ROBUST_SCALE = 3.0        # sigma: residuals beyond it weigh less (Cauchy loss), one bad slab
                            # does not drag the others off
 
@@ -285,11 +286,16 @@ def fit_slabs(layers: list[LayerMeasurement], wavelengths_nm: ArrayLike, *,
         fit_k2 = False
     prob = _Problem(t, R, T, hasR, hasT, k1, rel_noise, abs_noise)
 
-    def total_chi2(k2v: float) -> float:
-        return sum(prob.fit(j, k2v)[1] for j in range(n_wl))
+    def total_chi2(k2v: float, step: int = 1) -> float:
+        return sum(prob.fit(j, k2v)[1] for j in range(0, n_wl, step))
 
     if fit_k2:
-        sol = minimize_scalar(total_chi2, bounds=(0.0, _K2_MAX), method="bounded",
+        # chi^2(k2) has a narrow valley and a plateau (k2 > 0.6): a coarse grid on every 5th
+        # wavelength finds the valley, Brent's bounded search refines it on all of them
+        grid = np.arange(0.0, _K2_MAX + 1e-9, _K2_STEP)
+        best = int(np.argmin([total_chi2(float(k), 5) for k in grid]))
+        lo, hi = max(0.0, grid[best] - _K2_STEP), min(_K2_MAX, grid[best] + _K2_STEP)
+        sol = minimize_scalar(total_chi2, bounds=(lo, hi), method="bounded",
                               options={"xatol": 1e-4})
         k2_value = float(sol.x)
     K = np.empty(n_wl)
@@ -313,6 +319,10 @@ def fit_slabs(layers: list[LayerMeasurement], wavelengths_nm: ArrayLike, *,
         warnings.append(f"ink {ink}: the {s.thickness_mm:g} mm slab does not fit (dE2000 R "
                         f"{_fmt(s.dE2000_R)}, T {_fmt(s.dE2000_T)}; {s.chi:.1f} sigma): "
                         f"remeasure it or check its thickness ({s.source})")
+    if len(bad) > len(slabs) // 2 and not fit_k2 and len({s.thickness_mm for s in slabs}) > 1:
+        warnings.append(f"ink {ink}: most slabs do not fit with k2 {k2_value:.3f} (diffuse "
+                        "light at the faces): fit k2 (--fit-k2), as for a nearly clear ink "
+                        "whose light stays collimated")
     return SlabFit(ink, wl, K, S, sK, sS, float(refractive_index), k1, k2_value, fit_k2,
                    slabs, rms_R, rms_T, warnings)
 

@@ -115,3 +115,17 @@ def test_reflectance_only_is_refused():
     R, _ = slab_forward(K, S, 1.0, 0.04, 0.6)
     with pytest.raises(DreamPrintError, match="no transmittance measured"):
         fit_slabs([LayerMeasurement("W", 1.0, R, None, "r")], WL)
+
+
+def test_a_clear_slab_with_collimated_faces_is_found_by_fitting_k2():
+    """Faces reflecting only k1 inside (k2 = 0.04, light kept collimated): held at the diffuse
+    0.596 no slab fits and the fit says to fit k2; fitted, k2 and K come back (chi^2(k2) has a
+    narrow valley there and a plateau above 0.6, which a bounded search alone missed)."""
+    K, S = np.full(WL.size, 0.01), np.full(WL.size, 0.005)
+    slabs = simulate_slabs("Cl", K, S, SERIES, 0.04, 0.04, 0.0, np.random.default_rng(0))
+    held = fit_slabs(slabs, WL)
+    assert not any(s.fits for s in held.slabs)
+    assert "fit k2 (--fit-k2)" in held.warnings[-1]
+    fitted = fit_slabs(slabs, WL, fit_k2=True)
+    assert fitted.k2 == pytest.approx(0.04, abs=1e-3) and all(s.fits for s in fitted.slabs)
+    np.testing.assert_allclose(fitted.K[BAND], K[BAND], rtol=0.02)
