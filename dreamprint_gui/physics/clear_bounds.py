@@ -6,9 +6,11 @@ Clear (``dreamprint target wedge``, ``calibrate --slabs``), its K and S are mode
 /mm). The bound comes from the public data ``MEASURED.md`` ("Clear ink optics") gathers: a
 clear acrylic absorbs 0.001-0.008 /mm over 400-730 nm (Plexiglas, the floor) and printed
 VeroClear plausibly 0.002-0.1 /mm over 450-730 nm, a photopolymer's edge rising steeply below
-420 nm. The low bound keeps the modelled violet edge and lowers the flat part to 0.002 /mm::
+420 nm (a clear resin with its UV absorber: 26, 12 and 1.9 /mm at 380, 400 and 420 nm, a fall
+by e every 11 nm between 400 and 420). The low bound is 0.002 /mm with the modelled Clear's
+0.25 /mm at 380 nm falling by e every 10 nm, so that it is 0.002-0.0023 over 450-730 nm::
 
-    K_low(lambda) = 0.002 + 0.25 exp(-(lambda - 380 nm) / 25 nm)   [1/mm]
+    K_low(lambda) = 0.002 + 0.25 exp(-(lambda - 380 nm) / 10 nm)   [1/mm]
 
 and keeps the profile's S (no public figure bounds the Clear's scattering). The proof renders the
 same labels with it (``proof --clear-low-bound``): the error that goes away is the share of the
@@ -26,7 +28,7 @@ __all__ = ["CLEAR_LOW_K_FLAT", "clear_low_bound_K", "clear_low_bound", "clear_is
            "describe_low_bound"]
 
 CLEAR_LOW_K_FLAT = 0.002   # 1/mm, 450-730 nm (MEASURED.md "Clear ink optics")
-_EDGE_K, _EDGE_NM, _EDGE_WIDTH_NM = 0.25, 380.0, 25.0
+_EDGE_K, _EDGE_NM, _EDGE_WIDTH_NM = 0.25, 380.0, 10.0
 _CL = INKS.index("Cl")
 
 
@@ -49,5 +51,6 @@ def clear_low_bound(profile: InkProfile) -> InkProfile:
 
 def describe_low_bound() -> str:
     return (f"K = {CLEAR_LOW_K_FLAT:g} + {_EDGE_K:g} exp(-(lambda - {_EDGE_NM:g})/"
-            f"{_EDGE_WIDTH_NM:g}) /mm (the flat part at the low end of printed VeroClear's "
-            "plausible 0.002-0.1 /mm, MEASURED.md), S as the profile's")
+            f"{_EDGE_WIDTH_NM:g}) /mm (0.002-0.0023 over 450-730 nm, the low end of printed "
+            "VeroClear's plausible 0.002-0.1 /mm, with a resin's steep violet edge, "
+            "MEASURED.md), S as the profile's")

@@ -71,12 +71,16 @@ def clear_lines(clear: dict[str, Any] | None) -> list[str]:
     if a["clear_block_de2000"] is not None:
         lines.append(f"  Clear block body ({100 * a['clear_block_fraction']:.0f} % of the object "
                      f"pixels): {a['clear_block_de2000']:.2f} dE2000 at the modelled Clear, "
-                     f"{b['clear_block_de2000']:.2f} at the low bound; coverage error "
+                     f"{b['clear_block_de2000']:.2f} at the low bound; S-CIELAB "
+                     f"{a['clear_block_scielab_de2000']:.2f} -> "
+                     f"{b['clear_block_scielab_de2000']:.2f}; coverage error "
                      f"{a['clear_block_coverage_error']:+.3f} -> "
                      f"{b['clear_block_coverage_error']:+.3f}")
     if a["inside_source_de2000"] is not None:
-        lines.append(f"  inside the source: {a['inside_source_de2000']:.2f} -> "
-                     f"{b['inside_source_de2000']:.2f} dE2000")
+        lines.append(f"  inside the source: dE2000 {a['inside_source_de2000']:.2f} -> "
+                     f"{b['inside_source_de2000']:.2f}, S-CIELAB "
+                     f"{a['inside_source_scielab_de2000']:.2f} -> "
+                     f"{b['inside_source_scielab_de2000']:.2f}")
     lines.append(f"  all object pixels: dE2000 {a['mean_de2000']:.2f} -> {b['mean_de2000']:.2f}, "
                  f"S-CIELAB {a['mean_scielab_de2000']:.2f} -> {b['mean_scielab_de2000']:.2f}, "
                  f"coverage error {a['coverage_error']:+.3f} -> {b['coverage_error']:+.3f}")

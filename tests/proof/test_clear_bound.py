@@ -24,8 +24,11 @@ def test_low_bound_is_measured_md_s_floor_with_the_violet_edge():
     low = clear_low_bound(p)
     k = low.K[CL]
     assert k[wl == 700][0] == pytest.approx(0.002, abs=1e-6)   # MEASURED.md: 0.002 /mm
-    assert k[wl == 380][0] == pytest.approx(0.252)               # the modelled edge kept
-    # the built-in's flat part is 0.03: the bound is 15 x lower there, equal in the deep violet
+    assert k[wl == 380][0] == pytest.approx(0.252)               # the modelled 380 nm value
+    band = (wl >= 450) & (wl <= 730)
+    assert np.all((k[band] >= 0.002) & (k[band] <= 0.0023))     # MEASURED.md's 0.002 there
+    assert k[wl == 400][0] == pytest.approx(0.002 + 0.25 * np.exp(-2.0))  # the steep edge
+    # the built-in's flat part is 0.03: the bound is 15 x lower there
     assert p.K[CL][wl == 700][0] / k[wl == 700][0] == pytest.approx(15.0, rel=1e-3)
     np.testing.assert_array_equal(low.S, p.S)
     np.testing.assert_array_equal(np.delete(low.K, CL, 0), np.delete(p.K, CL, 0))
