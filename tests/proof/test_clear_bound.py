@@ -67,3 +67,14 @@ def test_a_measured_clear_has_no_bound_to_render(tmp_path, capsys):
                          prof, "--clear-low-bound")
     assert code == 0, err
     assert "Clear: measured (the Clear is measured: its K and S are no guess)" in out
+
+
+def test_evaluate_methods_carries_the_bounds_per_row(capsys):
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper",
+                         "--clear-low-bound", "--json")
+    assert code == 0, err
+    row = json.loads(out)["methods"][0]
+    assert set(row["clear"]["figures"]) == {"modelled", "low_bound"}
+    code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper")
+    assert code == 0, err
+    assert "Clear: modelled (the Clear is modelled; --clear-low-bound renders" in out
