@@ -47,6 +47,8 @@ def main() -> None:
                             "ink_meta, Inria non-commercial licence)",
             "scale": f"source K and S x {SCALE_PER_MM:g} = 1/mm (assumed, see SOURCES.md)",
             "clear_ink": "modelled: K = 0.03 + 0.25 exp(-(lambda-380)/25) 1/mm, S = 0.002/mm",
+            # the colour inks' K/S are measured (the source), their absolute scale assumed
+            "ink_origin": {ink: "modelled" for ink in INKS},
         },
     )
     out = ROOT / "resources" / "profiles" / "polyjet_default.json"

@@ -124,6 +124,7 @@ from dreamprint_gui.cli import jobs  # noqa: E402,F401,I001
 from dreamprint_gui.cli import gamut  # noqa: E402,F401,I001
 from dreamprint_gui.cli import proof  # noqa: E402,F401,I001
 from dreamprint_gui.cli import icc  # noqa: E402,F401,I001
+from dreamprint_gui.cli import target  # noqa: E402,F401,I001
 
 if __name__ == "__main__":
     sys.exit(main())

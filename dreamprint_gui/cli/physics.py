@@ -100,14 +100,25 @@ def predict(mix_text: str | None, mix_file: Path | None, profile_path: str | Non
 @click.option("--saunderson", default=None, metavar="k1,k2",
               help="Chart readings include surface reflections (Saunderson k1,k2).")
 @click.option("--folds", default=5, show_default=True, help="Cross-validation folds (chart).")
+@click.option("--slabs", is_flag=True,
+              help="The layers are free-standing slabs measured in air (the translucency "
+                   "wedge, `dreamprint target wedge`): fit the bulk K, S with both faces "
+                   "(Saunderson), their uncertainty and each slab's residual.")
+@click.option("--refractive-index", default=1.5, show_default=True, type=float,
+              help="With --slabs: the slabs' refractive index (gives k1 and k2).")
+@click.option("--fit-k2", is_flag=True,
+              help="With --slabs: fit the faces' internal reflectance k2 per ink (two or more "
+                   "thicknesses) instead of the diffuse value of the refractive index.")
 @click.option("--json", "as_json", is_flag=True, help="Print the fit report as JSON.")
 def calibrate(measurements: Path | None, output: Path, chart: Path | None,
               reflectance: Path | None, base_profile: str | None, name: str | None,
-              saunderson: str | None, folds: int, as_json: bool) -> None:
+              saunderson: str | None, folds: int, slabs: bool, refractive_index: float,
+              fit_k2: bool, as_json: bool) -> None:
     """Fit ink K and S from measurements and write a profile.
 
     MEASUREMENTS is a calibration set (.toml, naming instrument files per ink) or a CSV in
-    DreamPrint's layout (docs/measurements-csv.md). With --chart and --reflectance, refit all
+    DreamPrint's layout (docs/measurements-csv.md). With --slabs they are a thickness series
+    of slabs measured in air (docs/translucency.md). With --chart and --reflectance, refit all
     inks jointly to a printed mixture chart and report cross-validated dE2000.
     """
     from dreamprint_gui.core.profile import load_profile
@@ -122,15 +133,25 @@ def calibrate(measurements: Path | None, output: Path, chart: Path | None,
     else:
         if measurements is None:
             raise click.UsageError("give MEASUREMENTS (.toml or .csv) or --chart/--reflectance")
-        report = _calibrate_layers(base, measurements, name, output)
+        slab_options = None
+        if slabs:
+            from dreamprint_gui.physics.slab_fit import SlabOptions
+
+            if not 1.0 <= refractive_index <= 3.0:
+                raise DreamPrintError(f"--refractive-index must lie in 1-3, got "
+                                      f"{refractive_index:g}")
+            slab_options = SlabOptions(refractive_index, fit_k2)
+        elif fit_k2 or refractive_index != 1.5:
+            raise click.UsageError("--refractive-index and --fit-k2 apply to --slabs")
+        report = _calibrate_layers(base, measurements, name, output, slab_options)
     if as_json:
         emit_json(report)
     else:
         _print_report(report)
 
 
-def _calibrate_layers(base, path: Path, name: str | None, output: Path) -> dict:
-    from dreamprint_gui.core.profile import save_profile
+def _calibrate_layers(base, path: Path, name: str | None, output: Path, slabs=None) -> dict:
+    from dreamprint_gui.core.profile import ink_origins, save_profile
     from dreamprint_gui.physics.calibration import calibrate_profile
 
     if path.suffix.lower() == ".toml":
@@ -141,11 +162,12 @@ def _calibrate_layers(base, path: Path, name: str | None, output: Path) -> dict:
         from dreamprint_gui.io.measurements_csv import read_measurements_csv
 
         layers = read_measurements_csv(path, base.wavelengths_nm)
-    profile, fits = calibrate_profile(layers, base, name or output.stem)
+    profile, fits = calibrate_profile(layers, base, name or output.stem, slabs=slabs)
     save_profile(profile, output)
-    return {"profile": str(output), "kind": "layers",
+    return {"profile": str(output), "kind": "slabs" if slabs else "layers",
             "inks": [f.summary() for f in fits],
-            "inks_from_base_profile": sorted(profile.provenance["inks_from_base_profile"])}
+            "inks_from_base_profile": sorted(profile.provenance["inks_from_base_profile"]),
+            "ink_origin": ink_origins(profile)}
 
 
 def _calibrate_chart(base, chart: Path, reflectance: Path, name: str | None,
@@ -181,11 +203,36 @@ def _print_report(report: dict) -> None:
         if report["inks_from_base_profile"]:
             click.echo("  kept from the base profile: "
                        + ", ".join(report["inks_from_base_profile"]))
+    elif report["kind"] == "slabs":
+        _print_slabs(report)
     else:
         for key in ("base_dE2000", "fit_dE2000", "cross_validated_dE2000"):
             s = report[key]
             click.echo(f"  {key.replace('_', ' ')}: mean {s['mean']:.3f}, p95 {s['p95']:.3f}, "
                        f"max {s['max']:.3f}")
+
+
+def _print_slabs(report: dict) -> None:
+    def num(x: float | None, f: str = ".2f") -> str:
+        return "-" if x is None else format(x, f)
+
+    for ink in report["inks"]:
+        k2 = "fitted" if ink["k2_fitted"] else "from n"
+        click.echo(f"  {ink['ink']:>2}: {len(ink['slabs'])} slab(s), faces k1 {ink['k1']:.3f} "
+                   f"k2 {ink['k2']:.3f} ({k2}); 1-sigma over 450-700 nm up to "
+                   f"K {num(ink['max_rel_sigma_K_450_700'], '.1%')}, "
+                   f"S {num(ink['max_rel_sigma_S_450_700'], '.1%')}")
+        for s in ink["slabs"]:
+            t = "inf" if s["thickness_mm"] is None else f"{s['thickness_mm']:g}"
+            click.echo(f"      {t:>5} mm: rms R {num(s['rms_R'], '.4f')} T "
+                       f"{num(s['rms_T'], '.4f')}, dE2000 R {num(s['dE2000_R'])} T "
+                       f"{num(s['dE2000_T'])}{'' if s['fits'] else '  DOES NOT FIT'}")
+        for w in ink["warnings"]:
+            click.echo(f"  warning: {w}", err=True)
+    origin = report["ink_origin"]
+    click.echo("  measured: " + (", ".join(i for i, o in origin.items() if o == "measured")
+                                 or "none") + "; modelled: "
+               + (", ".join(i for i, o in origin.items() if o == "modelled") or "none"))
 
 
 @evaluate.command("density-fit")

@@ -138,6 +138,10 @@ def _common(f, halftones: bool = False):
         click.option("--option", "source_options", multiple=True,
                      help="Source reader option KEY=VALUE; repeatable."),
         click.option("--table-size", type=int, default=100, hidden=True),
+        click.option("--clear-low-bound", is_flag=True,
+                     help="When the profile's Clear is modelled (not measured), render the "
+                          "print once more with the Clear at its plausible low bound and "
+                          "report the figures at both (one more print render)."),
         click.option("--json", "as_json", is_flag=True, help="Print the report as JSON."),
     ]
     for o in reversed(opts):
@@ -160,7 +164,8 @@ def _settings(source, output, method, kw, overwrite=False, compensation=None):
         phase=kw["phase"], overwrite=overwrite,
         table_size=kw["table_size"], source_options=_options(kw["source_options"]),
         up=placement_values(kw["up"], kw["rotate"])[0],
-        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"])
+        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"],
+        clear_low_bound=kw["clear_low_bound"])
 
 
 def _check_source(source: str) -> None:
@@ -196,6 +201,7 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
     """Render SOURCE (a volume, 'demo', or an exported JOB folder) as printed, beside the
     source, and measure how alike they look; or, with --chart, a printed chart's recipes as
     an instrument would measure them."""
+    from dreamprint_gui.proof.clear_report import clear_lines
     from dreamprint_gui.proof.compare import empty_source_note
     from dreamprint_gui.proof.runner import run_proof
 
@@ -227,6 +233,8 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
         click.echo(f"noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 mean "
                    f"{f['mean_de2000']:.2f}, S-CIELAB dE2000 mean "
                    f"{f['mean_scielab_de2000']:.2f}")
+    for line in clear_lines(report["clear"]):
+        click.echo(line)
 
 
 def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickness_mm,
@@ -277,6 +285,7 @@ def _common_halftones(f):
 def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
     """Proof SOURCE with each method and halftoning (same cameras, seed, size) and tabulate the
     figures: one row per --method x --halftone."""
+    from dreamprint_gui.proof.clear_report import clear_lines
     from dreamprint_gui.proof.compare import SIGNIFICANCE_FACTOR, mark_significance
     from dreamprint_gui.proof.runner import render_proof
 
@@ -300,7 +309,7 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
                 Path(corr).unlink(missing_ok=True)
         r = res["report"]
         row = {"method": m, "halftone": h, **r["overall"], "noise_floor": r["noise_floor"],
-               "seconds": r["timings_s"]["total"]}
+               "clear": r["clear"], "seconds": r["timings_s"]["total"]}
         if comp is not None:
             row["optimise_seconds"] = comp["seconds"]
             row["training"] = comp["figures"]
@@ -335,6 +344,14 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
     if any(r["noise_floor"] for r in rows):
         click.echo(f"~: within {SIGNIFICANCE_FACTOR:g} x the noise floor of the best row (not "
                    "significant); floor: mean dE2000 / S-CIELAB between two seeds")
+    for r in rows:
+        lines = clear_lines(r["clear"]) if r["clear"].get("figures") else []
+        if lines:
+            click.echo(f"{r['method']}/{r['halftone']}: " + lines[0])
+            for line in lines[1:]:
+                click.echo(line)
+    if rows and rows[0]["clear"].get("figures") is None and rows[0]["clear"].get("note"):
+        click.echo(f"Clear: {rows[0]['clear']['origin']} ({rows[0]['clear']['note']})")
     if gfloor is not None:
         click.echo(f"{'gamut floor':25s} {gfloor['mean_de2000']:8.2f} {gfloor['p95_de2000']:8.2f} "
                    f"{gfloor['psnr_db']:6.1f} {gfloor['ssim']:6.3f} "
@@ -362,7 +379,8 @@ def _held_out_correction(source, kw, prefix, iterations, views):
         table_size=kw["table_size"], source_options=_options(kw["source_options"]),
         layers_per_block=kw["layers_per_block"], overwrite=True,
         up=placement_values(kw["up"], kw["rotate"])[0],
-        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"])
+        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"],
+        clear_low_bound=kw["clear_low_bound"])
     try:
         report = _drive(run_compensate(cs), prefix=prefix + "optimise: ")
     except BaseException:

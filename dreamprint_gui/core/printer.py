@@ -89,6 +89,12 @@ class PrinterProfile:
         shown = self.material_display_rgb or self.material_rgb
         return np.array([*shown, self.empty_rgb], dtype=np.uint8)
 
+    def slice_images(self, labels: np.ndarray) -> np.ndarray:
+        """The slice image(s) of labels (..., ny, nx): this printer's column axis and row
+        order (a view, no copy)."""
+        img = labels if self.image_columns == "x" else labels.swapaxes(-1, -2)
+        return img[..., ::-1, :] if self.flip_rows else img
+
     def pixels_per_metre(self) -> tuple[int, int]:
         """Pixels per metre along a slice image's x (columns) and y (rows), rounded (the
         PNG pHYs chunk's unit): 600 dpi -> 23622 (599.999 dpi)."""

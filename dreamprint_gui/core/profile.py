@@ -18,6 +18,11 @@ Optional ``table`` settings choose how the RGB -> ink table is solved for this p
 ``--intent`` overrides them). They are not part of the fingerprint: tables are cached per
 profile fingerprint, objective and intent.
 
+``provenance.ink_origin`` says per ink whether its K and S were ``measured`` (fitted to this
+printer's measurements by ``dreamprint calibrate``) or ``modelled`` (assumed: the built-in
+Clear, the built-in colour inks' absolute scale); :func:`ink_origins` reads it (profiles
+without it: the inks their ``measurements`` name are measured, the others modelled).
+
 Loading validates everything (inks, lengths, finiteness, signs) and raises
 :class:`~dreamprint_gui.core.errors.DreamPrintError` naming the file and the problem.
 """
@@ -39,7 +44,8 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.resources import resource_path
 
 __all__ = ["INKS", "COLOUR_INKS", "InkProfile", "load_profile", "save_profile",
-           "default_profile", "parse_mix", "DEFAULT_PROFILE_NAME"]
+           "default_profile", "parse_mix", "DEFAULT_PROFILE_NAME", "INK_ORIGINS", "ink_origins",
+           "modelled_inks"]
 
 INKS: tuple[str, ...] = ("C", "M", "Y", "K", "W", "Cl")
 COLOUR_INKS: tuple[str, ...] = ("C", "M", "Y", "K", "W")
@@ -49,6 +55,7 @@ DEFAULT_PROFILE_NAME = "polyjet-default"
 # 1e6 per mm (one per nanometre) is far beyond any ink; larger values are unit mistakes.
 _MAX_COEFFICIENT = 1e6
 UNITS = {"wavelength": "nm", "K": "1/mm", "S": "1/mm"}
+INK_ORIGINS = ("measured", "modelled")
 
 
 @dataclass(frozen=True)
@@ -182,6 +189,10 @@ def profile_from_dict(d: Any, source: str = "<profile>") -> InkProfile:
     K = _ink_table(d.get("K_per_mm"), "K_per_mm", w.size, source)
     S = _ink_table(d.get("S_per_mm"), "S_per_mm", w.size, source)
     validate_arrays(w, K, S, source)
+    provenance = d.get("provenance", {}) or {}
+    if not isinstance(provenance, dict):
+        raise DreamPrintError("'provenance' must be an object", source)
+    _check_ink_origin(provenance, source)
     model = d.get("model", {}) or {}
     ct = model.get("colour_thickness_mm")
     try:
@@ -196,11 +207,36 @@ def profile_from_dict(d: Any, source: str = "<profile>") -> InkProfile:
     return InkProfile(
         name=str(d.get("name", Path(source).stem)), wavelengths_nm=w, K=K, S=S,
         colour_thickness_mm=ct, layer_thickness_mm=lt, density_t_max_mm=tmax,
-        density_samples=ns, provenance=dict(d.get("provenance", {}) or {}),
+        density_samples=ns, provenance=dict(provenance),
         residuals=dict(d.get("residuals", {}) or {}),
         table_settings=_table_settings(d.get("table"), source),
         proof_optics=_proof_optics(d.get("proof"), source),
     )
+
+
+def _check_ink_origin(provenance: dict[str, Any], source: str) -> None:
+    origin = provenance.get("ink_origin")
+    if origin is None:
+        return
+    if not isinstance(origin, dict) or set(origin) - set(INKS) or any(
+            v not in INK_ORIGINS for v in origin.values()):
+        raise DreamPrintError(f"'provenance.ink_origin' must map inks ({', '.join(INKS)}) to "
+                              f"{' or '.join(INK_ORIGINS)}", source)
+
+
+def ink_origins(profile: InkProfile) -> dict[str, str]:
+    """Per ink, ``measured`` or ``modelled`` (see the module docstring)."""
+    origin = profile.provenance.get("ink_origin")
+    if isinstance(origin, dict):
+        return {ink: origin.get(ink, "modelled") for ink in INKS}
+    meas = profile.provenance.get("measurements")
+    measured = set(meas) if isinstance(meas, dict) else set()
+    return {ink: "measured" if ink in measured else "modelled" for ink in INKS}
+
+
+def modelled_inks(profile: InkProfile) -> list[str]:
+    """The inks whose K and S are assumed rather than measured, in INKS order."""
+    return [ink for ink, o in ink_origins(profile).items() if o == "modelled"]
 
 
 # The names the ``table`` settings accept (gamut/optimise.py and mapping.py own them;

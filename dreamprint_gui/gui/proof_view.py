@@ -22,6 +22,7 @@ import numpy as np
 from PySide6.QtCore import QRect, QSize, Qt, Signal
 from PySide6.QtGui import QImage, QPainter, QPixmap
 from PySide6.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QFormLayout,
     QHBoxLayout,
@@ -210,6 +211,12 @@ class ProofPage(QWidget):
             self.halftone.addItem(h, h)
         self.cells = QSpinBox(minimum=8, maximum=256, value=96)
         self.cells.setToolTip("Medium cells along the print's longest axis")
+        self.clear_low_bound = QCheckBox("Clear at its low bound too")
+        self.clear_low_bound.setToolTip(
+            "When the profile's Clear is modelled (not measured): render the print once more "
+            "with the Clear at its plausible low bound (K 0.002 /mm, MEASURED.md) and show the "
+            "figures at both, so the share of the error that rests on the guess shows (one "
+            "more print render)")
         self.comp_iterations = QSpinBox(minimum=1, maximum=20, value=4)
         self.comp_iterations.setToolTip("Render-compare-update iterations of the compensation "
                                         "(each renders the print on 3 training cameras)")
@@ -239,6 +246,7 @@ class ProofPage(QWidget):
         form.addRow("Method", self.method)
         form.addRow("Halftoning", self.halftone)
         form.addRow("Medium cells", self.cells)
+        form.addRow("", self.clear_low_bound)
         form.addRow("Compensation iterations", self.comp_iterations)
         side = QVBoxLayout()
         side.addLayout(form)
@@ -296,7 +304,8 @@ class ProofPage(QWidget):
             halftone=str(self.halftone.currentData()), seed=js.seed,
             density_scale=js.density_scale, background=js.background,
             max_cells=self.cells.value(), table_size=js.table_size or 100,
-            source_options=tuple(sorted(js.source_options.items())))
+            source_options=tuple(sorted(js.source_options.items())),
+            clear_low_bound=self.clear_low_bound.isChecked())
 
     def render(self, settings=None) -> None:
         """Start a render (of ``settings``, default :meth:`proof_settings`)."""
@@ -379,6 +388,7 @@ class ProofPage(QWidget):
         self._end("succeeded", "done: open loop and compensated on this page's cameras")
 
     def _on_result(self, result: dict) -> None:
+        from dreamprint_gui.proof.clear_report import clear_lines
         from dreamprint_gui.proof.compare import empty_source_note
 
         self.comparison = None
@@ -398,7 +408,8 @@ class ProofPage(QWidget):
             f"SSIM {o['ssim']:.3f}; coverage "
             f"{o['source_coverage']:.3f} (source) -> {o['print_coverage']:.3f} (print); "
             f"{self.result['renderer']['variant']}, {self.result['timings_s']['total']:.0f} s"
-            + (f"; {note}" if (note := empty_source_note(o)) else ""))
+            + (f"; {note}" if (note := empty_source_note(o)) else "")
+            + "".join(f"\n{line.strip()}" for line in clear_lines(self.result.get("clear"))))
         self._end("succeeded", "done")
 
     def _show_view(self, i: int) -> None:

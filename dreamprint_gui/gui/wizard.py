@@ -10,6 +10,9 @@ Defines :class:`CalibrationWizard` (a QWizard) and its pages:
    inks lacking it); or a calibration set (TOML, ``io.spectra.calibration_set``; several
    thicknesses per ink). Every parsed spectrum is plotted at once, resampled onto the profile's
    grid; each file's problem shows on its own row.
+   A tick, "slabs measured in air", leads to the slab page
+   (:class:`~dreamprint_gui.gui.slab_page.SlabPage`, the translucency wedge): the faces'
+   refractive index, k2 fitted or not, each ink's thickness series and what it can separate.
 2. :class:`ChartPage` (optional): a mixture chart, recipes (``--mix-file`` CSV) and the measured
    reflectance of each patch.
 3. :class:`FitPage`: runs ``calibration.calibrate_profile`` (and ``chart_calibration.fit_chart``)
@@ -38,6 +41,7 @@ from pathlib import Path
 import numpy as np
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QDoubleSpinBox,
     QFileDialog,
@@ -60,26 +64,17 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.gui.icc_export import IccExportBox, IccRequest
 from dreamprint_gui.gui.settings import AppSettings
+from dreamprint_gui.gui.slab_page import SlabPage
+from dreamprint_gui.gui.wizard_common import ERROR_STYLE, INK_COLOURS, canvas
 from dreamprint_gui.gui.workers import Task, abandonable, run_task
 
-__all__ = ["CalibrationWizard", "MeasurementsPage", "ChartPage", "FitPage", "ChartProofPage",
-           "SavePage", "SPECTRA_FILTER"]
+__all__ = ["CalibrationWizard", "MeasurementsPage", "SlabPage", "ChartPage", "FitPage",
+           "ChartProofPage", "SavePage", "SPECTRA_FILTER", "INK_COLOURS", "ERROR_STYLE"]
 
 log = logging.getLogger(__name__)
 
 SPECTRA_FILTER = ("Spectral measurements (*.csv *.txt *.ti3 *.cgats *.jdx *.dx *.jcamp *.spdx "
                   "*.tsv);;All files (*)")
-INK_COLOURS = {"C": "#00a0d0", "M": "#d0007a", "Y": "#d8c000", "K": "#202020", "W": "#999999",
-               "Cl": "#60b0a0"}
-ERROR_STYLE = "color: #d33;"
-
-
-def _canvas(figsize=(6, 4)):
-    from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=figsize, layout="constrained")
-    return fig, FigureCanvasQTAgg(fig)
 
 
 @dataclass
@@ -312,11 +307,18 @@ class MeasurementsPage(QWizardPage):
         set_row.addWidget(self.set_button)
         set_row.addWidget(self.clear_set_button)
         set_row.addWidget(self.set_label, 1)
+        self.slabs_box = QCheckBox("Slabs measured in air (the translucency wedge, "
+                                   "`dreamprint target wedge`): fit each ink's bulk inside "
+                                   "the slab's two faces")
+        self.slabs_box.setToolTip("Free-standing slabs reflect at both faces; the next page "
+                                  "sets the refractive index and shows each ink's thickness "
+                                  "series")
+        set_row.addWidget(self.slabs_box)
         self.missing = QLabel("")
         self.missing.setObjectName("missingThickness")
         self.missing.setStyleSheet(ERROR_STYLE)
         self.missing.setWordWrap(True)
-        self.figure, self.canvas = _canvas((7, 3))
+        self.figure, self.canvas = canvas((7, 3))
         self.canvas.setMinimumHeight(220)
         lay = QVBoxLayout(self)
         lay.addLayout(grid)
@@ -409,6 +411,11 @@ class MeasurementsPage(QWizardPage):
         self._plot()
         self.completeChanged.emit()
 
+    def nextId(self) -> int:  # noqa: N802 - Qt override
+        """The slab page when the layers are slabs measured in air, else the chart page."""
+        ids = self.wiz.page_ids
+        return ids[self.wiz.slab_page if self.slabs_box.isChecked() else self.wiz.chart_page]
+
     def isComplete(self) -> bool:  # noqa: N802 - Qt override
         # Measurements are optional when a chart is given on the next page; a row with a
         # problem or without its thickness must be fixed or cleared first.
@@ -483,7 +490,7 @@ class ChartPage(QWizardPage):
         self.error.setStyleSheet(ERROR_STYLE)
         self.error.setWordWrap(True)
         self.info = QLabel("")
-        self.figure, self.canvas = _canvas((6, 2.5))
+        self.figure, self.canvas = canvas((6, 2.5))
         lay = QVBoxLayout(self)
         lay.addLayout(form)
         lay.addWidget(self.error)
@@ -674,10 +681,10 @@ class FitPage(_TaskPage):
         self._clock = QTimer(self, interval=500)
         self._clock.timeout.connect(self._tick)
         self.tabs = QTabWidget()
-        self.fit_fig, self.fit_canvas = _canvas((8, 4.5))
-        self.ks_fig, self.ks_canvas = _canvas((8, 4.5))
-        self.res_fig, self.res_canvas = _canvas((8, 3))
-        self.chart_fig, self.chart_canvas = _canvas((8, 3))
+        self.fit_fig, self.fit_canvas = canvas((8, 4.5))
+        self.ks_fig, self.ks_canvas = canvas((8, 4.5))
+        self.res_fig, self.res_canvas = canvas((8, 3))
+        self.chart_fig, self.chart_canvas = canvas((8, 3))
         self.tabs.addTab(self.fit_canvas, "Measured vs fitted")
         self.tabs.addTab(self.ks_canvas, "Fitted K and S")
         self.tabs.addTab(self.res_canvas, "Held-out and residual error")
@@ -731,6 +738,7 @@ class FitPage(_TaskPage):
         recipes, refl, folds = chart.recipes, chart.reflectance, int(chart.folds.value())
         base = self.wiz.base_profile
         name = self.wiz.default_name
+        slabs = self.wiz.slab_options()
 
         def job(report, cancel):
             from dreamprint_gui.physics.calibration import calibrate_profile
@@ -740,12 +748,13 @@ class FitPage(_TaskPage):
                                       "a mixture chart (second page)")
             held: dict[str, tuple[list, list[str]]] = {}
             if measurements:
-                report("fitting K and S of each ink:")
+                report("fitting K and S of each ink" + (" inside the slabs' faces:" if slabs
+                                                        else ":"))
                 profile, fits = abandonable(
-                    lambda: calibrate_profile(measurements, base, name=name), cancel,
-                    name="calibrate-profile")
-                if any(len({m.thickness_mm for m in measurements if m.ink == f.ink}) > 1
-                       for f in fits):
+                    lambda: calibrate_profile(measurements, base, name=name, slabs=slabs),
+                    cancel, name="calibrate-profile")
+                if not slabs and any(len({m.thickness_mm for m in measurements
+                                          if m.ink == f.ink}) > 1 for f in fits):
                     report("holding out each thickness in turn:")
                     held = abandonable(lambda: _held_out(measurements, base), cancel,
                                        name="leave-one-thickness-out")
@@ -798,7 +807,12 @@ class FitPage(_TaskPage):
         self.result = (profile, fits, chart_fit)
         self.held_out = held
         text = ""
-        if fits:
+        from dreamprint_gui.gui.slab_page import slab_fit_table
+        from dreamprint_gui.physics.slab_fit import SlabFit
+
+        if fits and isinstance(fits[0], SlabFit):
+            text = slab_fit_table(fits)
+        elif fits:
             rows = [_fit_row(f, [m for m in measurements if m.ink == f.ink],
                              *held.get(f.ink, ([], []))) for f in fits]
             text = ("<table cellspacing='0' cellpadding='3'>" + FIT_TABLE_HEAD + "".join(rows)
@@ -808,15 +822,18 @@ class FitPage(_TaskPage):
             text += (f"<b>chart</b>: cross-validated dE2000 mean {cv['mean']:.2f}, "
                      f"p95 {cv['p95']:.2f}, max {cv['max']:.2f}")
         self.status.setText(text)
-        self._plot_fit(profile, measurements)
+        self._plot_fit(profile, measurements, fits)
         self._plot_ks(profile, [f.ink for f in fits])
         self._plot_residuals(fits, held)
         self._plot_chart(chart_fit)
         self.tabs.setTabEnabled(3, chart_fit is not None)
         self.fitted.emit(self.result)
 
-    def _plot_fit(self, profile, measurements) -> None:
+    def _plot_fit(self, profile, measurements, fits=()) -> None:
         from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
+        from dreamprint_gui.physics.slab_fit import SlabFit
+
+        slab_fits = {f.ink: f for f in fits if isinstance(f, SlabFit)}
 
         fig = self.fit_fig
         fig.clear()
@@ -827,7 +844,8 @@ class FitPage(_TaskPage):
         for j, ink in enumerate(inks):
             i = INKS.index(ink)
             for m in (m for m in measurements if m.ink == ink):
-                R, T = reflectance_transmittance(profile.K[i], profile.S[i], m.thickness_mm)
+                R, T = (slab_fits[ink].predict(m.thickness_mm) if ink in slab_fits else
+                        reflectance_transmittance(profile.K[i], profile.S[i], m.thickness_mm))
                 for row, meas, fit in ((0, m.R, R), (1, m.T, T)):
                     ax = axes[row, j]
                     if meas is not None:
@@ -1162,16 +1180,24 @@ class CalibrationWizard(QWizard):
         self.setWizardStyle(QWizard.WizardStyle.ClassicStyle)
         self.setOption(QWizard.WizardOption.NoBackButtonOnLastPage, False)
         self.measurements_page = MeasurementsPage(self)
+        self.slab_page = SlabPage(self)
         self.chart_page = ChartPage(self)
         self.fit_page = FitPage(self)
         self.chart_proof_page = ChartProofPage(self)
         self.save_page = SavePage(self)
         self.page_ids = {p: self.addPage(p) for p in (
-            self.measurements_page, self.chart_page, self.fit_page, self.chart_proof_page,
-            self.save_page)}
+            self.measurements_page, self.slab_page, self.chart_page, self.fit_page,
+            self.chart_proof_page, self.save_page)}
         self.resize(1000, 720)
         if calibration_set:
             self.measurements_page.load_set(calibration_set)
+
+    def slab_options(self):
+        """The slab fit's options when the measurements are slabs measured in air, else None
+        (:class:`~dreamprint_gui.physics.slab_fit.SlabOptions`, as ``calibrate --slabs``)."""
+        if not self.measurements_page.slabs_box.isChecked():
+            return None
+        return self.slab_page.options()
 
     def done(self, result: int) -> None:
         """Closing the wizard (Cancel, Esc, Finish) abandons a fit or chart proof still

@@ -119,8 +119,7 @@ def _clamp_report(stats: np.ndarray) -> dict[str, float]:
 
 def _oriented(ctx: JobContext, labels: np.ndarray) -> np.ndarray:
     """The slice image(s) of labels (..., ny, nx): the printer's column axis and row order."""
-    img = labels if ctx.printer.image_columns == "x" else labels.swapaxes(-1, -2)
-    return img[..., ::-1, :] if ctx.printer.flip_rows else img
+    return ctx.printer.slice_images(labels)
 
 
 def _write_new(path: str, data: bytes) -> None:

@@ -8,7 +8,10 @@ Defines
   with a faint pull towards that start (weight ``_PRIOR`` per unit of ln K, ln S: it decides
   only where the data leave K and S free, e.g. layers all opaque); per-wavelength residuals.
 - :func:`calibrate_profile`: all measured inks -> an :class:`InkProfile` plus a fit report; inks
-  without measurements keep the base profile's K and S (and the report says so).
+  without measurements keep the base profile's K and S (and the report says so). With
+  ``slabs`` (free-standing slabs measured in air, the translucency wedge) each ink is fitted by
+  :func:`~dreamprint_gui.physics.slab_fit.fit_slabs` (bulk + both faces, uncertainty, per-slab
+  residuals). The profile's ``provenance.ink_origin`` marks the fitted inks ``measured``.
 - :func:`leave_one_thickness_out`: what can be checked of a fit. One layer with R and T is
   reproduced exactly by construction (two unknowns, two data per wavelength), so its residual says
   nothing; with several thicknesses, each is left out in turn, K and S are fitted to the others
@@ -34,12 +37,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from dreamprint_gui.core.calibration_types import LayerMeasurement
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.core.profile import INKS, InkProfile, now_iso
-from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
+from dreamprint_gui.core.profile import INKS, InkProfile, ink_origins, now_iso
+from dreamprint_gui.physics.kubelka_munk import invert_closed_form, reflectance_transmittance
+from dreamprint_gui.physics.slab_fit import SlabFit, SlabOptions
 
 __all__ = ["invert_closed_form", "fit_ink", "InkFit", "calibrate_profile", "LayerMeasurement",
            "HeldOut", "leave_one_thickness_out", "exact_by_construction"]
@@ -47,37 +51,6 @@ __all__ = ["invert_closed_form", "fit_ink", "InkFit", "calibrate_profile", "Laye
 _T_FLOOR = 1e-12  # the smallest transmittance the starts invert (T = 0 has no finite K)
 _PRIOR = 1e-4  # weight of the pull towards the start, per unit of ln K or ln S (fit_ink)
 _FLOOR = 1e-9  # 1/mm: below this a coefficient is indistinguishable from 0 at mm thicknesses
-
-
-def invert_closed_form(R: ArrayLike, T: ArrayLike, t: float
-                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """K and S (1/mm) from R and T (fractions) of one layer of thickness ``t`` mm.
-
-    Exact inverse of :func:`~dreamprint_gui.physics.kubelka_munk.reflectance_transmittance`
-    where it exists (``R >= 0, T > 0, R + T <= 1``). With ``R = 0`` the layer does not scatter:
-    ``S = 0, K = -ln(T)/t``. Where the data are impossible (R + T > 1, T = 0) the result is NaN;
-    :func:`fit_ink` then falls back to a least-squares start.
-    """
-    R = np.asarray(R, dtype=np.float64)
-    T = np.asarray(T, dtype=np.float64)
-    if t <= 0:
-        raise ValueError("thickness must be > 0")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scatters = R > 1e-12
-        Rs = np.where(scatters, R, 1.0)
-        a = (1.0 + Rs * Rs - T * T) / (2.0 * Rs)
-        b = np.sqrt(a * a - 1.0)
-        # R (a - b) = R / (a + b) avoids cancellation when a is large (weak scattering).
-        S = np.log((1.0 - Rs / (a + b)) / T) / (b * t)
-        K = S * (a - 1.0)
-        # a -> 1 (no absorption): S t -> R / T and K -> 0, the 0/0 of the general form.
-        lossless = np.abs(a - 1.0) < 1e-12
-        S = np.where(lossless, Rs / (T * t), S)
-        K = np.where(lossless, 0.0, K)
-        K = np.where(scatters, K, -np.log(T) / t)
-        S = np.where(scatters, S, 0.0)
-    bad = (T <= 0) | (R < 0) | (R + T > 1.0 + 1e-12) | ~np.isfinite(K) | ~np.isfinite(S)
-    return np.where(bad, np.nan, K), np.where(bad, np.nan, S)
 
 
 @dataclass
@@ -198,10 +171,12 @@ def _json_list(x: NDArray) -> list[float | None]:
 
 
 def calibrate_profile(measurements: list[LayerMeasurement], base: InkProfile,
-                      name: str = "calibrated") -> tuple[InkProfile, list[InkFit]]:
+                      name: str = "calibrated", slabs: SlabOptions | None = None
+                      ) -> tuple[InkProfile, list[InkFit | SlabFit]]:
     """Fit every measured ink; inks without measurements keep ``base``'s K and S.
 
     ``measurements`` must be on ``base.wavelengths_nm`` (the importer resamples them).
+    ``slabs``: the layers are free-standing slabs measured in air (fit with both faces).
     """
     by_ink: dict[str, list[LayerMeasurement]] = {}
     for m in measurements:
@@ -213,26 +188,39 @@ def calibrate_profile(measurements: list[LayerMeasurement], base: InkProfile,
         raise DreamPrintError("no ink measurements given")
     n = base.wavelengths_nm.size
     K, S = base.K.copy(), base.S.copy()
-    fits = []
+    fits: list[InkFit | SlabFit] = []
     for ink, layers in by_ink.items():
-        fit = fit_ink(layers, n)
+        fit = slabs.fit(layers, base.wavelengths_nm) if slabs else fit_ink(layers, n)
         i = INKS.index(ink)
         K[i], S[i] = fit.K, fit.S
         fits.append(fit)
     kept = [ink for ink in INKS if ink not in by_ink]
+    origin = ink_origins(base)
+    origin.update({ink: "measured" for ink in by_ink})
+    model = ("Kubelka-Munk two-flux; per-wavelength inversion (closed form, "
+             "Levenberg-Marquardt for several layers)")
+    if slabs:
+        model = ("Kubelka-Munk two-flux bulk of slabs measured in air, Saunderson on both "
+                 "faces; per-wavelength robust least squares")
     profile = base.with_settings(
         name=name, K=K, S=S,
         provenance={
             "created": now_iso(),
-            "model": "Kubelka-Munk two-flux; per-wavelength inversion (closed form, "
-                     "Levenberg-Marquardt for several layers)",
+            "model": model,
+            **({"slabs": slabs.record()} if slabs else {}),
             "measurements": {f.ink: f.layers for f in fits},
             "inks_from_base_profile": {ink: base.name for ink in kept},
+            "ink_origin": origin,
         },
-        residuals={f.ink: {"rms_R": _json_list(f.rms_R), "rms_T": _json_list(f.rms_T)}
-                   for f in fits},
+        residuals={f.ink: _residual_record(f) for f in fits},
     )
     return profile, fits
+
+
+def _residual_record(f: InkFit | SlabFit) -> dict[str, Any]:
+    if isinstance(f, SlabFit):
+        return f.residual_record()
+    return {"rms_R": _json_list(f.rms_R), "rms_T": _json_list(f.rms_T)}
 
 
 def exact_by_construction(layers: list[LayerMeasurement]) -> bool:

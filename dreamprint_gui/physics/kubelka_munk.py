@@ -5,6 +5,9 @@ Defines
 - :func:`reflectance_transmittance`: R and T of a layer of thickness t (paper eqs. 3-4).
 - :func:`reflectance_infinite`: R_inf of an optically thick layer.
 - :func:`mix`: K and S of a mixture, linear in the concentrations (paper eq. 5).
+- :func:`invert_closed_form`: K and S from one layer's R and T (Kubelka 1948's explicit
+  inverse of eqs. 3-4: ``a = (1 + R^2 - T^2)/(2R)``, ``b = sqrt(a^2 - 1)``,
+  ``S = ln((1 - R(a - b))/T)/(b t)``, ``K = S(a - 1)``).
 
 All functions broadcast over leading dimensions (mixtures x wavelengths). K and S are in 1/mm
 and t in mm; only the products K t and S t matter.
@@ -26,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["reflectance_transmittance", "reflectance_infinite", "mix", "attenuation",
-           "layer_rt"]
+           "layer_rt", "invert_closed_form"]
 
 _SMALL_X = 1e-4
 
@@ -143,3 +146,34 @@ def mix(concentrations: ArrayLike, K_inks: ArrayLike, S_inks: ArrayLike
     """
     c = np.asarray(concentrations, dtype=np.float64)
     return c @ np.asarray(K_inks, dtype=np.float64), c @ np.asarray(S_inks, dtype=np.float64)
+
+
+def invert_closed_form(R: ArrayLike, T: ArrayLike, t: float
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """K and S (1/mm) from R and T (fractions) of one layer of thickness ``t`` mm.
+
+    Exact inverse of :func:`~dreamprint_gui.physics.kubelka_munk.reflectance_transmittance`
+    where it exists (``R >= 0, T > 0, R + T <= 1``). With ``R = 0`` the layer does not scatter:
+    ``S = 0, K = -ln(T)/t``. Where the data are impossible (R + T > 1, T = 0) the result is NaN;
+    :func:`fit_ink` then falls back to a least-squares start.
+    """
+    R = np.asarray(R, dtype=np.float64)
+    T = np.asarray(T, dtype=np.float64)
+    if t <= 0:
+        raise ValueError("thickness must be > 0")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scatters = R > 1e-12
+        Rs = np.where(scatters, R, 1.0)
+        a = (1.0 + Rs * Rs - T * T) / (2.0 * Rs)
+        b = np.sqrt(a * a - 1.0)
+        # R (a - b) = R / (a + b) avoids cancellation when a is large (weak scattering).
+        S = np.log((1.0 - Rs / (a + b)) / T) / (b * t)
+        K = S * (a - 1.0)
+        # a -> 1 (no absorption): S t -> R / T and K -> 0, the 0/0 of the general form.
+        lossless = np.abs(a - 1.0) < 1e-12
+        S = np.where(lossless, Rs / (T * t), S)
+        K = np.where(lossless, 0.0, K)
+        K = np.where(scatters, K, -np.log(T) / t)
+        S = np.where(scatters, S, 0.0)
+    bad = (T <= 0) | (R < 0) | (R + T > 1.0 + 1e-12) | ~np.isfinite(K) | ~np.isfinite(S)
+    return np.where(bad, np.nan, K), np.where(bad, np.nan, S)

@@ -71,10 +71,13 @@ def _stats(de: NDArray, mask: NDArray, prefix: str) -> dict:
 
 def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alpha: NDArray,
                  observer: Observer, samples_per_degree: float,
-                 threshold: float = COVERAGE_THRESHOLD) -> tuple[dict, NDArray[np.float64]]:
+                 threshold: float = COVERAGE_THRESHOLD, mask: NDArray | None = None
+                 ) -> tuple[dict, NDArray[np.float64]]:
     """Figures of one view and its dE2000 map (res, res); NaN outside the object.
 
-    ``samples_per_degree``: the pixels per degree of visual angle of the S-CIELAB figures."""
+    ``samples_per_degree``: the pixels per degree of visual angle of the S-CIELAB figures.
+    ``mask``: the object pixels (default: either coverage above ``threshold``); two prints
+    compared with one source on the same pixels pass the union of theirs."""
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 
@@ -82,7 +85,8 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     lab_p = observer.XYZ_to_Lab(np.maximum(prn_xyz, 0.0))
     de = delta_E2000(lab_s, lab_p)
     sde = scielab_de2000(src_xyz, prn_xyz, observer, samples_per_degree)
-    mask = (src_alpha > threshold) | (prn_alpha > threshold)
+    if mask is None:
+        mask = (src_alpha > threshold) | (prn_alpha > threshold)
     a = to_display(observer.XYZ_to_linear_sRGB(src_xyz)).astype(np.float64) / 255
     b = to_display(observer.XYZ_to_linear_sRGB(prn_xyz)).astype(np.float64) / 255
     psnr = float(peak_signal_noise_ratio(a, b, data_range=1.0))

@@ -29,8 +29,11 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gamut.alignment import predicted_appearance
 from dreamprint_gui.job.halftone import HALFTONE_METHODS
 from dreamprint_gui.job.plan import JobCancelled
+from dreamprint_gui.physics.clear_bounds import clear_is_modelled, clear_low_bound
 from dreamprint_gui.proof.cameras import orbit_views
+from dreamprint_gui.proof.clear_report import clear_report
 from dreamprint_gui.proof.compare import (
+    COVERAGE_THRESHOLD,
     compare_view,
     de_heatmap,
     noise_floor,
@@ -112,6 +115,7 @@ class ProofSettings:
     up: str | None = None            # source axis that becomes +z (None: auto)
     rotate: int = 0                  # degrees about the print's z
     fit: str = "occupied"            # "occupied" or "box"
+    clear_low_bound: bool = False    # a modelled Clear: render again at its low bound
 
 
 @dataclass(frozen=True)
@@ -265,7 +269,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     yield ProofProgress("compare", 0, len(views), el(), "comparing")
     obs = bands.observer
     to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
-    per_view, images = [], []
+    per_view, images, prints = [], [], []
     # the print at its real size on the frame (orthographic), seen from the viewing distance
     spd = samples_per_degree(2.0 * views[0].half_mm / s.resolution, s.viewing_distance_mm)
     for i, v in enumerate(views):
@@ -273,6 +277,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         prn_alpha = 1.0 - T @ y_w
         src_xyz = src_lin[i] @ to_xyz.T
         prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor, optics)
+        prints.append((prn_xyz, prn_alpha))
         fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs, spd)
         if s.noise_floor:
             fig["noise_floor"] = noise_floor(
@@ -283,6 +288,14 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
                        "de2000": de})
         yield ProofProgress("compare", i + 1, len(views), el())
     timings["compare"] = time.perf_counter() - t3
+    t5 = time.perf_counter()
+    overall = summarise(per_view)
+    bounds = None
+    if s.clear_low_bound and clear_is_modelled(lab.profile):
+        bounds = yield from _at_clear_low_bound(
+            s, lab, medium, optics, views, src_lin, src_alpha, prints, spd, el, cancel)
+    clear = clear_report(lab.profile, bounds, s.clear_low_bound)
+    timings["clear_low_bound"] = time.perf_counter() - t5
     t4 = time.perf_counter()
     floor_fig = gamut_floor(lab, field, views, s.resolution, src_lin, src_alpha, obs, spd,
                             floor_rho)
@@ -311,7 +324,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
                     "pixels_per_degree": round(spd, 3),
                     "metric": "S-CIELAB (Zhang & Wandell 1996) then CIEDE2000"},
         "views": per_view,
-        "overall": summarise(per_view),
+        "overall": overall,
+        "clear": clear,
         "compensation": _compensation(lab),
         "gamut_floor": floor_fig,
         "noise_floor": (
@@ -323,6 +337,54 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         "timings_s": timings,
     }
     return {"report": report, "images": images}
+
+
+def _at_clear_low_bound(s: ProofSettings, lab, medium, optics, views, src_lin: list,
+                        src_alpha: list, prints: list, spd: float, el, cancel):
+    """The same labels rendered (one seed) with the Clear at its low bound
+    (:func:`~dreamprint_gui.physics.clear_bounds.clear_low_bound`); both prints compared with
+    the same source renders on the same pixels (the union of the two comparisons' object
+    pixels): ``(modelled, low bound)`` overall figures (:func:`.compare.summarise`)."""
+    low = clear_low_bound(lab.profile)
+    bands = spectral_bands(low, s.bands)
+    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics)
+    lo, hi = medium.box_mm
+    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    direct_T = [optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
+                for v in views]
+    extra = [(i, r) for i, T in enumerate(direct_T) for r in thick_tiles(T @ y_w, THICK_T)]
+    box: dict[str, Any] = {}
+    prog: dict[str, tuple[int, int]] = {"p": (0, 1)}
+
+    def work() -> None:
+        try:
+            box["m"] = render_print_seeds(
+                sigma_t, albedo, lo, hi, views, s.resolution,
+                pass_spp(bands.xyz_weights, s.spp), (s.seed,), s.max_depth, s.key_light,
+                s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
+                cancelled=lambda: cancel is not None and cancel.is_set(), sampler=s.sampler,
+                optics=optics, extra=extra, extra_spp=s.thick_spp)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
+            box["e"] = exc
+
+    yield ProofProgress("print", 0, 1, el(), "rendering the print with the Clear at its low "
+                        "bound")
+    yield from _in_thread(work, "print", prog, el, box, cancel)
+    rendered = box["m"][0][0]
+    to_xyz = np.linalg.inv(bands.observer.xyz_to_linear_srgb)
+    both: tuple[list, list] = ([], [])
+    for i, v in enumerate(views):
+        T = direct_T[i]
+        low_alpha = 1.0 - T @ y_w
+        src_xyz = src_lin[i] @ to_xyz.T
+        mask = ((src_alpha[i] > COVERAGE_THRESHOLD) | (prints[i][1] > COVERAGE_THRESHOLD)
+                | (low_alpha > COVERAGE_THRESHOLD))
+        for out, (xyz, alpha) in zip(both, (prints[i], (print_xyz(
+                bands, rendered[i], T, s.floor, optics), low_alpha)), strict=True):
+            fig, _ = compare_view(src_xyz, xyz, src_alpha[i], alpha, bands.observer, spd,
+                                  mask=mask)
+            out.append({"view": i, **v.describe(), **fig})
+    return summarise(both[0]), summarise(both[1])
 
 
 def gamut_floor(lab, field, views, resolution: int, src_lin: list, src_alpha: list, obs,

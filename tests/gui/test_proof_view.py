@@ -216,3 +216,16 @@ def test_compensation_text_names_the_share_where_the_source_is_empty():
     # inside the source: (8.0 - 5.5) / 0.2 -> (7.0 - 5.4) / 0.2; S-CIELAB (4 - 2) / 0.2 -> ...
     assert "inside the source: dE2000 mean 12.50 -> 8.00, S-CIELAB 10.00 -> 7.50" in text
     assert "source is empty" not in compensation_text(result(0.0))
+
+
+def test_proof_page_shows_the_clear_at_both_bounds(qtbot, table_size):
+    """A modelled Clear (the built-in profile), the box ticked: the figures name both bounds."""
+    page = _page(qtbot, table_size)
+    page.clear_low_bound.setChecked(True)
+    assert page.proof_settings().clear_low_bound
+    with qtbot.waitSignal(page.finished, timeout=600_000) as sig:
+        page.render_button.click()
+    assert sig.args == ["succeeded"], page.status.text()
+    text = page.figures.text()
+    assert "Clear modelled, not measured; at its low bound" in text
+    assert "at the modelled Clear" in text and "at the low bound" in text
