@@ -29,6 +29,7 @@ Loading validates everything (inks, lengths, finiteness, signs) and raises
 
 from __future__ import annotations
 
+import copy
 import datetime as _dt
 import json
 import math
@@ -105,8 +106,10 @@ class InkProfile:
                 "density_t_max_mm": self.density_t_max_mm,
                 "density_samples": self.density_samples,
             },
-            "provenance": self.provenance,
-            "residuals": self.residuals,
+            # copies: a caller editing the dict must not edit this profile (the built-in one
+            # is shared by the whole process)
+            "provenance": copy.deepcopy(self.provenance),
+            "residuals": copy.deepcopy(self.residuals),
             **({"table": dict(self.table_settings)} if self.table_settings else {}),
             **({"proof": dict(self.proof_optics)} if self.proof_optics else {}),
         }
