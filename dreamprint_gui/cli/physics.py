@@ -93,7 +93,8 @@ def predict(mix_text: str | None, mix_file: Path | None, profile_path: str | Non
 @click.option("--chart", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Recipes CSV of a printed mixture chart.")
 @click.option("--reflectance", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              help="Measured reflectance of the chart's patches (CSV, header of wavelengths).")
+              help="Measured reflectance of the chart's patches (any format `dreamprint spectra` "
+                   "reads), one spectrum per recipe in the same order.")
 @click.option("--base-profile", default=None, metavar="P",
               help="Profile to start from / keep unmeasured inks from (default: built-in).")
 @click.option("--name", default=None, help="Name of the new profile.")
@@ -151,18 +152,11 @@ def _calibrate_layers(base, path: Path, name: str | None, output: Path) -> dict:
 def _calibrate_chart(base, chart: Path, reflectance: Path, name: str | None,
                      saunderson, folds: int, output: Path) -> dict:
     from dreamprint_gui.core.profile import save_profile
-    from dreamprint_gui.io.recipes import read_recipes, read_spectra_rows
+    from dreamprint_gui.io.chart_files import read_chart
     from dreamprint_gui.physics.chart_calibration import fit_chart
 
-    recipes = read_recipes(chart)
-    wl, spectra = read_spectra_rows(reflectance)
-    from dreamprint_gui.core.spectral_grid import resample
-
-    spectra = resample(wl, spectra, base.wavelengths_nm, source=str(reflectance))
-    if spectra.shape[0] != recipes.shape[0]:
-        raise DreamPrintError(f"{spectra.shape[0]} spectra but {recipes.shape[0]} recipes in "
-                              f"{chart}; one spectrum row per recipe, in the same order",
-                              reflectance)
+    files = read_chart(chart, reflectance, base.wavelengths_nm)
+    recipes, spectra = files.recipes, files.reflectance
     fit = fit_chart(base, recipes, spectra, folds=folds, saunderson=saunderson,
                     name=name or output.stem, source=str(chart))
     save_profile(fit.profile, output)

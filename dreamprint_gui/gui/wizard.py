@@ -506,16 +506,10 @@ class ChartPage(QWizardPage):
             try:
                 if not (rp and sp):
                     raise DreamPrintError("give both the recipes and the reflectance file")
-                from dreamprint_gui.io.recipes import read_recipes
-                from dreamprint_gui.io.spectra import read_spectra
+                from dreamprint_gui.io.chart_files import read_chart
 
-                recipes = np.asarray(read_recipes(rp))
-                f = read_spectra(sp, quantity="reflectance")
-                wl = self.wiz.base_profile.wavelengths_nm
-                refl = np.vstack([f.resample(i, wl) for i in range(len(f.samples))])
-                if len(refl) != len(recipes):
-                    raise DreamPrintError(f"{len(refl)} spectra for {len(recipes)} recipes "
-                                          f"in {rp}", sp)
+                files = read_chart(rp, sp, self.wiz.base_profile.wavelengths_nm)
+                recipes, refl = files.recipes, files.reflectance
                 self.recipes, self.reflectance = recipes, refl
                 self.info.setText(f"{len(recipes)} patches")
             except DreamPrintError as exc:

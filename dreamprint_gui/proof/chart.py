@@ -51,8 +51,7 @@ from numpy.typing import NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS, InkProfile, load_profile
-from dreamprint_gui.io.recipes import read_recipes
-from dreamprint_gui.io.spectra import read_spectra
+from dreamprint_gui.io.chart_files import read_chart
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
 from dreamprint_gui.proof.cameras import View
@@ -128,20 +127,12 @@ def load_chart(s: ChartSettings) -> Chart:
         raise DreamPrintError(f"--bands must be 1..36, got {s.bands}")
     profile = load_profile(s.profile)
     optics = _checked_optics(s.surface, s.phase, profile, s.geometry)
-    recipes = read_recipes(Path(s.recipes))
-    if len(recipes) > MAX_PATCHES:
-        raise DreamPrintError(f"{len(recipes)} recipes; at most {MAX_PATCHES}", s.recipes)
+    files = read_chart(s.recipes, s.reflectance, profile.wavelengths_nm,
+                       max_patches=MAX_PATCHES)
     lab = None
-    if s.reflectance is not None:
-        sf = read_spectra(s.reflectance, quantity="reflectance")
-        if sf.problems:
-            raise DreamPrintError(sf.problems[0], s.reflectance)
-        if len(sf.samples) != len(recipes):
-            raise DreamPrintError(f"{len(sf.samples)} measured spectra but {len(recipes)} "
-                                  f"recipes in {s.recipes}; one spectrum per recipe, in the "
-                                  "same order", s.reflectance)
-        R = np.stack([smp.resample(profile.wavelengths_nm) for smp in sf.samples])
-        lab = observer_for(profile.wavelengths_nm).spectra_to_Lab(R)
+    if files.reflectance is not None:
+        lab = observer_for(profile.wavelengths_nm).spectra_to_Lab(files.reflectance)
+    recipes = files.recipes
     return Chart(recipes, lab, profile, optics)
 
 
