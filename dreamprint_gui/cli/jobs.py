@@ -106,12 +106,9 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     from dreamprint_gui.job.run import run_conversion
 
     up_axis, turn = placement_values(up, rotate)
-    opts = {}
-    for kv in source_options:
-        if "=" not in kv:
-            raise DreamPrintError(f"--option must be KEY=VALUE, got '{kv}'")
-        k, v = kv.split("=", 1)
-        opts[k.strip()] = _option_value(v.strip())
+    from dreamprint_gui.io.volumes.registry import parse_reader_options
+
+    opts = parse_reader_options(source_options)
     settings = ConvertSettings(
         source=source, output=output, profile=profile, printer=printer, height_mm=height_mm,
         size_mm=_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
@@ -274,15 +271,6 @@ class _Progress:
         if self.bar is not None:
             self.bar.__exit__(None, None, None)
             self.bar = None
-
-
-def _option_value(v: str):
-    for conv in (int, float):
-        try:
-            return conv(v)
-        except ValueError:
-            pass
-    return {"true": True, "false": False}.get(v.lower(), v)
 
 
 @evaluate.command("job")

@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 
 from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
-from dreamprint_gui.cli.jobs import _fmt_time, _option_value, _size
+from dreamprint_gui.cli.jobs import _fmt_time, _size
 from dreamprint_gui.core.errors import DreamPrintError
 
 # Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
@@ -26,13 +26,9 @@ _STAGES = {"preparing": "preparing", "labels": "labels", "source": "source rende
 
 
 def _options(items: tuple[str, ...]) -> tuple[tuple[str, object], ...]:
-    out = []
-    for kv in items:
-        if "=" not in kv:
-            raise DreamPrintError(f"--option must be KEY=VALUE, got '{kv}'")
-        k, v = kv.split("=", 1)
-        out.append((k.strip(), _option_value(v.strip())))
-    return tuple(out)
+    from dreamprint_gui.io.volumes.registry import parse_reader_options
+
+    return tuple(parse_reader_options(items).items())
 
 
 def _drive(gen, prefix: str = "", quiet: bool = False):

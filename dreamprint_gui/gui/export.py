@@ -95,12 +95,14 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      workers: int | None = None, scheduler: str | None = None,
                      table_size: int | None = None, content: str = "auto",
                      sampling: str | None = None, intent: str | None = None,
-                     up: str | None = None, rotate: int = 0, fit: str = "occupied"):
+                     up: str | None = None, rotate: int = 0, fit: str = "occupied",
+                     source_options: dict | None = None):
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
     ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear";
     ``intent`` the rendering intent, None for the profile's; ``up`` the source axis that
     becomes +z, None or "auto" for the source's convention; ``rotate`` quarter turns about z
-    in degrees; ``fit`` "occupied" or "box")."""
+    in degrees; ``fit`` "occupied" or "box"; ``source_options`` the reader's options, as the
+    CLI's ``--option``)."""
     from dreamprint_gui.job.plan import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
@@ -115,7 +117,8 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            seed=int(seed), workers=workers, scheduler=scheduler,
                            background=background, content=content, sampling=sampling,
                            overwrite=overwrite, up=None if up in (None, "auto") else up,
-                           rotate=int(rotate), fit=fit, **extra)
+                           rotate=int(rotate), fit=fit,
+                           source_options=dict(source_options or {}), **extra)
 
 
 def placement_combos(params: dict | None = None) -> tuple[QComboBox, QComboBox, QComboBox]:
@@ -365,6 +368,8 @@ class ExportDialog(QDialog):
         pp = preview_params or {}
         self.context = context  # the preview's JobContext: reused when the job's source matches
         self.sampling_choice = pp.get("sampling")  # the preview's voxel-edge choice
+        # how the preview reads the file (grid, level set, reader options): the job's too
+        self.source_options = dict(pp.get("source_options") or {})
         self.preflight = None  # the engine's Preflight of the current settings
         self._preflight_settings = None  # the settings it estimated
         self._preflight_task: Task | None = None
@@ -672,7 +677,8 @@ class ExportDialog(QDialog):
             workers=workers, scheduler=scheduler, table_size=self.table_size,
             content=str(self.content.currentData()), sampling=self.sampling_choice,
             intent=str(self.intent.currentData()) or None, up=str(self.up.currentData()),
-            rotate=int(self.turn.currentData()), fit=str(self.fit.currentData()))
+            rotate=int(self.turn.currentData()), fit=str(self.fit.currentData()),
+            source_options=self.source_options)
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:
