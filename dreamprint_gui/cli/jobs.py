@@ -159,7 +159,9 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         signal.signal(signal.SIGTERM, old)
     t = manifest["timings_s"]
     nx, ny, nz = manifest["grid_dimensions"]
-    clamp_line = clamp_report(manifest)
+    from dreamprint_gui.job.clamp_report import clamp_summary
+
+    clamp_line = clamp_summary(manifest)
     if clamp_line and not quiet:
         click.echo(clamp_line, err=True)
     if as_json:
@@ -203,28 +205,6 @@ def _compensate_for(settings, quiet: bool) -> Path:
                    f"{f['before']['coverage_error']:+.3f} -> {f['after']['coverage_error']:+.3f}"
                    f" ({report['seconds']:.0f} s); wrote {out}", err=True)
     return out
-
-
-def clamp_report(manifest: dict) -> str | None:
-    """The line about the voxels the finished job clamped as too dense (manifest
-    ``clamped_density``), or None when none were. Voxels clamped as too thin alone are not
-    reported: they lie between the background threshold and pure Clear's density and print as
-    Clear, as the background does."""
-    c = manifest.get("clamped_density") or {}
-    hi = int(c.get("n_clamped_high", 0))
-    lo = int(c.get("n_clamped_low", 0))
-    if hi == 0:
-        return None
-    n = max(1, int(manifest.get("total_voxels", 1)))
-    parts = []
-    if hi:
-        parts.append(f"{hi:,} too dense (printed at the inks' densest, short by up to "
-                     f"{c.get('max_shortfall_high', 0.0):.3g}/mm)")
-    if lo:
-        parts.append(f"{lo:,} too thin (printed as Clear, denser by up to "
-                     f"{c.get('max_shortfall_low', 0.0):.3g}/mm)")
-    return (f"clamped: {hi + lo:,} voxels ({100 * (hi + lo) / n:.2f} % of the job): "
-            + "; ".join(parts))
 
 
 class _Progress:

@@ -238,21 +238,11 @@ def manifest_summary(manifest: dict, target: str, elapsed_s: float | None = None
         rows.append(f"<tr>{swatch}<td>{escape(lab)}</td><td>{escape(info.get('material', ''))}"
                     f"</td><td align=right>{n:,}</td><td align=right>{100 * n / total:.2f} %"
                     f"</td><td align=right>{'' if conc is None else f'{conc:.4f}'}</td></tr>")
-    clamped = manifest.get("clamped_density") or {}
-    if clamped:
-        low, high = clamped.get("n_clamped_low", 0), clamped.get("n_clamped_high", 0)
-        clamp_text = (f"{_num(low)} voxels too thin to print (printed denser, by at most "
-                      f"{_num(clamped.get('max_shortfall_low', 0), '.3g')} /mm), "
-                      f"{_num(high)} too dense (printed thinner, by at most "
-                      f"{_num(clamped.get('max_shortfall_high', 0), '.3g')} /mm)")
-        other = {k: v for k, v in clamped.items() if k not in (
-            "n_clamped_low", "n_clamped_high", "max_shortfall_low", "max_shortfall_high")}
-        if other:
-            clamp_text += "; " + ", ".join(f"{k} {_num(v, '.4g')}" for k, v in other.items())
-        if not (low or high):
-            clamp_text = "none"
-    else:
-        clamp_text = "none"
+    from dreamprint_gui.job.clamp_report import clamp_summary
+
+    clamp_line = clamp_summary(manifest)
+    clamp_text = ("none" if clamp_line is None
+                  else escape(gui_wording(clamp_line.removeprefix("clamped: "))))
     t = manifest.get("timings_s", {})
     ex = manifest.get("execution") or {}
     run_on = (f"; run on {ex.get('scheduler', 'threads')}"
