@@ -294,8 +294,8 @@ def _job_report_text(job: str, report: dict, z_limit: float) -> str:
         f"{report['total_voxels']:,} voxels;",
         "    intended = the mean concentration the colour tables asked for (manifest); z = "
         "(fraction - intended) / sqrt(intended (1 - intended) / N),",
-        f"    a halftone's count is within +-{z_limit:g} of it; volume ml = voxels x voxel "
-        f"volume ({' x '.join(f'{v:.5g}' for v in report['voxel_mm'])} mm) / 1000;",
+        f"    a halftone's count is within +-{z_limit:g} of it; volume ml = voxels x the "
+        f"job's voxel volume ({' x '.join(f'{v:.5g}' for v in report['voxel_mm'])} mm) / 1000;",
         "    mass g = volume x cured resin density: " + report["density_source"] + "."]
     for p in report["problems"]:
         lines.append(f"  problem: {p}")
