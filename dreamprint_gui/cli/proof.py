@@ -316,10 +316,7 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
     click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'dE p95':>8s} "
                f"{'S-CIELAB':>9s} {'floor':>11s} {'PSNR':>6s} {'SSIM':>6s} {'coverage':>9s}")
 
-    def mark(r, key):
-        sig = r["vs_best"][key]["significant"]
-        return " " if sig is None or sig or r["vs_best"][key]["difference"] == 0 else "~"
-
+    mark = noise_mark
     for r in rows:
         f = r["noise_floor"]
         floor = f"{f['mean_de2000']:.2f}/{f['mean_scielab_de2000']:.2f}" if f else "-"
@@ -328,15 +325,36 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
                    f"{r['mean_scielab_de2000']:8.2f}{mark(r, 'mean_scielab_de2000')} "
                    f"{floor:>11s} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
                    f"{r['coverage_error']:+9.3f}")
-    if any(r["noise_floor"] for r in rows):
-        click.echo(f"~: within {SIGNIFICANCE_FACTOR:g} x the noise floor of the best row (not "
-                   "significant); floor: mean dE2000 / S-CIELAB between two seeds")
+    for line in noise_legend(rows, kw["spp"]):
+        click.echo(line)
     if gfloor is not None:
         click.echo(f"{'gamut floor':25s} {gfloor['mean_de2000']:8.2f} {gfloor['p95_de2000']:8.2f} "
                    f"{gfloor['psnr_db']:6.1f} {gfloor['ssim']:6.3f} "
                    f"{gfloor['coverage_error']:+9.3f}  (the source in the printable colours, "
                    "no light transport)")
 
+
+
+def noise_mark(row: dict, key: str) -> str:
+    """"~" after a methods-table figure whose difference from the best row is within the
+    noise (:func:`..proof.compare.mark_significance`), else a blank."""
+    sig = row["vs_best"][key]["significant"]
+    return " " if sig is None or sig or row["vs_best"][key]["difference"] == 0 else "~"
+
+
+def noise_legend(rows: list[dict], spp: int) -> list[str]:
+    """The lines under a methods table: what "~" means and, when a figure is marked, what
+    tells the rows apart (more samples per pixel: 4 x halve the render noise)."""
+    from dreamprint_gui.proof.compare import SIGNIFICANCE_FACTOR
+
+    if not any(r["noise_floor"] for r in rows):
+        return []
+    out = [f"~: within {SIGNIFICANCE_FACTOR:g} x the noise floor of the best row (not "
+           "significant); floor: mean dE2000 / S-CIELAB between two seeds"]
+    if any(noise_mark(r, k) == "~" for r in rows for k in r.get("vs_best", {})):
+        out.append(f"to tell the ~ rows apart, raise --spp (now {spp}): 4 x the samples "
+                   f"halve the render noise (--spp {4 * spp})")
+    return out
 
 
 def _held_out_correction(source, kw, prefix, iterations, views):
