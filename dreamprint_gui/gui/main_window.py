@@ -427,8 +427,9 @@ class MainWindow(QMainWindow):
         self.profileChanged.emit(profile)
         self.preview.set_inputs(profile=profile, profile_path=path)
         if self.gamut is not None:
-            self.gamut.set_profile(profile.with_settings(
-                layer_thickness_mm=self._ensure_printer().layer_thickness_mm))
+            from dreamprint_gui.job.plan import profile_for_printer
+
+            self.gamut.set_profile(profile_for_printer(profile, self._ensure_printer()))
         self._build_tables(profile)
 
     def _build_tables(self, profile) -> None:
@@ -437,7 +438,9 @@ class MainWindow(QMainWindow):
         size = self.table_size
         # The tables of the job: the profile at the printer's layer thickness (the density
         # of eq. 9 is per layer), so the preview, the gamut page and the export share them.
-        eff = profile.with_settings(layer_thickness_mm=self._ensure_printer().layer_thickness_mm)
+        from dreamprint_gui.job.plan import profile_for_printer
+
+        eff = profile_for_printer(profile, self._ensure_printer())
 
         def job(report, cancel):
             from dreamprint_gui.gamut import get_tables

@@ -47,7 +47,7 @@ from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
            "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
-           "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS"]
+           "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS", "profile_for_printer"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
@@ -132,6 +132,19 @@ def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
                  sampling: str | None = None):
 
     return open_source(spec, **source_options_for(spec, options, content, sampling))
+
+
+def profile_for_printer(profile, printer=None):
+    """The ink profile as a job on ``printer`` uses it: at the printer's layer thickness (the
+    density of eq. 9 is per layer), so that the job, the GUI's preview and gamut pages,
+    ``lookup`` and ``gamut`` share one set of cached tables. ``profile``: an InkProfile, a
+    path or None (built-in); ``printer``: a PrinterProfile, a name, a path or None (the default
+    printer)."""
+    if not hasattr(profile, "with_settings"):
+        profile = load_profile(profile)
+    if not isinstance(printer, PrinterProfile):
+        printer = load_printer(printer)
+    return profile.with_settings(layer_thickness_mm=printer.layer_thickness_mm)
 
 
 def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None,
