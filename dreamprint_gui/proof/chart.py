@@ -305,7 +305,9 @@ def chart_report(s: ChartSettings, chart: Chart, band_R: NDArray, bands: Spectra
 def chart_picture(chart: Chart, band_R: NDArray, bands: SpectralBands,
                   px: int = 48) -> NDArray[np.uint8]:
     """sRGB picture (rows * px, cols * px, 3): one square per patch, measured left half,
-    proofed right half (the proof alone without measurements)."""
+    proofed right half (the proof alone without measurements), numbered in its top-left corner
+    as the report and ``patches.csv`` number the patches (1, 2, ...; row by row), in black or
+    white, whichever stands out from the patch."""
     obs = bands.observer
     rows, cols = _layout(len(chart.recipes))
     img = np.full((rows * px, cols * px, 3), 255, np.uint8)
@@ -323,7 +325,23 @@ def chart_picture(chart: Chart, band_R: NDArray, bands: SpectralBands,
         img[y0:y0 + px - 4, x0:x0 + px - 4] = proof_rgb[k]
         if meas_rgb is not None:
             img[y0:y0 + px - 4, x0:x0 + (px - 4) // 2] = meas_rgb[k]
-    return img
+    return _numbered(img, len(chart.recipes), cols, px)
+
+
+def _numbered(img: NDArray[np.uint8], n: int, cols: int, px: int) -> NDArray[np.uint8]:
+    """The patch numbers written on a chart picture (Pillow's built-in font)."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    pic = Image.fromarray(img)
+    draw = ImageDraw.Draw(pic)
+    font = ImageFont.load_default(size=max(8, px // 4))
+    for k in range(n):
+        r, c = divmod(k, cols)
+        x, y = c * px + 4, r * px + 3
+        corner = img[y:y + px // 4, x:x + px // 3].reshape(-1, 3).mean(axis=0)
+        light = float(corner @ np.array([0.2126, 0.7152, 0.0722])) > 140
+        draw.text((x, y), str(k + 1), fill=(0, 0, 0) if light else (255, 255, 255), font=font)
+    return np.asarray(pic)
 
 
 def _write(rep: dict, chart: Chart, band_R: NDArray, bands: SpectralBands,
