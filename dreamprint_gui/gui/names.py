@@ -19,6 +19,7 @@ _OPTIONS = {"--option level_set=solid": "Level set: Solid",
             "--option level_set=shell": "Level set: Shell",
             "--option grid=NAME": "the Grid control",
             "--option ": "Reader options ",
+            "--up changes it": "the Up control changes it",
             "--content": "Content", "--density-scale": "Density scale",
             "--background": "Background", "--sampling": "Voxel edges", "--up": "Up",
             "--rotate": "Turn", "--fit": "Size of", "--intent": "Rendering intent"}
@@ -52,8 +53,10 @@ SAMPLINGS = (
 
 # ``--up`` ids: the source axis that becomes the print's up (+z)
 UPS = (
-    ("auto", "Auto", "The source's known convention: Gaussian splats (PLY, .splat, SOG) -y, "
-     "SPZ +y, InstantNGP +z; otherwise the file's z"),
+    ("auto", "Auto", "What the file says (an OpenVDB writer: Houdini and Maya y-up, Blender "
+     "z-up, or an up axis in its metadata; the cameras.json beside a 3DGS splat), else a guess "
+     "said under the controls: splats (PLY, .splat, SOG) -y, SPZ +y, InstantNGP +z, otherwise "
+     "the file's z"),
     ("z", "+z (file's z)", "The file's z axis points up"),
     ("-z", "-z", "The file's -z axis points up (turned upside down)"),
     ("y", "+y", "The file's y axis points up (y-up scenes)"),

@@ -31,11 +31,13 @@ from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
     QFormLayout,
+    QFrame,
     QGroupBox,
     QHBoxLayout,
     QLabel,
     QLineEdit,
     QProgressBar,
+    QScrollArea,
     QSlider,
     QSplitter,
     QTabWidget,
@@ -238,6 +240,14 @@ class PreviewPage(QWidget):
         side_l.addWidget(self.warnings_box)
         side_l.addStretch(1)
         side.setMinimumWidth(280)
+        # The controls and warnings scroll when they outgrow the window (a file with reader
+        # choices and several warnings at 1280 x 800): nothing is cut off.
+        self.side_scroll = QScrollArea()
+        self.side_scroll.setWidgetResizable(True)
+        self.side_scroll.setFrameShape(QFrame.Shape.NoFrame)
+        self.side_scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.side_scroll.setWidget(side)
+        self.side_scroll.setMinimumWidth(300)
 
         views = QWidget()
         vl = QVBoxLayout(views)
@@ -252,7 +262,7 @@ class PreviewPage(QWidget):
 
         split = QSplitter()
         split.addWidget(self.pages)
-        split.addWidget(side)
+        split.addWidget(self.side_scroll)
         split.setStretchFactor(0, 4)
         split.setStretchFactor(1, 1)
         lay = QHBoxLayout(self)
@@ -569,7 +579,7 @@ class PreviewPage(QWidget):
         place = self.ctx.placement_json()
         fit = place["fit"].get("mode", "box")
         self.placement_note.setText(
-            f"{place['orientation_text']}; height of "
+            f"{gui_wording(place['orientation_text'])}; height of "
             + ("the object" if fit == "occupied" else "the file's box"))
         self._start_preflight()
         if not self.slice_slider.isEnabled():

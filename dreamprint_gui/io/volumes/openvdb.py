@@ -485,6 +485,8 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
     for g in res["grids"]:
         grids.setdefault(g["name"], g)
     info = {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}
+    if res["metadata"]:
+        info["metadata"] = dict(res["metadata"])  # the writer (creator), an up axis: orient.py
     if not grids:
         raise DreamPrintError("the file holds no grids", path)
     scalar = [g for g in res["grids"] if g["type"] in ("float", "double", "half")]
