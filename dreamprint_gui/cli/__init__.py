@@ -72,6 +72,30 @@ def placement_options(f):
     return f
 
 
+def step_progress(label: str, quiet: bool = False):
+    """``progress(done, total)`` printing ``label: done/total steps, elapsed, about T left``
+    on stderr after each step (a step of the slow commands, seconds each: fits, render
+    passes); ``progress(0, total)``, called once the inputs are checked, says what started.
+    None when ``quiet``."""
+    import time
+
+    if quiet:
+        return None
+    t0 = [time.monotonic()]
+
+    def report(done: int, total: int) -> None:
+        if done == 0:
+            t0[0] = time.monotonic()
+            click.echo(f"{label}: 0/{total}, started", err=True)
+            return
+        el = time.monotonic() - t0[0]
+        left = el / done * (total - done) if done else float("nan")
+        tail = f", about {left:.0f} s left" if done < total else ", done"
+        click.echo(f"{label}: {done}/{total} ({el:.0f} s{tail})", err=True)
+
+    return report
+
+
 def placement_values(up: str, rotate: str) -> tuple[str | None, int]:
     """(up or None for auto, rotate in degrees) from the CLI's values."""
     from dreamprint_gui.io.volumes.orient import parse_rotate

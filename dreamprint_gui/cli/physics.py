@@ -102,9 +102,10 @@ def predict(mix_text: str | None, mix_file: Path | None, profile_path: str | Non
               help="Chart readings include surface reflections (Saunderson k1,k2).")
 @click.option("--folds", default=5, show_default=True, help="Cross-validation folds (chart).")
 @click.option("--json", "as_json", is_flag=True, help="Print the fit report as JSON.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress on stderr.")
 def calibrate(measurements: Path | None, output: Path, chart: Path | None,
               reflectance: Path | None, base_profile: str | None, name: str | None,
-              saunderson: str | None, folds: int, as_json: bool) -> None:
+              saunderson: str | None, folds: int, as_json: bool, quiet: bool) -> None:
     """Fit ink K and S from measurements and write a profile.
 
     MEASUREMENTS is a calibration set (.toml, naming instrument files per ink) or a CSV in
@@ -119,7 +120,7 @@ def calibrate(measurements: Path | None, output: Path, chart: Path | None,
             raise click.UsageError("a chart needs both --chart and --reflectance (and no "
                                    "MEASUREMENTS)")
         report = _calibrate_chart(base, chart, reflectance, name, parse_pair(
-            saunderson, "--saunderson"), folds, output)
+            saunderson, "--saunderson"), folds, output, quiet)
     else:
         if measurements is None:
             raise click.UsageError("give MEASUREMENTS (.toml or .csv) or --chart/--reflectance")
@@ -150,15 +151,19 @@ def _calibrate_layers(base, path: Path, name: str | None, output: Path) -> dict:
 
 
 def _calibrate_chart(base, chart: Path, reflectance: Path, name: str | None,
-                     saunderson, folds: int, output: Path) -> dict:
+                     saunderson, folds: int, output: Path, quiet: bool = False) -> dict:
     from dreamprint_gui.core.profile import save_profile
     from dreamprint_gui.io.chart_files import read_chart
     from dreamprint_gui.physics.chart_calibration import fit_chart
 
     files = read_chart(chart, reflectance, base.wavelengths_nm)
     recipes, spectra = files.recipes, files.reflectance
+    from dreamprint_gui.cli import step_progress
+
     fit = fit_chart(base, recipes, spectra, folds=folds, saunderson=saunderson,
-                    name=name or output.stem, source=str(chart))
+                    name=name or output.stem, source=str(chart),
+                    progress=step_progress(f"calibrate --chart, {len(recipes)} patches: fits (all "
+                                           "patches, then each fold)", quiet))
     save_profile(fit.profile, output)
     return {"profile": str(output), "kind": "chart", **fit.report()}
 

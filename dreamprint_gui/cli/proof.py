@@ -240,7 +240,9 @@ def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickn
                       geometry=geometry, thickness_mm=thickness_mm,
                       spp=kw["spp"] if spp_given else DEFAULT_CHART_SPP, bands=kw["bands"],
                       seed=kw["seed"], max_depth=kw["max_depth"], overwrite=overwrite)
-    rep = run_chart_proof(s)
+    from dreamprint_gui.cli import step_progress
+
+    rep = run_chart_proof(s, step_progress("chart proof: render passes (3 bands each)"))
     if kw["as_json"]:
         click.echo(json.dumps(rep, indent=2))
         return

@@ -239,6 +239,8 @@ def render_chart(recipes: NDArray, profile: InkProfile, optics: Optics, bands: S
     passes = -(-nb // 3)
     out = np.zeros((n, passes * 3))
     t = THICK_MM if thickness_mm is None else float(thickness_mm)
+    if progress is not None:
+        progress(0, passes)
     for p in range(passes):
         if cancelled is not None and cancelled():
             raise JobCancelled("the chart proof was cancelled")
@@ -392,8 +394,10 @@ def proof_chart(chart: Chart, s: ChartSettings,
     return chart_report(s, chart, band_R, bands, info), band_R, bands
 
 
-def run_chart_proof(s: ChartSettings) -> dict[str, Any]:
-    """Check the inputs, render, write ``s.output`` atomically; returns the report."""
+def run_chart_proof(s: ChartSettings,
+                    progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+    """Check the inputs, render, write ``s.output`` atomically; returns the report.
+    ``progress(done, total)`` after each render pass (three bands each)."""
     if s.output is None:
         raise DreamPrintError("no output folder given (-o DIR)")
     out = Path(s.output)
@@ -404,7 +408,7 @@ def run_chart_proof(s: ChartSettings) -> dict[str, Any]:
     if not out.absolute().parent.is_dir():
         raise DreamPrintError("the folder to write into does not exist", out.absolute().parent)
     chart = load_chart(s)
-    rep, band_R, bands = proof_chart(chart, s)
+    rep, band_R, bands = proof_chart(chart, s, progress)
     with staged_folder(out, "chart") as tmp:
         _write(rep, chart, band_R, bands, tmp)
     return rep

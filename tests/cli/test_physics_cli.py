@@ -159,4 +159,7 @@ def test_calibrate_chart_as_published_reports_cross_validated_de(tmp_path, capsy
     rep = json.loads(stdout)
     assert rep["patches"] == 24
     assert rep["cross_validated_dE2000"]["mean"] < rep["base_dE2000"]["mean"]
+    # the wait is visible: a line when it starts and after each of the 1 + 2 fits
+    steps = [ln for ln in err.splitlines() if ln.startswith("calibrate --chart, 24 patches")]
+    assert len(steps) == 4 and steps[-1].endswith("3/3 (" + steps[-1].split("(")[-1])
     assert load_profile(out).residuals["chart"]["folds"] == 2

@@ -138,6 +138,10 @@ def test_chart_proof_command(tmp_path, capsys):
     assert rep["de2000"]["worst_patches"][0]["patch"] == int(np.argmax(de)) + 1
     lines = (out / "patches.csv").read_text().splitlines()
     assert len(lines) == 4 and lines[0].endswith("de2000")
+    # the wait is visible (issue 46): a line when rendering starts and after each of the 12
+    # passes of 3 bands
+    steps = [ln for ln in err.splitlines() if ln.startswith("chart proof: render passes")]
+    assert len(steps) == 13 and "12/12" in steps[-1] and "done" in steps[-1]
 
 
 @pytest.mark.parametrize("case, words", [
