@@ -113,7 +113,7 @@ def _stated_up(meta: dict) -> tuple[str, str] | None:
     creator = str(meta.get("creator", ""))
     for word, up, name in _VDB_WRITERS:
         if word in creator.lower():
-            return up, f"written by {name} ({creator!r}), whose scenes are {up.lstrip('-')}-up"
+            return up, f"written by {name}, whose scenes are {up.lstrip('-')}-up"
     return None
 
 
