@@ -748,12 +748,20 @@ class FitPage(_TaskPage):
             if recipes is not None:
                 from dreamprint_gui.physics.chart_calibration import fit_chart
 
-                report(f"refitting the inks to the chart's {len(recipes)} patches with "
+                n = len(recipes)
+                report(f"refitting the inks to the chart's {n} patches with "
                        f"{folds}-fold cross-validation (this can take a minute):")
                 start = profile
+
+                def step(done: int, total: int) -> None:
+                    report(f"refitting the inks to the chart's {n} patches: fit {done + 1} "
+                           f"of {total} (all patches, then each of the {total - 1} folds):"
+                           if done < total else
+                           f"refitted to the chart's {n} patches ({total} fits):")
+
                 chart_fit = abandonable(
-                    lambda: fit_chart(start, recipes, refl, name=name, folds=folds), cancel,
-                    name="fit-chart")
+                    lambda: fit_chart(start, recipes, refl, name=name, folds=folds,
+                                      progress=step), cancel, name="fit-chart")
                 profile = chart_fit.profile
             return profile, fits, chart_fit, measurements, held
 
