@@ -103,3 +103,19 @@ def test_a_splat_stands_as_its_cameras_stood(shared_data, tmp_path):
     (model / "cameras.json").write_text(json.dumps(_cameras(24, (0, 0, 1), rng, 12)))
     o = choose_orientation(open_source(ply), None, 0)   # cameras disagree: the convention
     assert (o.up, o.guessed) == ("-y", True) and "a guess" in o.describe()
+
+
+def test_inspect_says_how_a_level_set_stands(tmp_path, openvdb_python, capsys):
+    """A level set is placed as a job opens it (content auto: a solid), so inspect says its
+    orientation too (it said nothing: the file was opened as a fog and refused)."""
+    script = tmp_path / "w.py"
+    script.write_text(textwrap.dedent('''
+        import sys
+        import pyopenvdb as vdb
+        ls = vdb.createLevelSetSphere(radius=1.0, center=(0, 0, 0), voxelSize=0.1)
+        vdb.write(sys.argv[1], [ls], metadata={'creator': 'Houdini 20.0/GEO_VDBTranslator'})
+    '''))
+    subprocess.run([openvdb_python, "-I", str(script), str(tmp_path / "ls.vdb")], check=True)
+    assert main(["inspect", str(tmp_path / "ls.vdb")]) == 0
+    out = capsys.readouterr().out
+    assert "print orientation: up = source y (auto: written by Houdini" in out
