@@ -170,6 +170,20 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
                                progress=progress)
 
 
+# A source file at least this large is announced before it is read (reading takes seconds).
+OPENING_NOTICE_BYTES = 50_000_000
+
+
+def _source_bytes(spec: str) -> int:
+    """Bytes of a source file, or of the files directly in a source folder (0 for "demo")."""
+    try:
+        if os.path.isdir(spec):
+            return sum(e.stat().st_size for e in os.scandir(spec) if e.is_file())
+        return os.path.getsize(spec)
+    except OSError:
+        return 0
+
+
 def _seconds(s: float) -> str:
     return f"{s:.0f} s" if s < 90 else f"{s / 60:.1f} min"
 
@@ -358,11 +372,22 @@ def prepare_job(settings: ConvertSettings,
     """Open the source, lay out the grid, refuse a job larger than the tray, build the tables.
 
     ``notify(message)`` is told of each first-use build (compiled kernels, colour tables,
-    blue-noise mask) before it starts, with its estimated time, and of the tables' progress."""
+    blue-noise mask) before it starts, with its estimated time, and of the tables' progress;
+    of a large source file (``OPENING_NOTICE_BYTES``) before it is read, and of any source
+    that took more than 2 s to open, with the time it took."""
+    import time
+
     s = settings
     check_settings(s)
     printer = load_printer(s.printer)
+    name = os.path.basename(str(s.source).rstrip("/")) or str(s.source)
+    if notify is not None and _source_bytes(s.source) >= OPENING_NOTICE_BYTES:
+        notify(f"opening the source {name} ({_source_bytes(s.source) / 1e6:.0f} MB) ...")
+    t_open = time.perf_counter()
     source = _open_source(s.source, s.source_options, s.content, s.sampling)
+    t_open = time.perf_counter() - t_open
+    if notify is not None and t_open > 2.0:
+        notify(f"opened the source {name} in {t_open:.1f} s")
     if notify is not None:
         for msg in _compile_notices(source):
             notify(msg)
