@@ -4,7 +4,7 @@ operator's 2-fold workflow (calibrate from half the patches, chart-proof the oth
 Needs a chart's recipes (``calibrate --chart`` format) and its measured reflectance (one
 spectrum per recipe). The data used for the figures in docs/physics.md (70 printed PolyJet
 mixtures of K, C, M, Y, W, measured 380-730 nm) is public but under a non-commercial licence, so
-it is not shipped: convert it to these two CSVs (see docs/physics.md, "Chart proof").
+it is not shipped: its `ratios.csv` and `color_measurements.csv` are read as distributed.
 
     python benchmarks/bench_chart_proof.py RECIPES.csv REFLECTANCE.csv [--spp 512]
         [--variants none,glossy,matte,none+hg:0.4 | --variants ""] [--no-folds] [--geometry d:8]
@@ -25,15 +25,13 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from pathlib import Path
 
 import numpy as np
 
 
 def main() -> None:
     from dreamprint_gui.core.profile import default_profile
-    from dreamprint_gui.io.recipes import read_recipes
-    from dreamprint_gui.io.spectra import read_spectra
+    from dreamprint_gui.io.chart_files import read_chart
     from dreamprint_gui.physics.chart_calibration import fit_chart
     from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
     from dreamprint_gui.physics.kubelka_munk import mix, reflectance_infinite
@@ -53,9 +51,8 @@ def main() -> None:
     args = ap.parse_args()
 
     base = default_profile()
-    c = read_recipes(Path(args.recipes))
-    sf = read_spectra(args.reflectance, quantity="reflectance")
-    R = np.stack([s.resample(base.wavelengths_nm) for s in sf.samples])
+    files = read_chart(args.recipes, args.reflectance, base.wavelengths_nm)
+    c, R = files.recipes, files.reflectance
     obs = observer_for(base.wavelengths_nm)
     lab = obs.spectra_to_Lab(R)
     print(f"{len(c)} patches, {args.geometry}, {args.spp} spp, {args.bands} bands; "

@@ -54,9 +54,10 @@ def placement_options(f):
     opts = [
         click.option("--up", type=click.Choice(["auto", "x", "-x", "y", "-y", "z", "-z"]),
                      default="auto", show_default=True,
-                     help="The source axis that becomes the print's up (+z). auto: the "
-                          "source's known convention (Gaussian splats PLY/.splat/SOG -y, SPZ "
-                          "y, InstantNGP z), else z."),
+                     help="The source axis that becomes the print's up (+z). auto: what "
+                          "the file says (OpenVDB: Houdini/Maya y, Blender z, or an up axis in "
+                          "its metadata; a 3DGS splat: its cameras.json), else a guess said as "
+                          "one (splats PLY/.splat/SOG -y, SPZ y, InstantNGP z, else z)."),
         click.option("--rotate", default="0", show_default=True,
                      help="Turn the print about its z: 0, 90, 180 or 270 degrees "
                           "(counter-clockwise seen from above)."),
@@ -69,6 +70,30 @@ def placement_options(f):
     for o in reversed(opts):
         f = o(f)
     return f
+
+
+def step_progress(label: str, quiet: bool = False):
+    """``progress(done, total)`` printing ``label: done/total steps, elapsed, about T left``
+    on stderr after each step (a step of the slow commands, seconds each: fits, render
+    passes); ``progress(0, total)``, called once the inputs are checked, says what started.
+    None when ``quiet``."""
+    import time
+
+    if quiet:
+        return None
+    t0 = [time.monotonic()]
+
+    def report(done: int, total: int) -> None:
+        if done == 0:
+            t0[0] = time.monotonic()
+            click.echo(f"{label}: 0/{total}, started", err=True)
+            return
+        el = time.monotonic() - t0[0]
+        left = el / done * (total - done) if done else float("nan")
+        tail = f", about {left:.0f} s left" if done < total else ", done"
+        click.echo(f"{label}: {done}/{total} ({el:.0f} s{tail})", err=True)
+
+    return report
 
 
 def placement_values(up: str, rotate: str) -> tuple[str | None, int]:

@@ -22,6 +22,12 @@ _INTENT_HELP = ("Rendering intent for colours outside the printable gamut: color
                 "compression in CAM16-UCS). Default: the profile's, else colorimetric.")
 
 
+_PRINTER = click.option(
+    "--printer", default=None, metavar="P",
+    help="The printer whose layer thickness the densities are per (built-in name or .toml; "
+         "default: the default printer): the tables a job on it uses, cached once for both.")
+
+
 def _parse_rgb(text: str) -> list[float]:
     parts = [p.strip() for p in text.split(",")]
     try:
@@ -93,16 +99,18 @@ def _progress_bar(what: str = ""):
               "built-in).")
 @click.option("--objective", type=_OBJECTIVES, default=None, help=_OBJECTIVE_HELP)
 @click.option("--intent", type=_INTENTS, default=None, help=_INTENT_HELP)
+@_PRINTER
 @click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, size,
+def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, printer, size,
            as_json) -> None:
     """Ink concentrations for colours: table lookup, density alignment, reproduced colour."""
     import numpy as np
 
-    from dreamprint_gui.core.profile import COLOUR_INKS, INKS, load_profile
+    from dreamprint_gui.core.profile import COLOUR_INKS, INKS
     from dreamprint_gui.gamut import align_density, get_tables
     from dreamprint_gui.gamut import lookup as table_lookup
+    from dreamprint_gui.job.plan import profile_for_printer
     from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for, srgb_to_lab
     from dreamprint_gui.physics.mixture import predict
 
@@ -111,7 +119,7 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, size,
     if density is not None and not (math.isfinite(density) and density >= 0):
         raise DreamPrintError("--density must be a finite number >= 0 (1/mm)")
     colours = [_parse_rgb(rgb_text)] if rgb_text else _read_rgb_file(rgb_file)
-    profile = load_profile(profile_path)
+    profile = profile_for_printer(profile_path, printer)
     tables = get_tables(profile, objective, size, progress=_progress_bar(), intent=intent)
     rgb = np.asarray(colours, dtype=np.float64)
     conc5 = table_lookup(tables, rgb)
@@ -159,18 +167,19 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, size,
 @click.option("--chart", type=click.Path(dir_okay=False), help="Write the Fig. 7 hexagon chart "
               "(PNG).")
 @click.option("--plot", type=click.Path(dir_okay=False), help="Write the CIELAB gamut plot (PNG).")
+@_PRINTER
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def gamut(profile_path, objective, intent, compare, size, samples, chart, plot,
+def gamut(profile_path, objective, intent, compare, size, samples, chart, plot, printer,
           as_json) -> None:
     """Build (or load) the colour tables and report the printable gamut."""
-    from dreamprint_gui.core.profile import load_profile
     from dreamprint_gui.gamut import get_tables
     from dreamprint_gui.gamut.charts import gamut_plot, hexagon_chart
     from dreamprint_gui.gamut.evaluation import evaluate
     from dreamprint_gui.gamut.optimise import OBJECTIVES
     from dreamprint_gui.gamut.tables import resolve_choice
+    from dreamprint_gui.job.plan import profile_for_printer
 
-    profile = load_profile(profile_path)
+    profile = profile_for_printer(profile_path, printer)
     objective, intent = resolve_choice(profile, objective, intent)
     tables = get_tables(profile, objective, size, progress=_progress_bar(f"{objective}, {intent}"),
                         intent=intent)

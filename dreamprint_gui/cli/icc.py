@@ -51,12 +51,14 @@ def icc(output, profile_path, printer, intent, objective, size, icc_version, gri
     from dreamprint_gui.gamut.icc import check_target
     from dreamprint_gui.gamut.icc_export import export_icc
     from dreamprint_gui.gamut.tables import resolve_choice
+    from dreamprint_gui.job.plan import profile_for_printer
 
     for target in (output, cgats):
         if target is not None:
             check_target(target)
     printer_profile = load_printer(printer)
-    profile = load_profile(profile_path)
+    # the profile as a job on this printer uses it: the job's (and lookup's) cached tables
+    profile = profile_for_printer(load_profile(profile_path), printer_profile)
     objective, intent = resolve_choice(profile, objective, intent)
     tables = get_tables(profile, objective, size, intent=intent,
                         progress=_progress_bar(f"{objective}, {intent}"))

@@ -106,12 +106,9 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     from dreamprint_gui.job.run import run_conversion
 
     up_axis, turn = placement_values(up, rotate)
-    opts = {}
-    for kv in source_options:
-        if "=" not in kv:
-            raise DreamPrintError(f"--option must be KEY=VALUE, got '{kv}'")
-        k, v = kv.split("=", 1)
-        opts[k.strip()] = _option_value(v.strip())
+    from dreamprint_gui.io.volumes.registry import parse_reader_options
+
+    opts = parse_reader_options(source_options)
     settings = ConvertSettings(
         source=source, output=output, profile=profile, printer=printer, height_mm=height_mm,
         size_mm=_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
@@ -162,7 +159,9 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         signal.signal(signal.SIGTERM, old)
     t = manifest["timings_s"]
     nx, ny, nz = manifest["grid_dimensions"]
-    clamp_line = clamp_report(manifest)
+    from dreamprint_gui.job.clamp_report import clamp_summary
+
+    clamp_line = clamp_summary(manifest)
     if clamp_line and not quiet:
         click.echo(clamp_line, err=True)
     if as_json:
@@ -206,28 +205,6 @@ def _compensate_for(settings, quiet: bool) -> Path:
                    f"{f['before']['coverage_error']:+.3f} -> {f['after']['coverage_error']:+.3f}"
                    f" ({report['seconds']:.0f} s); wrote {out}", err=True)
     return out
-
-
-def clamp_report(manifest: dict) -> str | None:
-    """The line about the voxels the finished job clamped as too dense (manifest
-    ``clamped_density``), or None when none were. Voxels clamped as too thin alone are not
-    reported: they lie between the background threshold and pure Clear's density and print as
-    Clear, as the background does."""
-    c = manifest.get("clamped_density") or {}
-    hi = int(c.get("n_clamped_high", 0))
-    lo = int(c.get("n_clamped_low", 0))
-    if hi == 0:
-        return None
-    n = max(1, int(manifest.get("total_voxels", 1)))
-    parts = []
-    if hi:
-        parts.append(f"{hi:,} too dense (printed at the inks' densest, short by up to "
-                     f"{c.get('max_shortfall_high', 0.0):.3g}/mm)")
-    if lo:
-        parts.append(f"{lo:,} too thin (printed as Clear, denser by up to "
-                     f"{c.get('max_shortfall_low', 0.0):.3g}/mm)")
-    return (f"clamped: {hi + lo:,} voxels ({100 * (hi + lo) / n:.2f} % of the job): "
-            + "; ".join(parts))
 
 
 class _Progress:
@@ -276,15 +253,6 @@ class _Progress:
             self.bar = None
 
 
-def _option_value(v: str):
-    for conv in (int, float):
-        try:
-            return conv(v)
-        except ValueError:
-            pass
-    return {"true": True, "false": False}.get(v.lower(), v)
-
-
 @evaluate.command("job")
 @click.argument("job", type=click.Path())
 @click.option("--printer", default=None,
@@ -326,8 +294,8 @@ def _job_report_text(job: str, report: dict, z_limit: float) -> str:
         f"{report['total_voxels']:,} voxels;",
         "    intended = the mean concentration the colour tables asked for (manifest); z = "
         "(fraction - intended) / sqrt(intended (1 - intended) / N),",
-        f"    a halftone's count is within +-{z_limit:g} of it; volume ml = voxels x voxel "
-        f"volume ({' x '.join(f'{v:.5g}' for v in report['voxel_mm'])} mm) / 1000;",
+        f"    a halftone's count is within +-{z_limit:g} of it; volume ml = voxels x the "
+        f"job's voxel volume ({' x '.join(f'{v:.5g}' for v in report['voxel_mm'])} mm) / 1000;",
         "    mass g = volume x cured resin density: " + report["density_source"] + "."]
     for p in report["problems"]:
         lines.append(f"  problem: {p}")

@@ -93,7 +93,8 @@ def predict(mix_text: str | None, mix_file: Path | None, profile_path: str | Non
 @click.option("--chart", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Recipes CSV of a printed mixture chart.")
 @click.option("--reflectance", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              help="Measured reflectance of the chart's patches (CSV, header of wavelengths).")
+              help="Measured reflectance of the chart's patches (any format `dreamprint spectra` "
+                   "reads), one spectrum per recipe in the same order.")
 @click.option("--base-profile", default=None, metavar="P",
               help="Profile to start from / keep unmeasured inks from (default: built-in).")
 @click.option("--name", default=None, help="Name of the new profile.")
@@ -110,10 +111,11 @@ def predict(mix_text: str | None, mix_file: Path | None, profile_path: str | Non
               help="With --slabs: fit the faces' internal reflectance k2 per ink (two or more "
                    "thicknesses) instead of the diffuse value of the refractive index.")
 @click.option("--json", "as_json", is_flag=True, help="Print the fit report as JSON.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress on stderr.")
 def calibrate(measurements: Path | None, output: Path, chart: Path | None,
               reflectance: Path | None, base_profile: str | None, name: str | None,
               saunderson: str | None, folds: int, slabs: bool, refractive_index: float,
-              fit_k2: bool, as_json: bool) -> None:
+              fit_k2: bool, as_json: bool, quiet: bool) -> None:
     """Fit ink K and S from measurements and write a profile.
 
     MEASUREMENTS is a calibration set (.toml, naming instrument files per ink) or a CSV in
@@ -129,7 +131,7 @@ def calibrate(measurements: Path | None, output: Path, chart: Path | None,
             raise click.UsageError("a chart needs both --chart and --reflectance (and no "
                                    "MEASUREMENTS)")
         report = _calibrate_chart(base, chart, reflectance, name, parse_pair(
-            saunderson, "--saunderson"), folds, output)
+            saunderson, "--saunderson"), folds, output, quiet)
     else:
         if measurements is None:
             raise click.UsageError("give MEASUREMENTS (.toml or .csv) or --chart/--reflectance")
@@ -171,22 +173,19 @@ def _calibrate_layers(base, path: Path, name: str | None, output: Path, slabs=No
 
 
 def _calibrate_chart(base, chart: Path, reflectance: Path, name: str | None,
-                     saunderson, folds: int, output: Path) -> dict:
+                     saunderson, folds: int, output: Path, quiet: bool = False) -> dict:
     from dreamprint_gui.core.profile import save_profile
-    from dreamprint_gui.io.recipes import read_recipes, read_spectra_rows
+    from dreamprint_gui.io.chart_files import read_chart
     from dreamprint_gui.physics.chart_calibration import fit_chart
 
-    recipes = read_recipes(chart)
-    wl, spectra = read_spectra_rows(reflectance)
-    from dreamprint_gui.core.spectral_grid import resample
+    files = read_chart(chart, reflectance, base.wavelengths_nm)
+    recipes, spectra = files.recipes, files.reflectance
+    from dreamprint_gui.cli import step_progress
 
-    spectra = resample(wl, spectra, base.wavelengths_nm, source=str(reflectance))
-    if spectra.shape[0] != recipes.shape[0]:
-        raise DreamPrintError(f"{spectra.shape[0]} spectra but {recipes.shape[0]} recipes in "
-                              f"{chart}; one spectrum row per recipe, in the same order",
-                              reflectance)
     fit = fit_chart(base, recipes, spectra, folds=folds, saunderson=saunderson,
-                    name=name or output.stem, source=str(chart))
+                    name=name or output.stem, source=str(chart),
+                    progress=step_progress(f"calibrate --chart, {len(recipes)} patches: fits (all "
+                                           "patches, then each fold)", quiet))
     save_profile(fit.profile, output)
     return {"profile": str(output), "kind": "chart", **fit.report()}
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 
 from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
-from dreamprint_gui.cli.jobs import _fmt_time, _option_value, _size
+from dreamprint_gui.cli.jobs import _fmt_time, _size
 from dreamprint_gui.core.errors import DreamPrintError
 
 # Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
@@ -26,13 +26,9 @@ _STAGES = {"preparing": "preparing", "labels": "labels", "source": "source rende
 
 
 def _options(items: tuple[str, ...]) -> tuple[tuple[str, object], ...]:
-    out = []
-    for kv in items:
-        if "=" not in kv:
-            raise DreamPrintError(f"--option must be KEY=VALUE, got '{kv}'")
-        k, v = kv.split("=", 1)
-        out.append((k.strip(), _option_value(v.strip())))
-    return tuple(out)
+    from dreamprint_gui.io.volumes.registry import parse_reader_options
+
+    return tuple(parse_reader_options(items).items())
 
 
 def _drive(gen, prefix: str = "", quiet: bool = False):
@@ -252,7 +248,9 @@ def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickn
                       geometry=geometry, thickness_mm=thickness_mm,
                       spp=kw["spp"] if spp_given else DEFAULT_CHART_SPP, bands=kw["bands"],
                       seed=kw["seed"], max_depth=kw["max_depth"], overwrite=overwrite)
-    rep = run_chart_proof(s)
+    from dreamprint_gui.cli import step_progress
+
+    rep = run_chart_proof(s, step_progress("chart proof: render passes (3 bands each)"))
     if kw["as_json"]:
         click.echo(json.dumps(rep, indent=2))
         return
@@ -329,10 +327,7 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
     click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'dE p95':>8s} "
                f"{'S-CIELAB':>9s} {'floor':>11s} {'PSNR':>6s} {'SSIM':>6s} {'coverage':>9s}")
 
-    def mark(r, key):
-        sig = r["vs_best"][key]["significant"]
-        return " " if sig is None or sig or r["vs_best"][key]["difference"] == 0 else "~"
-
+    mark = noise_mark
     for r in rows:
         f = r["noise_floor"]
         floor = f"{f['mean_de2000']:.2f}/{f['mean_scielab_de2000']:.2f}" if f else "-"
@@ -341,9 +336,8 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
                    f"{r['mean_scielab_de2000']:8.2f}{mark(r, 'mean_scielab_de2000')} "
                    f"{floor:>11s} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
                    f"{r['coverage_error']:+9.3f}")
-    if any(r["noise_floor"] for r in rows):
-        click.echo(f"~: within {SIGNIFICANCE_FACTOR:g} x the noise floor of the best row (not "
-                   "significant); floor: mean dE2000 / S-CIELAB between two seeds")
+    for line in noise_legend(rows, kw["spp"]):
+        click.echo(line)
     for r in rows:
         lines = clear_lines(r["clear"]) if r["clear"].get("figures") else []
         if lines:
@@ -358,6 +352,28 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
                    f"{gfloor['coverage_error']:+9.3f}  (the source in the printable colours, "
                    "no light transport)")
 
+
+
+def noise_mark(row: dict, key: str) -> str:
+    """"~" after a methods-table figure whose difference from the best row is within the
+    noise (:func:`..proof.compare.mark_significance`), else a blank."""
+    sig = row["vs_best"][key]["significant"]
+    return " " if sig is None or sig or row["vs_best"][key]["difference"] == 0 else "~"
+
+
+def noise_legend(rows: list[dict], spp: int) -> list[str]:
+    """The lines under a methods table: what "~" means and, when a figure is marked, what
+    tells the rows apart (more samples per pixel: 4 x halve the render noise)."""
+    from dreamprint_gui.proof.compare import SIGNIFICANCE_FACTOR
+
+    if not any(r["noise_floor"] for r in rows):
+        return []
+    out = [f"~: within {SIGNIFICANCE_FACTOR:g} x the noise floor of the best row (not "
+           "significant); floor: mean dE2000 / S-CIELAB between two seeds"]
+    if any(noise_mark(r, k) == "~" for r in rows for k in r.get("vs_best", {})):
+        out.append(f"to tell the ~ rows apart, raise --spp (now {spp}): 4 x the samples "
+                   f"halve the render noise (--spp {4 * spp})")
+    return out
 
 
 def _held_out_correction(source, kw, prefix, iterations, views):

@@ -175,8 +175,10 @@ def _placement(file: str, src, up: str | None, rotate: int, fit: str) -> dict | 
     from dreamprint_gui.io.volumes.registry import open_source
 
     if src is None:
-        try:
-            src = open_source(file)
+        from dreamprint_gui.job.plan import source_options_for
+
+        try:  # as a job with its defaults opens it (content auto: a level set as a solid)
+            src = open_source(file, **source_options_for(file, {}, "auto"))
         except DreamPrintError:
             return None  # described, not printable as opened by default (inspect says why)
     o = choose_orientation(src, up, rotate)

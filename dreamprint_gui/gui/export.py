@@ -95,12 +95,14 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                      workers: int | None = None, scheduler: str | None = None,
                      table_size: int | None = None, content: str = "auto",
                      sampling: str | None = None, intent: str | None = None,
-                     up: str | None = None, rotate: int = 0, fit: str = "occupied"):
+                     up: str | None = None, rotate: int = 0, fit: str = "occupied",
+                     source_options: dict | None = None):
     """The engine's ``ConvertSettings`` for the GUI's choices (printer: name, path or profile;
     ``content`` fog, solid or auto; ``sampling`` None for the reader's own, or "linear";
     ``intent`` the rendering intent, None for the profile's; ``up`` the source axis that
     becomes +z, None or "auto" for the source's convention; ``rotate`` quarter turns about z
-    in degrees; ``fit`` "occupied" or "box")."""
+    in degrees; ``fit`` "occupied" or "box"; ``source_options`` the reader's options, as the
+    CLI's ``--option``)."""
     from dreamprint_gui.job.plan import ConvertSettings
 
     if printer is not None and not isinstance(printer, str | os.PathLike):
@@ -115,7 +117,8 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
                            seed=int(seed), workers=workers, scheduler=scheduler,
                            background=background, content=content, sampling=sampling,
                            overwrite=overwrite, up=None if up in (None, "auto") else up,
-                           rotate=int(rotate), fit=fit, **extra)
+                           rotate=int(rotate), fit=fit,
+                           source_options=dict(source_options or {}), **extra)
 
 
 def placement_combos(params: dict | None = None) -> tuple[QComboBox, QComboBox, QComboBox]:
@@ -235,21 +238,11 @@ def manifest_summary(manifest: dict, target: str, elapsed_s: float | None = None
         rows.append(f"<tr>{swatch}<td>{escape(lab)}</td><td>{escape(info.get('material', ''))}"
                     f"</td><td align=right>{n:,}</td><td align=right>{100 * n / total:.2f} %"
                     f"</td><td align=right>{'' if conc is None else f'{conc:.4f}'}</td></tr>")
-    clamped = manifest.get("clamped_density") or {}
-    if clamped:
-        low, high = clamped.get("n_clamped_low", 0), clamped.get("n_clamped_high", 0)
-        clamp_text = (f"{_num(low)} voxels too thin to print (printed denser, by at most "
-                      f"{_num(clamped.get('max_shortfall_low', 0), '.3g')} /mm), "
-                      f"{_num(high)} too dense (printed thinner, by at most "
-                      f"{_num(clamped.get('max_shortfall_high', 0), '.3g')} /mm)")
-        other = {k: v for k, v in clamped.items() if k not in (
-            "n_clamped_low", "n_clamped_high", "max_shortfall_low", "max_shortfall_high")}
-        if other:
-            clamp_text += "; " + ", ".join(f"{k} {_num(v, '.4g')}" for k, v in other.items())
-        if not (low or high):
-            clamp_text = "none"
-    else:
-        clamp_text = "none"
+    from dreamprint_gui.job.clamp_report import clamp_summary
+
+    clamp_line = clamp_summary(manifest)
+    clamp_text = ("none" if clamp_line is None
+                  else escape(gui_wording(clamp_line.removeprefix("clamped: "))))
     t = manifest.get("timings_s", {})
     ex = manifest.get("execution") or {}
     run_on = (f"; run on {ex.get('scheduler', 'threads')}"
@@ -365,6 +358,8 @@ class ExportDialog(QDialog):
         pp = preview_params or {}
         self.context = context  # the preview's JobContext: reused when the job's source matches
         self.sampling_choice = pp.get("sampling")  # the preview's voxel-edge choice
+        # how the preview reads the file (grid, level set, reader options): the job's too
+        self.source_options = dict(pp.get("source_options") or {})
         self.preflight = None  # the engine's Preflight of the current settings
         self._preflight_settings = None  # the settings it estimated
         self._preflight_task: Task | None = None
@@ -672,7 +667,8 @@ class ExportDialog(QDialog):
             workers=workers, scheduler=scheduler, table_size=self.table_size,
             content=str(self.content.currentData()), sampling=self.sampling_choice,
             intent=str(self.intent.currentData()) or None, up=str(self.up.currentData()),
-            rotate=int(self.turn.currentData()), fit=str(self.fit.currentData()))
+            rotate=int(self.turn.currentData()), fit=str(self.fit.currentData()),
+            source_options=self.source_options)
 
     # running ----------------------------------------------------------------------------------
     def start(self) -> None:

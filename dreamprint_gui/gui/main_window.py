@@ -33,6 +33,7 @@ from PySide6.QtWidgets import (
 )
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.gui.names import gui_wording
 from dreamprint_gui.gui.settings import AppSettings
 from dreamprint_gui.gui.workers import Task, run_task
 
@@ -119,6 +120,9 @@ class MainWindow(QMainWindow):
         # Problems that do not stop an action (a preview, a layer, the gamut page) go to the
         # status bar, once; the pages themselves only say what they are waiting for.
         self.preview.failed.connect(self.note_problem)
+        self.preview.interpretationChanged.connect(
+            lambda: self.preview.source_path and self.set_source(self.preview.source_path,
+                                                                 reopen=True))
         self.preview.problem.connect(self.note_problem)
         if self.gamut is not None:
             self.gamut.problem.connect(self.note_problem)
@@ -301,18 +305,38 @@ class MainWindow(QMainWindow):
         self.last_error = message
         self.statusBar().showMessage(message, 30000)
 
-    def set_source(self, path: str) -> Task:
-        """Open the volume ``path`` on a worker thread; it becomes the source once open."""
+    def set_source(self, path: str, *, reopen: bool = False) -> Task:
+        """Open the volume ``path`` on a worker thread as a job would read it
+        (``job.plan.source_options_for``): a new file with its reader's defaults and content
+        auto (a level set as a solid), ``reopen`` with the preview's interpretation controls.
+        It becomes the source once open. A file that needs a choice the preview offers (which
+        grid, how to read a level set) is handed to the preview with the problem, which waits
+        for that choice."""
         name = "demo volume" if path == "demo" else Path(path).name
         self._source_request = path
         if self._source_task is not None and self._source_task.outcome is None:
             self._source_task.cancel()  # its result is ignored (see _source_opened)
         self._say_waiting(f"opening {name} ...")
+        try:
+            options = self.preview.source_options() if reopen else {}
+        except DreamPrintError as exc:
+            self.preview.hold_for_choice(str(exc))
+            return None
+        content = self.preview.params()["content"] if reopen else "auto"
 
         def job(report, cancel):
             from dreamprint_gui.io.volumes import open_source
+            from dreamprint_gui.io.volumes.registry import interpretation_choices
+            from dreamprint_gui.job.plan import source_options_for
 
-            return open_source(path)
+            choices = interpretation_choices(path)
+            try:
+                return open_source(path, **source_options_for(path, options, content)), \
+                    choices, None
+            except DreamPrintError as exc:
+                if not (choices["grids"] or choices["level_set"] or reopen):
+                    raise
+                return None, choices, str(exc)
 
         task = Task(job, "open-source")
         task.succeeded.connect(lambda src, path=path: self._source_opened(path, src))
@@ -328,9 +352,21 @@ class MainWindow(QMainWindow):
         else:
             self.statusBar().showMessage(text[:1].upper() + text[1:])
 
-    def _source_opened(self, path: str, source) -> None:
+    def _source_opened(self, path: str, result) -> None:
         if path != self._source_request:
             return  # another file was asked for since
+        source, choices, problem = result
+        new = path != self.preview.source_path
+        if problem is not None:  # the preview's controls can solve it: they wait for a choice
+            self.source, self.source_path = None, path
+            self.source_label.setText(f"Source: {Path(path).name} (choose how to read it)")
+            if self.statusBar().currentMessage().startswith("Opening "):
+                self.statusBar().clearMessage()
+            self.preview.hold_for_choice(problem)
+            self.preview.set_inputs(source_path=path, printer=self._ensure_printer())
+            self.preview.set_choices(choices)
+            self._file_problem(gui_wording(problem))
+            return
         self.source, self.source_path = source, path
         name = "demo volume" if path == "demo" else Path(path).name
         self.source_label.setText(f"Source: {name}")
@@ -341,7 +377,10 @@ class MainWindow(QMainWindow):
             self.settings.set_last_folder("volume", path)
         self._remember(path)
         self.sourceChanged.emit(source)
+        self.preview.waiting_for_choice = None
         self.preview.set_inputs(source_path=path, printer=self._ensure_printer())
+        if new:
+            self.preview.set_choices(choices)
 
     def _source_failed(self, path: str, message: str) -> None:
         if path != self._source_request:
@@ -349,7 +388,7 @@ class MainWindow(QMainWindow):
         self._source_request = self.source_path  # the previous source stays
         if self.source is None:
             self.preview.show_waiting("no volume open")
-        self._file_problem(message)
+        self._file_problem(gui_wording(message))
         self.openFailed.emit(path, message)
 
     def _ensure_printer(self):
@@ -390,9 +429,10 @@ class MainWindow(QMainWindow):
         self.profileChanged.emit(profile)
         self.preview.set_inputs(profile=profile, profile_path=path)
         if self.gamut is not None:
+            from dreamprint_gui.job.plan import profile_for_printer
+
             self.gamut.printer_name = self._ensure_printer().display_name
-            self.gamut.set_profile(profile.with_settings(
-                layer_thickness_mm=self._ensure_printer().layer_thickness_mm))
+            self.gamut.set_profile(profile_for_printer(profile, self._ensure_printer()))
         self._build_tables(profile)
 
     def _build_tables(self, profile) -> None:
@@ -401,7 +441,9 @@ class MainWindow(QMainWindow):
         size = self.table_size
         # The tables of the job: the profile at the printer's layer thickness (the density
         # of eq. 9 is per layer), so the preview, the gamut page and the export share them.
-        eff = profile.with_settings(layer_thickness_mm=self._ensure_printer().layer_thickness_mm)
+        from dreamprint_gui.job.plan import profile_for_printer
+
+        eff = profile_for_printer(profile, self._ensure_printer())
 
         def job(report, cancel):
             from dreamprint_gui.gamut import get_tables
@@ -460,8 +502,13 @@ class MainWindow(QMainWindow):
         if self.source is None or self.profile is None:
             QMessageBox.information(self, "DreamPrint", "Open a volume first.")
             return
+        try:
+            params = {**self.preview.params(), "source_options": self.preview.source_options()}
+        except DreamPrintError as exc:
+            self._file_problem(gui_wording(str(exc)), "cannot export")
+            return
         dlg = ExportDialog(self, source_path=self.source_path, profile_path=self.profile_path,
-                           settings=self.settings, preview_params=self.preview.params(),
+                           settings=self.settings, preview_params=params,
                            source_name="demo" if self.source_path == "demo" else None,
                            table_size=self.table_size, context=self.preview.ctx)
         dlg.printerChanged.connect(self.set_printer)

@@ -1,7 +1,8 @@
 """What the GUI calls things: human names for the ids the files and the command line use.
 
 Defines :data:`BACKGROUNDS` (``--background`` ids -> names), :data:`CONTENTS` (``--content``),
-:data:`SAMPLINGS` (``--sampling`` of voxel models), :func:`background_name` and
+:data:`SAMPLINGS` (``--sampling`` of voxel models), :data:`LEVEL_SETS` (``--option
+level_set=``), :func:`background_name` and
 :func:`printer_name` (a printer's human name, ``PrinterProfile.display_name``, for the id
 ``j850-paper``). The ids stay in the files (manifest, settings); only the screen uses these
 names, the same on every page.
@@ -9,11 +10,17 @@ names, the same on every page.
 
 from __future__ import annotations
 
-__all__ = ["BACKGROUNDS", "CONTENTS", "SAMPLINGS", "background_name", "printer_name",
-           "gui_wording"]
+__all__ = ["BACKGROUNDS", "CONTENTS", "SAMPLINGS", "LEVEL_SETS", "background_name",
+           "printer_name", "gui_wording"]
 
-# The command line's options as the GUI's controls are labelled (engine messages name options)
-_OPTIONS = {"--content": "Content", "--density-scale": "Density scale",
+# The command line's options as the GUI's controls are labelled (engine messages name options;
+# the reader options first, most specific first)
+_OPTIONS = {"--option level_set=solid": "Level set: Solid",
+            "--option level_set=shell": "Level set: Shell",
+            "--option grid=NAME": "the Grid control",
+            "--option ": "Reader options ",
+            "--up changes it": "the Up control changes it",
+            "--content": "Content", "--density-scale": "Density scale",
             "--background": "Background", "--sampling": "Voxel edges", "--up": "Up",
             "--rotate": "Turn", "--fit": "Size of", "--intent": "Rendering intent"}
 
@@ -31,6 +38,12 @@ CONTENTS = (
     ("fog", "Fog", "The source's density as it states it (smoke, clouds): density x scale"),
     ("solid", "Solid", "Occupied voxels print opaque in their colour; the rest is background"),
 )
+# ``--option level_set=``: how a level set is read (None: as Content implies, solid unless fog)
+LEVEL_SETS = (
+    (None, "As Content", "Solid for Content Auto or Solid; refused for Fog"),
+    ("solid", "Solid", "The inside of the surface, filled"),
+    ("shell", "Shell", "A hollow object: the wall inside the surface, Wall voxels thick"),
+)
 # ``--sampling`` of voxel models: None is the reader's own (nearest: sharp voxel edges)
 SAMPLINGS = (
     (None, "Sharp", "Each voxel keeps its colour and its edges (nearest neighbour)"),
@@ -40,8 +53,10 @@ SAMPLINGS = (
 
 # ``--up`` ids: the source axis that becomes the print's up (+z)
 UPS = (
-    ("auto", "Auto", "The source's known convention: Gaussian splats (PLY, .splat, SOG) -y, "
-     "SPZ +y, InstantNGP +z; otherwise the file's z"),
+    ("auto", "Auto", "What the file says (an OpenVDB writer: Houdini and Maya y-up, Blender "
+     "z-up, or an up axis in its metadata; the cameras.json beside a 3DGS splat), else a guess "
+     "said under the controls: splats (PLY, .splat, SOG) -y, SPZ +y, InstantNGP +z, otherwise "
+     "the file's z"),
     ("z", "+z (file's z)", "The file's z axis points up"),
     ("-z", "-z", "The file's -z axis points up (turned upside down)"),
     ("y", "+y", "The file's y axis points up (y-up scenes)"),

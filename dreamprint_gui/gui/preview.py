@@ -31,10 +31,13 @@ from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
     QFormLayout,
+    QFrame,
     QGroupBox,
     QHBoxLayout,
     QLabel,
+    QLineEdit,
     QProgressBar,
+    QScrollArea,
     QSlider,
     QSplitter,
     QTabWidget,
@@ -43,7 +46,14 @@ from PySide6.QtWidgets import (
 )
 
 from dreamprint_gui.gui.layer_view import LayerView, MaterialLegend
-from dreamprint_gui.gui.names import BACKGROUNDS, CONTENTS, SAMPLINGS, gui_wording, printer_name
+from dreamprint_gui.gui.names import (
+    BACKGROUNDS,
+    CONTENTS,
+    LEVEL_SETS,
+    SAMPLINGS,
+    gui_wording,
+    printer_name,
+)
 from dreamprint_gui.gui.preview_data import PreviewData, compute_preview, job_context
 from dreamprint_gui.gui.volume_view import ViewHost, add_rgba_volume
 from dreamprint_gui.gui.workers import Task, run_task
@@ -60,6 +70,9 @@ class PreviewPage(QWidget):
     failed = Signal(str)  # the preview could not be computed (the window says it, once)
     problem = Signal(str)  # something that stops nothing failed (a layer); said by the window
     paramsChanged = Signal()
+    # the operator changed how the file is read (grid, level set, reader options): the window
+    # opens it again with them
+    interpretationChanged = Signal()
     preflightReady = Signal(object)  # the engine's Preflight of the current settings
 
     def __init__(self, parent: QWidget | None = None, table_size: int | None = None) -> None:
@@ -117,6 +130,28 @@ class PreviewPage(QWidget):
         self.sampling.setToolTip("Voxel models: sharp voxel edges (nearest) or smooth "
                                  "(trilinear); other sources are always smooth")
         self.sampling.setEnabled(False)
+        # How the file is read (the CLI's --option): shown for files that offer the choice
+        self.grid = QComboBox()
+        self.grid.setToolTip("Which of the file's scalar grids is the density "
+                             "(--option grid=NAME)")
+        self.level_set = QComboBox()
+        for key, name, tip in LEVEL_SETS:
+            self.level_set.addItem(name, key)
+            self.level_set.setItemData(self.level_set.count() - 1, tip,
+                                       Qt.ItemDataRole.ToolTipRole)
+        self.level_set.setToolTip("How a level set (a surface) is printed: filled, or as a "
+                                  "hollow shell (--option level_set=solid / shell)")
+        self.shell_voxels = QDoubleSpinBox(decimals=1, minimum=0.5, maximum=50.0, value=1.0,
+                                           singleStep=0.5, suffix=" file voxels")
+        self.shell_voxels.setToolTip("Thickness of the shell's wall, in voxels of the file "
+                                     "(--option shell_voxels=W)")
+        self.reader_options = QLineEdit()
+        self.reader_options.setPlaceholderText("KEY=VALUE, ...")
+        self.reader_options.setToolTip("Further options of the file's reader, as the command "
+                                       "line's --option KEY=VALUE (comma-separated)")
+        self._interpretation_rows = (self.grid, self.level_set, self.shell_voxels,
+                                     self.reader_options)
+        self.waiting_for_choice: str | None = None  # the problem a choice must solve
         from dreamprint_gui.gui.export import placement_combos
 
         self.up, self.turn, self.fit = placement_combos()
@@ -152,6 +187,12 @@ class PreviewPage(QWidget):
         form.addRow("Turn", self.turn)
         form.addRow("Size of", self.fit)
         form.addRow("", self.placement_note)
+        form.addRow("Grid", self.grid)
+        form.addRow("Level set", self.level_set)
+        form.addRow("Wall", self.shell_voxels)
+        form.addRow("Reader options", self.reader_options)
+        for w in self._interpretation_rows:
+            form.setRowVisible(w, False)  # shown for files that offer the choice
         self.form = form
         box = QGroupBox("Print")
         box.setLayout(form)
@@ -199,6 +240,14 @@ class PreviewPage(QWidget):
         side_l.addWidget(self.warnings_box)
         side_l.addStretch(1)
         side.setMinimumWidth(280)
+        # The controls and warnings scroll when they outgrow the window (a file with reader
+        # choices and several warnings at 1280 x 800): nothing is cut off.
+        self.side_scroll = QScrollArea()
+        self.side_scroll.setWidgetResizable(True)
+        self.side_scroll.setFrameShape(QFrame.Shape.NoFrame)
+        self.side_scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.side_scroll.setWidget(side)
+        self.side_scroll.setMinimumWidth(300)
 
         views = QWidget()
         vl = QVBoxLayout(views)
@@ -213,7 +262,7 @@ class PreviewPage(QWidget):
 
         split = QSplitter()
         split.addWidget(self.pages)
-        split.addWidget(side)
+        split.addWidget(self.side_scroll)
         split.setStretchFactor(0, 4)
         split.setStretchFactor(1, 1)
         lay = QHBoxLayout(self)
@@ -228,6 +277,10 @@ class PreviewPage(QWidget):
             w.valueChanged.connect(self._params_changed)
         for w in (self.background, self.content, self.sampling, self.up, self.turn, self.fit):
             w.currentIndexChanged.connect(self._params_changed)
+        for w in (self.grid, self.level_set):
+            w.currentIndexChanged.connect(self._interpretation_changed)
+        self.shell_voxels.valueChanged.connect(self._interpretation_changed)
+        self.reader_options.editingFinished.connect(self._interpretation_changed)
         self.slice_slider.valueChanged.connect(lambda _v: self._slice_moved())
 
     @property
@@ -253,6 +306,56 @@ class PreviewPage(QWidget):
                 "sampling": self.sampling.currentData() if self.sampling.isEnabled() else None,
                 "up": str(self.up.currentData()), "rotate": int(self.turn.currentData()),
                 "fit": str(self.fit.currentData())}
+
+    def source_options(self) -> dict:
+        """The reader options the controls ask for (the CLI's ``--option``s): Reader options,
+        then Grid and Level set (a control shown for the file wins over the text). Raises
+        DreamPrintError for Reader options that are not KEY=VALUE."""
+        from dreamprint_gui.io.volumes.registry import parse_reader_options
+
+        opts = parse_reader_options(self.reader_options.text())
+        if self.form.isRowVisible(self.grid) and self.grid.currentData() is not None:
+            opts["density_grid"] = str(self.grid.currentData())
+        if self.form.isRowVisible(self.level_set) and self.level_set.currentData() is not None:
+            opts["level_set"] = str(self.level_set.currentData())
+            if opts["level_set"] == "shell":
+                opts["shell_voxels"] = float(self.shell_voxels.value())
+        return opts
+
+    def set_choices(self, choices: dict | None) -> None:
+        """Show the interpretation controls a file offers
+        (``io.volumes.registry.interpretation_choices``), values unchanged."""
+        c = choices or {}
+        self.grid.blockSignals(True)
+        keep = self.grid.currentData()
+        self.grid.clear()
+        self.grid.addItem("Auto (the reader's choice)", None)
+        for name in c.get("grids", []):
+            self.grid.addItem(name, name)
+        i = self.grid.findData(keep)
+        self.grid.setCurrentIndex(max(i, 0))
+        self.grid.blockSignals(False)
+        self.form.setRowVisible(self.grid, bool(c.get("grids")))
+        self.form.setRowVisible(self.level_set, bool(c.get("level_set")))
+        self._shell_row()
+        self.form.setRowVisible(self.reader_options, bool(c.get("options")))
+
+    def _shell_row(self) -> None:
+        self.form.setRowVisible(self.shell_voxels, self.form.isRowVisible(self.level_set)
+                                and self.level_set.currentData() == "shell")
+
+    def hold_for_choice(self, message: str) -> None:
+        """The file cannot be read as it is: say why (in the GUI's words) and wait for a
+        choice of the controls above instead of computing a preview that would fail again."""
+        self.waiting_for_choice = message
+        self.show_waiting(gui_wording(message))
+
+    def _interpretation_changed(self, *_args) -> None:
+        """The window opens the file again with the new choice, then hands it back here
+        (:meth:`set_inputs`), which recomputes; a problem comes back as :meth:`hold_for_choice`."""
+        self._shell_row()
+        self.paramsChanged.emit()
+        self.interpretationChanged.emit()
 
     _KEEP = object()
 
@@ -288,10 +391,15 @@ class PreviewPage(QWidget):
             takes = reader_options(path)
         except Exception:  # noqa: BLE001 - an unreadable file is reported when opened
             takes = set()
-        for combo in (self.content, self.sampling, self.up, self.turn):
+        for combo in (self.content, self.sampling, self.up, self.turn, self.grid,
+                      self.level_set):
             combo.blockSignals(True)
             combo.setCurrentIndex(0)  # each file starts on auto content, auto up, no turn
             combo.blockSignals(False)
+        self.reader_options.blockSignals(True)
+        self.reader_options.setText("")  # and is read as its reader reads it by default
+        self.reader_options.blockSignals(False)
+        self.set_choices(None)
         self.sampling.setEnabled("sampling" in takes)
         self.form.setRowVisible(self.sampling, "sampling" in takes)
         self.content_note.setText("")
@@ -325,7 +433,8 @@ class PreviewPage(QWidget):
             self.show_waiting("waiting for the colour tables of the profile ...")
 
     def ready_to_compute(self) -> bool:
-        return (self.source_path is not None and self.profile is not None
+        return (self.source_path is not None and self.waiting_for_choice is None
+                and self.profile is not None
                 and self.tables is not None and self.printer is not None)
 
     def _params_changed(self) -> None:
@@ -343,7 +452,7 @@ class PreviewPage(QWidget):
                                 background=p["background"], output=output,
                                 table_size=self.table_size, content=p["content"],
                                 sampling=p["sampling"], up=p["up"], rotate=p["rotate"],
-                                fit=p["fit"])
+                                fit=p["fit"], source_options=self.source_options())
 
     def recompute(self) -> None:
         if not self.ready_to_compute():
@@ -355,7 +464,7 @@ class PreviewPage(QWidget):
         try:
             settings = self.job_settings()
         except Exception as exc:  # noqa: BLE001 - shown inline
-            self._failed(str(exc), "")
+            self._failed(gui_wording(str(exc)), "")
             return
         previous = self.ctx
         profile = self.profile.with_settings(
@@ -424,7 +533,7 @@ class PreviewPage(QWidget):
     def _failed(self, message: str, _tb: str) -> None:
         self._stop_wait()
         self.show_waiting("no preview")  # the message itself: the window's status bar
-        self.failed.emit(f"Preview failed: {message}")
+        self.failed.emit(f"Preview failed: {gui_wording(message)}")
 
     def _show(self, result) -> None:
         if self._pending:
@@ -470,7 +579,7 @@ class PreviewPage(QWidget):
         place = self.ctx.placement_json()
         fit = place["fit"].get("mode", "box")
         self.placement_note.setText(
-            f"{place['orientation_text']}; height of "
+            f"{gui_wording(place['orientation_text'])}; height of "
             + ("the object" if fit == "occupied" else "the file's box"))
         self._start_preflight()
         if not self.slice_slider.isEnabled():

@@ -514,16 +514,10 @@ class ChartPage(QWizardPage):
             try:
                 if not (rp and sp):
                     raise DreamPrintError("give both the recipes and the reflectance file")
-                from dreamprint_gui.io.recipes import read_recipes
-                from dreamprint_gui.io.spectra import read_spectra
+                from dreamprint_gui.io.chart_files import read_chart
 
-                recipes = np.asarray(read_recipes(rp))
-                f = read_spectra(sp, quantity="reflectance")
-                wl = self.wiz.base_profile.wavelengths_nm
-                refl = np.vstack([f.resample(i, wl) for i in range(len(f.samples))])
-                if len(refl) != len(recipes):
-                    raise DreamPrintError(f"{len(refl)} spectra for {len(recipes)} recipes "
-                                          f"in {rp}", sp)
+                files = read_chart(rp, sp, self.wiz.base_profile.wavelengths_nm)
+                recipes, refl = files.recipes, files.reflectance
                 self.recipes, self.reflectance = recipes, refl
                 self.info.setText(f"{len(recipes)} patches")
             except DreamPrintError as exc:
@@ -764,12 +758,20 @@ class FitPage(_TaskPage):
             if recipes is not None:
                 from dreamprint_gui.physics.chart_calibration import fit_chart
 
-                report(f"refitting the inks to the chart's {len(recipes)} patches with "
+                n = len(recipes)
+                report(f"refitting the inks to the chart's {n} patches with "
                        f"{folds}-fold cross-validation (this can take a minute):")
                 start = profile
+
+                def step(done: int, total: int) -> None:
+                    report(f"refitting the inks to the chart's {n} patches: fit {done + 1} "
+                           f"of {total} (all patches, then each of the {total - 1} folds):"
+                           if done < total else
+                           f"refitted to the chart's {n} patches ({total} fits):")
+
                 chart_fit = abandonable(
-                    lambda: fit_chart(start, recipes, refl, name=name, folds=folds), cancel,
-                    name="fit-chart")
+                    lambda: fit_chart(start, recipes, refl, name=name, folds=folds,
+                                      progress=step), cancel, name="fit-chart")
                 profile = chart_fit.profile
             return profile, fits, chart_fit, measurements, held
 

@@ -1,9 +1,11 @@
 """DreamPrint's own CSV layout for ink layer measurements (docs/measurements-csv.md).
 
-Header ``ink,quantity,thickness_mm,<wavelength nm>...``; one row per measured spectrum:
-``quantity`` is ``R`` (reflectance) or ``T`` (transmittance), values are fractions (0-1) or
-percent (read as percent when any value of the file exceeds 1.5). An R row and a T row of the
-same ink and thickness form one layer. Rows are resampled onto the profile's grid.
+Header ``ink,quantity,thickness_mm,<wavelength nm>...`` (headings ``380``, ``380nm`` or
+``SPECTRAL_NM380``: :func:`~dreamprint_gui.io.spectra.cgats.wavelength_of_field`); one row
+per measured spectrum: ``quantity`` is ``R`` (reflectance) or ``T`` (transmittance), values
+are fractions (0-1) or percent (read as percent when any value of the file exceeds 1.5). An R
+row and a T row of the same ink and thickness form one layer. Rows are resampled onto the
+profile's grid.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.core.spectral_grid import resample
 from dreamprint_gui.io.recipes import read_csv_rows
+from dreamprint_gui.io.spectra.cgats import wavelength_of_field
 
 __all__ = ["read_measurements_csv", "write_measurements_csv"]
 
@@ -28,11 +31,12 @@ def read_measurements_csv(path: Path, wavelengths_nm: NDArray) -> list[LayerMeas
     hline, header = rows[0]
     if [h.lower() for h in header[:3]] != ["ink", "quantity", "thickness_mm"]:
         raise DreamPrintError("header must start with ink,quantity,thickness_mm", path, hline)
-    try:
-        wl = np.array([float(h.lower().removesuffix("nm")) for h in header[3:]])
-    except ValueError:
-        raise DreamPrintError("header after thickness_mm must be wavelengths in nm", path,
-                              hline) from None
+    named = [wavelength_of_field(h) for h in header[3:]]
+    if any(w is None for w in named):
+        bad = header[3 + named.index(None)]
+        raise DreamPrintError(f"header cell '{bad}' after thickness_mm is not a wavelength "
+                              "(380, 380nm or SPECTRAL_NM380)", path, hline)
+    wl = np.array(named, dtype=np.float64)
     if wl.size < 3 or np.any(np.diff(wl) <= 0):
         raise DreamPrintError("need at least 3 increasing wavelengths in the header", path, hline)
     entries = []

@@ -181,7 +181,9 @@ def check_job(job: str | Path, printer: str | PrinterProfile | None = None) -> d
               + f", printer {_dpi(want_ppm[0]):.1f} x {_dpi(want_ppm[1]):.1f} dpi")
     # --- against the manifest
     total = nx * ny * nz
-    vvox = prn.volume_per_voxel_mm3
+    # the slices' voxels are the job's: its resin is counted at its own voxel size, whatever
+    # printer it is checked against (a mismatch is the voxel check's to say)
+    vvox = float(np.prod(job_voxel))
     materials = {}
     for i, k in enumerate(labels[: len(codes)]):
         frac = counts[i] / total
@@ -205,7 +207,8 @@ def check_job(job: str | Path, printer: str | PrinterProfile | None = None) -> d
         problems.append(f"slices hold {int(counts.sum())} voxels, the grid has {total}")
     resin = [m for m in materials if m != "empty"]
     return {"job": str(job), "grid_dimensions": [nx, ny, nz], "slices_found": len(present),
-            "total_voxels": total, "printer": prn.name, "voxel_mm": list(pv),
+            "total_voxels": total, "printer": prn.name, "voxel_mm": job_voxel,
+            "printer_voxel_mm": list(pv),
             "size_mm": size, "checks": checks, "materials": materials,
             "total_volume_ml": sum(materials[m]["volume_ml"] for m in resin),
             "total_mass_g": sum(materials[m]["mass_g"] for m in resin),

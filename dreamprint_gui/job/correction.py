@@ -12,7 +12,8 @@ outer half cells), and the sampled values become::
 
     v     = g_rgb * decode(rgb)                        (sRGB transfer function, IEC 61966-2-1)
     rgb'  = encode(v / max(1, max_c v_c))
-    sigma' = g_sigma * sigma
+    sigma' = g_sigma * sigma          (except a solid voxel's sigma, SOLID_TARGET: it stays
+                                       solid, its colour's undiluted mixture)
 
 A colour pushed above the top is scaled down as a whole, not clipped per channel: it keeps the
 chromaticity the optimiser asked for. At the gamut's top (a white fog: the print's white is
@@ -48,6 +49,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.gamut.alignment import SOLID_TARGET
 
 __all__ = ["Correction", "save_correction", "load_correction", "check_correction",
            "source_fingerprint", "apply_correction", "axis_weights", "placement_key",
@@ -241,6 +243,9 @@ def _encode(v):
     return 1.055 * v ** (1.0 / 2.4) - 0.055
 
 
+_SOLID = np.float32(SOLID_TARGET)
+
+
 @njit(cache=True, nogil=True)
 def _apply(gain, iz, wz, iy, wy, ix, wx, rgb, dens):
     L, ny, nx = dens.shape
@@ -268,7 +273,7 @@ def _apply(gain, iz, wz, iy, wy, ix, wx, rgb, dens):
                     b = (gain[z1, y0, x0, c] * (1 - fx) + gain[z1, y0, x1, c] * fx) * (1 - fy) \
                         + (gain[z1, y1, x0, c] * (1 - fx) + gain[z1, y1, x1, c] * fx) * fy
                     g[c] = a * (1 - fz) + b * fz
-                if g[3] != 1.0:
+                if g[3] != 1.0 and d < _SOLID:  # a solid voxel stays solid (undiluted)
                     dens[k, j, i] = d * g[3]
                 if g[0] == 1.0 and g[1] == 1.0 and g[2] == 1.0:
                     continue

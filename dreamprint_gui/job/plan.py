@@ -47,7 +47,7 @@ from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
            "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
-           "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS"]
+           "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS", "profile_for_printer"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
@@ -134,6 +134,19 @@ def _open_source(spec: str, options: dict[str, Any], content: str = "fog",
     return open_source(spec, **source_options_for(spec, options, content, sampling))
 
 
+def profile_for_printer(profile, printer=None):
+    """The ink profile as a job on ``printer`` uses it: at the printer's layer thickness (the
+    density of eq. 9 is per layer), so that the job, the GUI's preview and gamut pages,
+    ``lookup`` and ``gamut`` share one set of cached tables. ``profile``: an InkProfile, a
+    path or None (built-in); ``printer``: a PrinterProfile, a name, a path or None (the default
+    printer)."""
+    if not hasattr(profile, "with_settings"):
+        profile = load_profile(profile)
+    if not isinstance(printer, PrinterProfile):
+        printer = load_printer(printer)
+    return profile.with_settings(layer_thickness_mm=printer.layer_thickness_mm)
+
+
 def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None,
                 notify: Callable[[str], None] | None = None):
     """The profile at the printer's layer and its tables; a first-use build is announced with
@@ -155,6 +168,20 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
 
     return profile, get_tables(profile, objective=objective, size=size, intent=intent,
                                progress=progress)
+
+
+# A source file at least this large is announced before it is read (reading takes seconds).
+OPENING_NOTICE_BYTES = 50_000_000
+
+
+def _source_bytes(spec: str) -> int:
+    """Bytes of a source file, or of the files directly in a source folder (0 for "demo")."""
+    try:
+        if os.path.isdir(spec):
+            return sum(e.stat().st_size for e in os.scandir(spec) if e.is_file())
+        return os.path.getsize(spec)
+    except OSError:
+        return 0
 
 
 def _seconds(s: float) -> str:
@@ -345,11 +372,22 @@ def prepare_job(settings: ConvertSettings,
     """Open the source, lay out the grid, refuse a job larger than the tray, build the tables.
 
     ``notify(message)`` is told of each first-use build (compiled kernels, colour tables,
-    blue-noise mask) before it starts, with its estimated time, and of the tables' progress."""
+    blue-noise mask) before it starts, with its estimated time, and of the tables' progress;
+    of a large source file (``OPENING_NOTICE_BYTES``) before it is read, and of any source
+    that took more than 2 s to open, with the time it took."""
+    import time
+
     s = settings
     check_settings(s)
     printer = load_printer(s.printer)
+    name = os.path.basename(str(s.source).rstrip("/")) or str(s.source)
+    if notify is not None and _source_bytes(s.source) >= OPENING_NOTICE_BYTES:
+        notify(f"opening the source {name} ({_source_bytes(s.source) / 1e6:.0f} MB) ...")
+    t_open = time.perf_counter()
     source = _open_source(s.source, s.source_options, s.content, s.sampling)
+    t_open = time.perf_counter() - t_open
+    if notify is not None and t_open > 2.0:
+        notify(f"opened the source {name} in {t_open:.1f} s")
     if notify is not None:
         for msg in _compile_notices(source):
             notify(msg)

@@ -132,6 +132,9 @@ class Preflight:
     # no clamping: the largest --density-scale that still clamps none of the sampled voxels
     max_unclamped_density_scale: float | None = None
     intent: str = "colorimetric"              # the rendering intent gamut is measured against
+    # seconds the job already spent before this estimate: opening the source and loading or
+    # building the colour tables (measured; 0 when the job reuses a prepared context)
+    prepared_seconds: float = 0.0
 
     @property
     def ink_fraction(self) -> float:
@@ -141,8 +144,18 @@ class Preflight:
         """One line: the job's size, disk and time estimates and the number of warnings."""
         n = len(self.warnings)
         return (f"pre-flight: {self.total_voxels:,} voxels in {self.slices:,} slices, about "
-                f"{_human_bytes(self.disk_bytes)}, {_about_seconds(self.seconds)}; "
+                f"{_human_bytes(self.disk_bytes)}, {self.time_text()}; "
                 + (f"{n} warning{'s' if n != 1 else ''}" if n else "no warnings"))
+
+    def time_text(self) -> str:
+        """The conversion's estimate and, when preparing took a while, the job's whole time
+        with it (a first build of the colour tables, a slow source)."""
+        if self.prepared_seconds < 1:
+            return _about_seconds(self.seconds)
+        return (f"{_about_seconds(self.seconds)} to convert, about "
+                f"{_human_seconds(self.seconds + self.prepared_seconds)} in all (preparing "
+                f"took {_human_seconds(self.prepared_seconds)}: the source, the colour tables, "
+                "first-use builds)")
 
     def summary_lines(self) -> list[str]:
         """The human-readable summary: one line per figure, then one per warning."""
@@ -160,6 +173,8 @@ class Preflight:
             f"{_about_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
             f"({self.rate_source})",
         ]
+        if self.prepared_seconds >= 1:
+            lines.append(f"time: {self.time_text()}")
         lines += [f"warning: {w.message}" for w in self.warnings]
         return lines
 
@@ -186,6 +201,7 @@ class Preflight:
             "printed_lost_at_safe_scale": self.lost_at_safe_scale,
             "max_unclamped_density_scale": self.max_unclamped_density_scale,
             "intent": self.intent,
+            "prepared_seconds": self.prepared_seconds,
         }
 
 

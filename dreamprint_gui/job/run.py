@@ -269,6 +269,8 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
         t0 = time.perf_counter()
         pf = estimate(ctx, seed=settings.seed)
         t_pf = time.perf_counter() - t0
+        if context is None:
+            pf.prepared_seconds = t0 - started
     elif preflight is not False and preflight is not None:
         pf = preflight
     if pf is not None:

@@ -20,6 +20,7 @@ see it): a fit judged on its own patches flatters itself.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -123,11 +124,13 @@ def _fit(model: _Model, recipes: NDArray, target_lab: NDArray, p0: NDArray, ridg
 def fit_chart(base: InkProfile, recipes: ArrayLike, reflectance: ArrayLike, *,
               n_basis: int = 5, folds: int = 5, ridge: float = 0.05,
               saunderson: tuple[float, float] | None = None, name: str = "chart-calibrated",
-              source: str | None = None) -> ChartFit:
+              source: str | None = None,
+              progress: Callable[[int, int], None] | None = None) -> ChartFit:
     """Refit the inks used in ``recipes`` (n, 6) to the measured ``reflectance`` (n, n_wl).
 
     Reflectance is on ``base.wavelengths_nm`` as fractions. ``saunderson=(k1, k2)`` when the
-    instrument's readings include the surface reflections.
+    instrument's readings include the surface reflections. ``progress(done, total)`` after the
+    fit to every patch and after each cross-validation fold (``folds + 1`` steps; 0 first).
     """
     c = np.asarray(recipes, dtype=np.float64)
     Rm = np.asarray(reflectance, dtype=np.float64)
@@ -146,11 +149,15 @@ def fit_chart(base: InkProfile, recipes: ArrayLike, reflectance: ArrayLike, *,
     model = _Model(base, used, n_basis, anchor)
     obs = model.obs
     target = obs.spectra_to_Lab(Rm)
+    k = max(2, min(folds, n_patches))
+    if progress is not None:
+        progress(0, k + 1)
     p_full = _fit(model, c, target, np.zeros(model.n_params), ridge, saunderson)
+    if progress is not None:
+        progress(1, k + 1)
     K, S = model.unpack(p_full)
     fit_dE = delta_E2000(model.lab(K, S, c, saunderson), target)
     base_dE = delta_E2000(model.lab(base.K, base.S, c, saunderson), target)
-    k = max(2, min(folds, n_patches))
     order = np.random.default_rng(0).permutation(n_patches)
     cv = np.empty(n_patches)
     for f in range(k):
@@ -159,6 +166,8 @@ def fit_chart(base: InkProfile, recipes: ArrayLike, reflectance: ArrayLike, *,
         p = _fit(model, c[train], target[train], p_full, ridge, saunderson)
         Kf, Sf = model.unpack(p)
         cv[test] = delta_E2000(model.lab(Kf, Sf, c[test], saunderson), target[test])
+        if progress is not None:
+            progress(f + 2, k + 1)
     profile = base.with_settings(
         name=name, K=K, S=S,
         provenance={

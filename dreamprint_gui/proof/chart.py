@@ -51,8 +51,7 @@ from numpy.typing import NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS, InkProfile, load_profile
-from dreamprint_gui.io.recipes import read_recipes
-from dreamprint_gui.io.spectra import read_spectra
+from dreamprint_gui.io.chart_files import read_chart
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
 from dreamprint_gui.proof.cameras import View
@@ -128,20 +127,12 @@ def load_chart(s: ChartSettings) -> Chart:
         raise DreamPrintError(f"--bands must be 1..36, got {s.bands}")
     profile = load_profile(s.profile)
     optics = _checked_optics(s.surface, s.phase, profile, s.geometry)
-    recipes = read_recipes(Path(s.recipes))
-    if len(recipes) > MAX_PATCHES:
-        raise DreamPrintError(f"{len(recipes)} recipes; at most {MAX_PATCHES}", s.recipes)
+    files = read_chart(s.recipes, s.reflectance, profile.wavelengths_nm,
+                       max_patches=MAX_PATCHES)
     lab = None
-    if s.reflectance is not None:
-        sf = read_spectra(s.reflectance, quantity="reflectance")
-        if sf.problems:
-            raise DreamPrintError(sf.problems[0], s.reflectance)
-        if len(sf.samples) != len(recipes):
-            raise DreamPrintError(f"{len(sf.samples)} measured spectra but {len(recipes)} "
-                                  f"recipes in {s.recipes}; one spectrum per recipe, in the "
-                                  "same order", s.reflectance)
-        R = np.stack([smp.resample(profile.wavelengths_nm) for smp in sf.samples])
-        lab = observer_for(profile.wavelengths_nm).spectra_to_Lab(R)
+    if files.reflectance is not None:
+        lab = observer_for(profile.wavelengths_nm).spectra_to_Lab(files.reflectance)
+    recipes = files.recipes
     return Chart(recipes, lab, profile, optics)
 
 
@@ -248,6 +239,8 @@ def render_chart(recipes: NDArray, profile: InkProfile, optics: Optics, bands: S
     passes = -(-nb // 3)
     out = np.zeros((n, passes * 3))
     t = THICK_MM if thickness_mm is None else float(thickness_mm)
+    if progress is not None:
+        progress(0, passes)
     for p in range(passes):
         if cancelled is not None and cancelled():
             raise JobCancelled("the chart proof was cancelled")
@@ -314,7 +307,9 @@ def chart_report(s: ChartSettings, chart: Chart, band_R: NDArray, bands: Spectra
 def chart_picture(chart: Chart, band_R: NDArray, bands: SpectralBands,
                   px: int = 48) -> NDArray[np.uint8]:
     """sRGB picture (rows * px, cols * px, 3): one square per patch, measured left half,
-    proofed right half (the proof alone without measurements)."""
+    proofed right half (the proof alone without measurements), numbered in its top-left corner
+    as the report and ``patches.csv`` number the patches (1, 2, ...; row by row), in black or
+    white, whichever stands out from the patch."""
     obs = bands.observer
     rows, cols = _layout(len(chart.recipes))
     img = np.full((rows * px, cols * px, 3), 255, np.uint8)
@@ -332,7 +327,23 @@ def chart_picture(chart: Chart, band_R: NDArray, bands: SpectralBands,
         img[y0:y0 + px - 4, x0:x0 + px - 4] = proof_rgb[k]
         if meas_rgb is not None:
             img[y0:y0 + px - 4, x0:x0 + (px - 4) // 2] = meas_rgb[k]
-    return img
+    return _numbered(img, len(chart.recipes), cols, px)
+
+
+def _numbered(img: NDArray[np.uint8], n: int, cols: int, px: int) -> NDArray[np.uint8]:
+    """The patch numbers written on a chart picture (Pillow's built-in font)."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    pic = Image.fromarray(img)
+    draw = ImageDraw.Draw(pic)
+    font = ImageFont.load_default(size=max(8, px // 4))
+    for k in range(n):
+        r, c = divmod(k, cols)
+        x, y = c * px + 4, r * px + 3
+        corner = img[y:y + px // 4, x:x + px // 3].reshape(-1, 3).mean(axis=0)
+        light = float(corner @ np.array([0.2126, 0.7152, 0.0722])) > 140
+        draw.text((x, y), str(k + 1), fill=(0, 0, 0) if light else (255, 255, 255), font=font)
+    return np.asarray(pic)
 
 
 def _write(rep: dict, chart: Chart, band_R: NDArray, bands: SpectralBands,
@@ -383,8 +394,10 @@ def proof_chart(chart: Chart, s: ChartSettings,
     return chart_report(s, chart, band_R, bands, info), band_R, bands
 
 
-def run_chart_proof(s: ChartSettings) -> dict[str, Any]:
-    """Check the inputs, render, write ``s.output`` atomically; returns the report."""
+def run_chart_proof(s: ChartSettings,
+                    progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+    """Check the inputs, render, write ``s.output`` atomically; returns the report.
+    ``progress(done, total)`` after each render pass (three bands each)."""
     if s.output is None:
         raise DreamPrintError("no output folder given (-o DIR)")
     out = Path(s.output)
@@ -395,7 +408,7 @@ def run_chart_proof(s: ChartSettings) -> dict[str, Any]:
     if not out.absolute().parent.is_dir():
         raise DreamPrintError("the folder to write into does not exist", out.absolute().parent)
     chart = load_chart(s)
-    rep, band_R, bands = proof_chart(chart, s)
+    rep, band_R, bands = proof_chart(chart, s, progress)
     with staged_folder(out, "chart") as tmp:
         _write(rep, chart, band_R, bands, tmp)
     return rep

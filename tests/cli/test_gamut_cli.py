@@ -110,3 +110,20 @@ def test_gamut_progress_on_stderr_only_while_building(capsys, tmp_path, monkeypa
     code, out, err = _run(capsys, *args)
     assert code == 0 and json.loads(out)["cached"] is True
     assert "building" not in err
+
+
+def test_lookup_and_gamut_reuse_the_tables_a_job_built(capsys, tmp_path):
+    """A job's tables (the profile at its printer's layer) serve lookup and gamut: no second
+    build (issue 46: lookup rebuilt them at the profile's own 14 um layer). Size 5: no other
+    test builds it in this session's cache."""
+    code, _, err = _run(capsys, "convert", "demo", "-o", str(tmp_path / "J"), "--height-mm",
+                        "0.5", "--table-size", "5")
+    assert code == 0 and "building colour tables" in err
+    code, _, err = _run(capsys, "lookup", "--rgb", "0.2,0.5,0.7", "--size", "5")
+    assert code == 0 and "building" not in err
+    code, _, err = _run(capsys, "gamut", "--size", "5", "--samples", "20", "--no-compare")
+    assert code == 0 and "building" not in err
+    # another printer's layer is another table
+    code, _, err = _run(capsys, "lookup", "--rgb", "0.2,0.5,0.7", "--size", "5", "--printer",
+                        "voxelprint-14um")
+    assert code == 0 and "building colour tables" in err

@@ -92,28 +92,6 @@ def test_calibrate_from_project_csv(tmp_path, capsys):
     np.testing.assert_allclose(prof.S[i], S, rtol=1e-6)
 
 
-def test_calibrate_chart_reports_cross_validated_de(tmp_path, capsys):
-    base = default_profile()
-    rng = np.random.default_rng(5)
-    c = np.zeros((24, 6))
-    c[:, :5] = rng.dirichlet(np.ones(5), 24)
-    K = base.K * np.exp(0.1 * rng.standard_normal((6, 1)))
-    R = reflectance_infinite(*mix(c, K, base.S))
-    (tmp_path / "recipes.csv").write_text(
-        "C,M,Y,K,W\n" + "\n".join(",".join(repr(float(x)) for x in row[:5]) for row in c) + "\n")
-    (tmp_path / "spectra.csv").write_text(
-        ",".join(f"{w:g}" for w in base.wavelengths_nm) + "\n"
-        + "\n".join(",".join(repr(float(x)) for x in row) for row in R) + "\n")
-    out = tmp_path / "chart.json"
-    code, stdout, err = run(capsys, "calibrate", "--chart", str(tmp_path / "recipes.csv"),
-                            "--reflectance", str(tmp_path / "spectra.csv"), "-o", str(out),
-                            "--folds", "2", "--json")
-    assert code == 0, err
-    rep = json.loads(stdout)
-    assert rep["cross_validated_dE2000"]["mean"] < rep["base_dE2000"]["mean"]
-    assert load_profile(out).residuals["chart"]["folds"] == 2
-
-
 @pytest.mark.parametrize("content, message", [
     ("ink,quantity,thickness_mm,380,390,400\nQ,R,0.1,0.1,0.1,0.1\n", "unknown ink 'Q'"),
     ("ink,quantity,thickness_mm,380,390,400\nC,R,0.1,0.1,abc,0.1\n", ":2: a cell is not"),
@@ -150,3 +128,38 @@ def test_optically_thick_reflectance_joins_the_fit():
     fit = fit_ink(layers, 36)
     np.testing.assert_allclose(fit.K, K, rtol=1e-6)
     np.testing.assert_allclose(fit.S, S, rtol=1e-6)
+
+
+def test_calibrate_chart_as_published_reports_cross_validated_de(tmp_path, capsys):
+    """The layouts of a published PolyJet chart (issue 46): recipes as ``k50,c0,...`` under a
+    ``K,C,M,Y,W`` header, measurements as ``LAB_L,LAB_A,LAB_B,SPECTRAL_NM380,...``."""
+    from dreamprint_gui.physics.colorimetry import observer_for
+
+    base = default_profile()
+    rng = np.random.default_rng(7)
+    parts = np.array([rng.multinomial(4, np.ones(5) / 5) * 25 for _ in range(24)])  # K,C,M,Y,W
+    c = np.zeros((24, 6))
+    for j, ink in enumerate("KCMYW"):
+        c[:, INKS.index(ink)] = parts[:, j] / 100
+    K = base.K * np.exp(0.1 * rng.standard_normal((6, 1)))
+    R = reflectance_infinite(*mix(c, K, base.S))
+    lab = observer_for(base.wavelengths_nm).spectra_to_Lab(R)
+    (tmp_path / "ratios.csv").write_text("K,C,M,Y,W\n" + "".join(
+        ",".join(f"{ink.lower()}{v}" for ink, v in zip("kcmyw", row, strict=True)) + "\n"
+        for row in parts))
+    (tmp_path / "color_measurements.csv").write_text(
+        "LAB_L,LAB_A,LAB_B," + ",".join(f"SPECTRAL_NM{w:g}" for w in base.wavelengths_nm)
+        + "\n" + "".join(",".join(f"{x:.2f}" for x in lab[r]) + ","
+                         + ",".join(f"{x:.4f}" for x in R[r]) + "\n" for r in range(24)))
+    out = tmp_path / "chart.json"
+    code, stdout, err = run(capsys, "calibrate", "--chart", str(tmp_path / "ratios.csv"),
+                            "--reflectance", str(tmp_path / "color_measurements.csv"),
+                            "-o", str(out), "--folds", "2", "--json")
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["patches"] == 24
+    assert rep["cross_validated_dE2000"]["mean"] < rep["base_dE2000"]["mean"]
+    # the wait is visible: a line when it starts and after each of the 1 + 2 fits
+    steps = [ln for ln in err.splitlines() if ln.startswith("calibrate --chart, 24 patches")]
+    assert len(steps) == 4 and steps[-1].endswith("3/3 (" + steps[-1].split("(")[-1])
+    assert load_profile(out).residuals["chart"]["folds"] == 2

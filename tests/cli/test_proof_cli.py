@@ -230,3 +230,21 @@ def test_a_solid_jobs_folder_is_proofed_against_its_source_as_the_job_read_it(
             for x in (folder, engine))
     assert a.nearest and b.nearest  # solid: the occupied cells at the solid density
     np.testing.assert_array_equal(a.sigma, b.sigma)
+
+
+def test_a_figure_within_the_noise_says_how_to_tell_the_rows_apart():
+    """A "~" comes with the way out: more samples per pixel (issue 46)."""
+    from dreamprint_gui.cli.proof import noise_legend
+    from dreamprint_gui.proof.compare import mark_significance
+
+    def row(de, floor):
+        return {"mean_de2000": de, "mean_scielab_de2000": de,
+                "noise_floor": {"mean_de2000": floor, "mean_scielab_de2000": floor}}
+
+    close = [row(5.0, 0.2), row(5.3, 0.2)]          # 0.3 apart, 3 x floor = 0.6: noise
+    mark_significance(close)
+    lines = noise_legend(close, 16)
+    assert len(lines) == 2 and "raise --spp (now 16)" in lines[1] and "--spp 64" in lines[1]
+    apart = [row(5.0, 0.05), row(6.0, 0.05)]        # 1.0 apart, threshold 0.15: a ranking
+    mark_significance(apart)
+    assert len(noise_legend(apart, 16)) == 1

@@ -99,7 +99,7 @@ def _picker_matches_the_cli(qtbot, page, profile, table_size) -> None:
         save_profile(profile, prof_path)
         res = CliRunner().invoke(cli, ["lookup", "--rgb", "0.2,0.45,0.7", "--density", "2.5",
                                        "--profile", str(prof_path), "--size", str(table_size),
-                                       "--json"])
+                                       "--printer", "j850-paper", "--json"])
     assert res.exit_code == 0, res.output
     cli_rec = json.loads(res.output)[0]
     for ink in INKS:

@@ -183,6 +183,9 @@ def test_chart_only_calibration(qtbot, tmp_path, truth):
     assert report["fit_dE2000"]["mean"] < report["base_dE2000"]["mean"]
     assert "cross-validated dE2000" in wiz.fit_page.status.text()
     assert len(wiz.fit_page.chart_fig.axes[0].patches) == 2 * 14  # fit and CV bars
+    # each fit of the refit was said as it started (issue 46: a minute with one message)
+    qtbot.waitUntil(lambda: "refitted to the chart's 14 patches (3 fits)"
+                    in wiz.fit_page._stage, timeout=5000)
 
     # after a chart calibration the wizard offers the chart proof (issue 28)
     wiz.next()

@@ -41,3 +41,27 @@ def test_builds_are_announced_once(tmp_path, monkeypatch):
     msgs = [m for st, m in stages if st == "preparing"]
     assert any(m.startswith("building colour tables (") for m in msgs)
     assert stages[-1][0] == "preflight"
+
+
+def test_a_slow_or_large_source_is_announced(tmp_path, monkeypatch):
+    """Opening a large source says so before it starts, and a slow one how long it took
+    (issue 46: a MetaImage's 7.5 s of loading was silent)."""
+    import time
+
+    from dreamprint_gui.job import plan
+
+    real_open = plan._open_source
+
+    def slow_open(*args, **kwargs):
+        time.sleep(2.2)
+        return real_open("demo", {})
+
+    big = tmp_path / "big.vdb"
+    with open(big, "wb") as f:                     # a sparse file of the announcing size
+        f.truncate(plan.OPENING_NOTICE_BYTES)
+    monkeypatch.setattr(plan, "_open_source", slow_open)
+    said: list[str] = []
+    prepare_job(ConvertSettings(source=str(big), output=tmp_path / "J", height_mm=0.3,
+                                table_size=9), notify=said.append)
+    assert said[0] == "opening the source big.vdb (50 MB) ..."
+    assert any(m.startswith("opened the source big.vdb in 2.") for m in said)

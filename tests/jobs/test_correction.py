@@ -191,3 +191,18 @@ def test_corrected_job_is_deterministic_for_any_worker_count(tmp_path):
     assert h1 == _slice_hashes(tmp_path / "w2")
     assert h1 != _slice_hashes(tmp_path / "plain")  # the correction did change the print
     assert m1["compensation"]["density_gain_range"][1] > 1.0
+
+
+def test_a_solid_voxel_stays_solid_under_a_density_gain():
+    """Solid content's density is the sentinel SOLID_SIGMA (the colour's undiluted mixture):
+    a gain below 1 used to turn it into a 'too dense' target, reported as "short by up to
+    1e+30/mm" (issue 46). It stays solid; a fog voxel beside it is scaled."""
+    from dreamprint_gui.job.content import SOLID_SIGMA
+
+    rgb = np.full((1, 2, 2, 3), 0.5, np.float32)
+    dens = np.array([[[SOLID_SIGMA, 4.0], [SOLID_SIGMA, 0.0]]], np.float32)
+    g = np.empty((2, 2, 2, 4), np.float32)
+    g[...] = (1.0, 1.0, 1.0, 0.5)
+    d2 = dens.copy()
+    apply_correction(g, (2, 2, 1), 0, rgb.copy(), d2)
+    np.testing.assert_array_equal(d2, [[[SOLID_SIGMA, 2.0], [SOLID_SIGMA, 0.0]]])

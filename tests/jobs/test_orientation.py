@@ -127,4 +127,4 @@ def test_splats_stand_up_automatically_and_say_so(shared_data, capsys):
     assert a.max() > 0 and np.allclose(a, b, rtol=1e-4, atol=1e-6 * float(a.max()))
     assert main(["inspect", str(path), "--height-mm", "20"]) == 0
     out = capsys.readouterr().out
-    assert "up = source -y (auto: " in out
+    assert "up = source -y (a guess: " in out and "--up changes it" in out

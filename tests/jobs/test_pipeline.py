@@ -304,6 +304,11 @@ def test_evaluate_job_against_another_printer_and_a_foreign_code(reference_job, 
     report = check_job(job, "j850-paper")  # another grid: voxel, layers and dpi disagree
     bad = {c["check"] for c in report["checks"] if not c["ok"]}
     assert {"voxel", "layers", "dpi"} <= bad and not report["consistent"]
+    # the resin is the job's, at its own voxel, whatever printer it is checked against
+    # (issue 46: a 27 um job checked against a 14 um printer was counted at 14 um)
+    own = check_job(job)
+    assert report["voxel_mm"] == own["voxel_mm"] != report["printer_voxel_mm"]
+    assert report["total_volume_ml"] == pytest.approx(own["total_volume_ml"], rel=1e-12)
     copy = tmp_path / "J"
     shutil.copytree(job, copy)
     first = copy / "slices" / "00000.png"

@@ -54,3 +54,16 @@ def test_a_named_scale_limit_is_rounded_down():
     assert _at_most(19.999) == "19.9"
     for v in 10.0 ** np.random.default_rng(0).uniform(-4, 4, 500):
         assert float(_at_most(v)) <= v * (1 + 1e-12)
+
+
+def test_a_slow_preparation_is_in_the_time_said():
+    """A first build of the colour tables (about 60 s) is no longer hidden behind "under 1 s"
+    (issue 46): the line gives the conversion and the whole job."""
+    pf = _pf(0.4)
+    pf.prepared_seconds = 61.0
+    line = pf.short_line()
+    assert "under 1 s to convert, about 1.0 min in all (preparing took 1.0 min" in line
+    assert any(x.startswith("time: under 1 s to convert") for x in pf.summary_lines())
+    assert pf.to_json()["prepared_seconds"] == 61.0
+    pf.prepared_seconds = 0.2                      # a prepared context: as before
+    assert ", under 1 s;" in pf.short_line()

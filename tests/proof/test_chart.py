@@ -138,6 +138,10 @@ def test_chart_proof_command(tmp_path, capsys):
     assert rep["de2000"]["worst_patches"][0]["patch"] == int(np.argmax(de)) + 1
     lines = (out / "patches.csv").read_text().splitlines()
     assert len(lines) == 4 and lines[0].endswith("de2000")
+    # the wait is visible (issue 46): a line when rendering starts and after each of the 12
+    # passes of 3 bands
+    steps = [ln for ln in err.splitlines() if ln.startswith("chart proof: render passes")]
+    assert len(steps) == 13 and "12/12" in steps[-1] and "done" in steps[-1]
 
 
 @pytest.mark.parametrize("case, words", [
@@ -187,3 +191,28 @@ def test_the_starter_chart_is_a_valid_recipes_file():
     np.testing.assert_allclose(rec.sum(axis=1), 1.0)
     assert len({tuple(r) for r in rec.round(6)}) == 24
     assert np.all(rec[:, INKS.index("Cl")] == 0)
+
+
+def test_the_chart_picture_numbers_its_patches_as_the_report_does():
+    """Each square carries its patch number (issue 46: the report names the worst patches by
+    number), legible on a black and on a white patch."""
+    from dreamprint_gui.core.profile import default_profile
+    from dreamprint_gui.proof.chart import chart_from_arrays, chart_picture
+    from dreamprint_gui.proof.spectral import spectral_bands
+
+    profile = default_profile()
+    c = np.zeros((2, 6))
+    c[0, 3] = c[1, 4] = 1.0                         # K, W
+    chart = chart_from_arrays(c, None, profile)
+    bands = spectral_bands(profile, 3)
+    band_R = np.array([[0.0] * 3, [1.0] * 3])       # a black and a white patch
+    px = 48
+    img = chart_picture(chart, band_R, bands, px=px).astype(int)
+    black, white = img[:px, :px], img[:px, px:2 * px]
+    corner = (slice(2, px // 3), slice(2, px // 2))
+    assert (black[corner].min(axis=-1) > 200).sum() > 5       # white digits on black
+    assert (white[corner].max(axis=-1) < 60).sum() > 5        # black digits on white
+    assert (black[px // 2:px - 4, 4:px - 4] < 30).all()       # the patch itself stays clear
+    one = black[corner].min(axis=-1) > 200
+    two = white[corner].max(axis=-1) < 60
+    assert (one != two).any()                                  # "1" and "2" differ

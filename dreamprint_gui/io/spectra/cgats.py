@@ -50,7 +50,7 @@ import numpy as np
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.spectra.model import RawSample, RawSpectra, Sample, parse_float
 
-__all__ = ["read_cgats", "write_cgats", "looks_like_cgats"]
+__all__ = ["read_cgats", "write_cgats", "looks_like_cgats", "wavelength_of_field"]
 
 _WIDE = re.compile(
     r"^(?:(?P<prefix>SPECTRAL_NM|SPECTRAL_PCT|SPECTRAL_DEC|SPECTRAL|SPEC|SPECTRUM|NM|R)_?"
@@ -66,6 +66,20 @@ CGATS_FIELDS = frozenset({
     "LAB_DE_2000", "MEAN_DE", "STDEV_X", "STDEV_Y", "STDEV_Z", "STDEV_L", "STDEV_A", "STDEV_B",
     "STDEV_DE", "CHI_SQD_PAR"})
 _CGATS_SPECTRAL = re.compile(r"^SPECTRAL_(?:NM|PCT|DEC)_?\d", re.IGNORECASE)
+
+
+_PLAIN_NM = re.compile(r"^(\d+(?:\.\d+)?)\s*(?:nm)?$", re.IGNORECASE)
+
+
+def wavelength_of_field(cell: str) -> float | None:
+    """The wavelength in nm a column heading names (``380``, ``380nm``, ``nm380``,
+    ``SPECTRAL_NM380``, ``SPEC_380``, ``R380``, ``380_NM``), else ``None``: the one rule for
+    spectral headings of the project's own CSV layouts."""
+    c = cell.strip()
+    m = _WIDE.match(c) or _PLAIN_NM.match(c)
+    if m is None:
+        return None
+    return float(next(g for g in m.groups() if g is not None and g[0].isdigit()))
 
 
 def names_cgats_fields(cells: Sequence[str]) -> bool:

@@ -35,6 +35,13 @@ from dreamprint_gui.io.volumes.base import (
 )
 from dreamprint_gui.io.volumes.dense import MAX_EXPANSION
 from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan
+from dreamprint_gui.io.volumes.level_set import (
+    GRID_ADVICE,
+    LEVEL_SET_ADVICE,
+    check_level_set_options,
+    check_shell,
+    level_set_density,
+)
 from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
 
 __all__ = ["read_nvdb", "inspect_path", "open_path", "NanoVdbSource"]
@@ -242,8 +249,11 @@ class NanoVdbSource:
     """A float NanoVDB grid as density (fog volume, or a level set made solid)."""
 
     def __init__(self, path: Path, m: dict, info: dict, *, colour=(1.0, 1.0, 1.0),
-                 level_set: str = "refuse", solid_density: float = 1.0):
+                 level_set: str = "refuse", solid_density: float = 1.0,
+                 shell_voxels: float = 1.0):
         self.name = str(path)
+        self.level_set = level_set
+        self.shell_voxels = float(shell_voxels)
         self.format = "NanoVDB"
         self.colour_encoding = "srgb"
         self.uniform_colour = np.asarray(colour, np.float32)
@@ -251,6 +261,9 @@ class NanoVdbSource:
         o, vals, bg, (self.origin, self.scale), _ = read_nvdb(path, m)
         self.blocks = SparseBlocks(o, vals, bg, m["name"])
         self.is_level_set = m["class"] == 1
+        if self.is_level_set:
+            check_shell(level_set, shell_voxels, abs(float(np.ravel(bg)[0])),
+                        float(self.scale.min()), m["name"], path)
         self.solid_density = float(solid_density)
         lo = np.asarray(m["index_bbox"][:3], float)
         hi = np.asarray(m["index_bbox"][3:], float)
@@ -275,7 +288,8 @@ class NanoVdbSource:
              / self.scale[a] for a in range(3)]
         d = sample_sparse(self.blocks, u[2], u[1], u[0])[..., 0]
         if self.is_level_set:
-            d = self.solid_density * np.clip(0.5 - d / float(self.scale.min()), 0.0, 1.0)
+            d = level_set_density(d, float(self.scale.min()), self.solid_density,
+                                  self.level_set, self.shell_voxels)
         sigma = np.maximum(d, 0.0).astype(np.float32)
         sigma *= np.float32(density_scale / grid.mm_per_unit)
         return uniform_rgb(d.shape, self.uniform_colour,
@@ -287,8 +301,10 @@ class NanoVdbSource:
 
 def open_path(path: Path, fmt: str = "nanovdb", *, density_grid: str | None = None,
               colour=(1.0, 1.0, 1.0), level_set: str = "refuse",
-              solid_density: float = 1.0) -> NanoVdbSource:
-    """Open a .nvdb: ``density_grid`` (default ``density``, else the only float grid)."""
+              solid_density: float = 1.0, shell_voxels: float = 1.0) -> NanoVdbSource:
+    """Open a .nvdb: ``density_grid`` (default ``density``, else the only float grid); a level
+    set as ``level_set`` solid or shell (:mod:`.level_set`)."""
+    check_level_set_options(level_set, shell_voxels, path)
     metas = _read_meta(path)
     info = {"format": "NanoVDB", "grids": [_info_entry(m) for m in metas]}
     if not metas:
@@ -300,18 +316,17 @@ def open_path(path: Path, fmt: str = "nanovdb", *, density_grid: str | None = No
         if chosen is None:
             if len(floats) != 1:
                 raise DreamPrintError("no grid named 'density'; choose one of: "
-                                      f"{', '.join(names)}", path)
+                                      f"{', '.join(names)} ({GRID_ADVICE})", path)
             chosen = floats[0]
     else:
         chosen = next((m for m in metas if m["name"] == density_grid), None)
         if chosen is None:
             raise DreamPrintError(f"no grid named {density_grid!r} (has: {', '.join(names)})",
                                   path)
-    if chosen["class"] == 1 and level_set != "solid":
-        raise DreamPrintError(f"grid {chosen['name']!r} is a level set, not a fog volume "
-                              "(convert it to a fog volume, or ask for a uniform solid "
-                              "with --option level_set=solid)", path)
+    if chosen["class"] == 1 and level_set == "refuse":
+        raise DreamPrintError(f"grid {chosen['name']!r} is a level set, not a fog volume: "
+                              + LEVEL_SET_ADVICE, path)
     if chosen["voxels"] == 0:
         raise DreamPrintError(f"grid {chosen['name']!r} is empty (no active voxels)", path)
     return NanoVdbSource(path, chosen, info, colour=colour, level_set=level_set,
-                         solid_density=solid_density)
+                         solid_density=solid_density, shell_voxels=shell_voxels)

@@ -15,9 +15,9 @@ linear transform), interpolation is trilinear in index space (``BoxSampler``), v
 every leaf read as the background.  Density: the fog volume's value per source unit (the rule
 of :mod:`.base`).  Colour: a vec3 grid (``Cd``, ``color``, ``colour``, ``rgb``) or three
 scalar grids ``color_r/g/b`` (``Cd_r``...), scene-linear as Houdini and Blender write them
-(``colour_encoding="srgb"`` to override), else one uniform colour.  A level set is refused, or
-with ``level_set="solid"`` becomes a solid of density ``solid_density`` (antialiased over one
-voxel: ``clip(1/2 - phi / voxel, 0, 1)``).
+(``colour_encoding="srgb"`` to override), else one uniform colour.  A level set (signed
+distance) is refused, or read as a solid or a hollow shell (``level_set="solid"`` /
+``"shell"``, :mod:`.level_set`).
 
 Reference: OpenVDB file format and grid classes (openvdb.org/documentation/doxygen, "OpenVDB
 Overview", "Grid classes"); Museth, "VDB", ACM TOG 32(3), 2013.
@@ -40,6 +40,13 @@ from dreamprint_gui.io.volumes.base import (
     voxel_centres,
 )
 from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
+from dreamprint_gui.io.volumes.level_set import (
+    GRID_ADVICE,
+    LEVEL_SET_ADVICE,
+    check_level_set_options,
+    check_shell,
+    level_set_density,
+)
 from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
 from dreamprint_gui.io.volumes.vdb_file import VdbError, VdbGrid, read_file, read_grid
 
@@ -349,7 +356,8 @@ class VdbSource:
     def __init__(self, path: Path, density_grid: str, colour_grids: list[str], info: dict,
                  grids_meta: list[dict], grids: dict[str, VdbGrid], *,
                  colour=(1.0, 1.0, 1.0), level_set: str = "refuse",
-                 solid_density: float = 1.0, colour_encoding: str = "linear"):
+                 solid_density: float = 1.0, colour_encoding: str = "linear",
+                 shell_voxels: float = 1.0):
         self.name = str(path)
         self.format = "OpenVDB"
         self._info = info
@@ -357,6 +365,7 @@ class VdbSource:
         self.uniform_colour = np.asarray(colour, np.float32)
         self.level_set = level_set
         self.solid_density = float(solid_density)
+        self.shell_voxels = float(shell_voxels)
         names = [density_grid, *colour_grids]
         by_name = {}
         for m in grids_meta:
@@ -442,7 +451,8 @@ class VdbSource:
         self._densify()
         d = self.density.sample(grid, z0, z1)[..., 0]
         if self.is_level_set:
-            d = self.solid_density * np.clip(0.5 - d / self.voxel_size, 0.0, 1.0)
+            d = level_set_density(d, self.voxel_size, self.solid_density, self.level_set,
+                                  self.shell_voxels)
         sigma = np.maximum(d, 0.0)
         sigma *= np.float32(density_scale / grid.mm_per_unit)
         if len(self.colour_grids) == 1:
@@ -463,17 +473,20 @@ class VdbSource:
 
 def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = None,
               colour_grid: str | None = None, colour=(1.0, 1.0, 1.0), level_set: str = "refuse",
-              solid_density: float = 1.0, colour_encoding: str = "linear") -> VdbSource:
+              solid_density: float = 1.0, colour_encoding: str = "linear",
+              shell_voxels: float = 1.0) -> VdbSource:
     """Open a .vdb: ``density_grid`` (default ``density``, else the only float fog volume),
-    ``colour_grid`` (a vec3 grid name; default: found by name), ``level_set`` "refuse" or
-    "solid" (with ``solid_density`` per source unit)."""
-    if level_set not in ("refuse", "solid"):
-        raise DreamPrintError(f"level_set must be 'refuse' or 'solid', got {level_set!r}", path)
+    ``colour_grid`` (a vec3 grid name; default: found by name), ``level_set`` "refuse",
+    "solid" or "shell" (with ``solid_density`` per source unit; a shell ``shell_voxels`` of
+    the file's voxels thick)."""
+    check_level_set_options(level_set, shell_voxels, path)
     res, read = _read(path)
     grids = {}
     for g in res["grids"]:
         grids.setdefault(g["name"], g)
     info = {"format": "OpenVDB", "grids": [_info_entry(g, path) for g in res["grids"]]}
+    if res["metadata"]:
+        info["metadata"] = dict(res["metadata"])  # the writer (creator), an up axis: orient.py
     if not grids:
         raise DreamPrintError("the file holds no grids", path)
     scalar = [g for g in res["grids"] if g["type"] in ("float", "double", "half")]
@@ -483,14 +496,13 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
         else:
             fog = [g for g in scalar if _class_name(g) == "fog volume"]
             pool = fog or ([g for g in scalar if _class_name(g) == "level set"]
-                           if level_set == "solid" else [])
+                           if level_set != "refuse" else [])
             if not pool and any(_class_name(g) == "level set" for g in scalar):
-                raise DreamPrintError("the file holds a level set, not a fog volume (convert "
-                                      "it to a fog volume, or ask for a uniform solid with "
-                                      "--option level_set=solid)", path)
+                raise DreamPrintError("the file holds a level set, not a fog volume: "
+                                      + LEVEL_SET_ADVICE, path)
             if len(pool) != 1:
                 raise DreamPrintError("no grid named 'density'; choose one of: "
-                                      f"{', '.join(grids)}", path)
+                                      f"{', '.join(grids)} ({GRID_ADVICE})", path)
             density_grid = pool[0]["name"]
     if density_grid not in grids:
         raise DreamPrintError(f"no grid named {density_grid!r} (has: {', '.join(grids)})", path)
@@ -500,12 +512,15 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
     if g["type"] not in ("float", "double", "half"):
         raise DreamPrintError(f"grid {density_grid!r} holds {g['type']} values, not a scalar "
                               "density", path)
-    if _class_name(g) == "level set" or (density_grid.startswith("ls_") and level_set != "solid"
+    if _class_name(g) == "level set" or (density_grid.startswith("ls_")
+                                         and level_set == "refuse"
                                          and _class_name(g) != "fog volume"):
-        if level_set != "solid":
-            raise DreamPrintError(f"grid {density_grid!r} is a level set, not a fog volume "
-                                  "(convert it to a fog volume, or ask for a uniform solid)",
-                                  path)
+        if level_set == "refuse":
+            raise DreamPrintError(f"grid {density_grid!r} is a level set, not a fog volume: "
+                                  + LEVEL_SET_ADVICE, path)
+        check_shell(level_set, shell_voxels, abs(float(np.ravel(g["background"])[0])),
+                    float(np.min(_affine(g["transform"], density_grid, path)[1])),
+                    density_grid, path)
     if g["empty"]:
         raise DreamPrintError(f"grid {density_grid!r} is empty (no active voxels)", path)
     colour_grids: list[str] = []
@@ -528,4 +543,4 @@ def open_path(path: Path, fmt: str = "openvdb", *, density_grid: str | None = No
             colour_grids = list(trip[0])
     return VdbSource(path, density_grid, colour_grids, info, res["grids"], read, colour=colour,
                      level_set=level_set, solid_density=solid_density,
-                     colour_encoding=colour_encoding)
+                     colour_encoding=colour_encoding, shell_voxels=shell_voxels)

@@ -22,9 +22,13 @@ splat keeps its closed-form kernel) and nothing is resampled twice; any other an
 resample the source on a turned grid. The matrices are proper rotations (determinant +1): an
 object is never mirrored.
 
-Conventions (:func:`auto_up`): the INRIA 3D Gaussian Splatting PLY and the formats made from it
-(SuperSplat compressed PLY, antimatter15 ``.splat``, ``.ksplat``, PlayCanvas SOG) keep COLMAP's
-camera-derived world frame, y down (RDF: right, down, front): up = -y. Niantic SPZ stores RUB
+What the file says comes first (:func:`auto_up`): an OpenVDB file's metadata (an ``up_axis``
+entry, or the ``creator`` its writer states: Houdini and Maya scenes are y-up, Blender's
+z-up), the ``cameras.json`` 3D Gaussian Splatting writes beside a splat PLY (the cameras' mean
+up). Otherwise a convention of the kind, said to be a guess: the INRIA 3D Gaussian Splatting
+PLY and the formats made from it (SuperSplat compressed PLY, antimatter15 ``.splat``,
+``.ksplat``, PlayCanvas SOG) keep COLMAP's camera-derived world frame, y down (RDF: right,
+down, front): up = -y. Niantic SPZ stores RUB
 (right, up, back; the ``spz`` library converts PLY's RDF on writing): up = +y. An InstantNGP
 snapshot's source units are its ``transforms.json`` coordinates, z up (the NeRF synthetic scenes,
 and ``colmap2nerf.py`` turns the scene's up to +z): up = z. Every other kind: the file's z.
@@ -91,17 +95,83 @@ def orientation_matrix(up: str, rotate: int = 0) -> np.ndarray:
     return m
 
 
-def auto_up(source) -> tuple[str, str]:
-    """(up, reason): the up axis of ``source``'s known convention (module doc), else z."""
+# OpenVDB writers that state themselves (file metadata ``creator``) and their scenes' up axis
+_VDB_WRITERS = (("houdini", "y", "Houdini"), ("maya", "y", "Maya"),
+                ("blender", "z", "Blender"), ("kamikaze", "z", "Blender (Kamikaze)"))
+_UP_WORDS = {"x": "x", "+x": "x", "-x": "-x", "y": "y", "+y": "y", "-y": "-y", "z": "z",
+             "+z": "z", "-z": "-z"}
+
+
+def _stated_up(meta: dict) -> tuple[str, str] | None:
+    """(up, reason) from a volume file's metadata: an explicit up axis (``up_axis``,
+    ``upAxis``, ``up``: x, y or z, signed or not), else the writer (``creator``) of a known
+    convention."""
+    for key, value in meta.items():
+        if str(key).replace("_", "").lower() in ("upaxis", "up") and \
+                str(value).strip().lower() in _UP_WORDS:
+            return _UP_WORDS[str(value).strip().lower()], f"the file's {key} says {value}"
+    creator = str(meta.get("creator", ""))
+    for word, up, name in _VDB_WRITERS:
+        if word in creator.lower():
+            return up, f"written by {name}, whose scenes are {up.lstrip('-')}-up"
+    return None
+
+
+def _cameras_up(path: str) -> tuple[str, str] | None:
+    """(up, reason) from the ``cameras.json`` 3D Gaussian Splatting writes beside its output
+    (``<model>/cameras.json`` for ``<model>/point_cloud/iteration_N/point_cloud.ply``): each
+    entry's ``rotation`` is the camera-to-world rotation of an OpenCV/COLMAP camera (x right,
+    y down), so its up in the world is ``-rotation[:, 1]``; the signed axis nearest their mean
+    is up, when the cameras agree (mean length >= 0.5)."""
+    import json
+    from pathlib import Path
+
+    p = Path(path)
+    for folder in (p.parent, p.parent.parent, p.parent.parent.parent):
+        f = folder / "cameras.json"
+        if not f.is_file():
+            continue
+        try:
+            cams = json.loads(f.read_text(encoding="utf-8"))
+            rots = np.array([c["rotation"] for c in cams], dtype=np.float64)
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        if rots.ndim != 3 or rots.shape[1:] != (3, 3) or not len(rots):
+            return None
+        up = -rots[:, :, 1].mean(axis=0)
+        if not np.all(np.isfinite(up)) or np.linalg.norm(up) < 0.5:
+            return None
+        a = int(np.argmax(np.abs(up)))
+        axis = ("-" if up[a] < 0 else "") + "xyz"[a]
+        return axis, f"the {len(rots)} cameras of {f.name} beside it look {axis}-up"
+    return None
+
+
+def auto_up(source) -> tuple[str, str, bool]:
+    """(up, reason, guessed): what the file says (an OpenVDB file's metadata: its up axis or a
+    writer of known convention; the cameras beside a 3DGS splat file), else the convention of
+    its kind (module doc), else the file's z; ``guessed`` unless the file itself said."""
     fmt = str(getattr(source, "format", ""))
     low = fmt.lower()
+    info = {}
+    try:
+        info = source.info() if hasattr(source, "info") else {}
+    except Exception:  # noqa: BLE001 - a description is optional here
+        info = {}
+    stated = _stated_up(info.get("metadata") or {}) if isinstance(info, dict) else None
+    if stated is not None:
+        return stated[0], stated[1], False
+    name = str(getattr(source, "name", ""))
     if "spz" in low:
-        return "y", "SPZ stores RUB coordinates, y up"
+        return "y", "SPZ stores RUB coordinates, y up", True
     if low.startswith("splats") or hasattr(source, "n_total"):
-        return "-y", "3DGS splats keep COLMAP's frame, y down"
+        cams = _cameras_up(name) if name else None
+        if cams is not None:
+            return cams[0], cams[1], False
+        return "-y", "3DGS splats keep COLMAP's frame, y down, as their first camera stood", True
     if "instantngp" in low:
-        return "z", "InstantNGP's transforms.json frame, z up"
-    return "z", "the file's z"
+        return "z", "InstantNGP's transforms.json frame, z up", True
+    return "z", "the file does not say; its z kept", True
 
 
 @dataclass(frozen=True)
@@ -113,6 +183,7 @@ class Orientation:
     rotate: int = 0
     auto: bool = False
     reason: str = ""
+    guessed: bool = False  # auto, and the file did not say (a convention or the file's z)
 
     @property
     def matrix(self) -> np.ndarray:
@@ -123,21 +194,27 @@ class Orientation:
         return self.up == "z" and self.rotate == 0
 
     def describe(self) -> str:
-        how = f"auto: {self.reason}" if self.auto else "as asked"
+        """One line: the up axis, where it came from (a guess says so) and the option that
+        changes it."""
+        if self.auto:
+            how = f"{'a guess' if self.guessed else 'auto'}: {self.reason}; --up changes it"
+        else:
+            how = "as asked"
         turn = f", turned {self.rotate} degrees about z" if self.rotate else ""
         return f"up = source {self.up} ({how}){turn}"
 
     def to_json(self) -> dict[str, Any]:
         return {"up": self.up, "rotate_deg": self.rotate, "auto": self.auto,
-                "reason": self.reason, "matrix": self.matrix.tolist()}
+                "guessed": self.guessed, "reason": self.reason,
+                "matrix": self.matrix.tolist()}
 
 
 def choose_orientation(source, up: str | None = None, rotate: Any = 0) -> Orientation:
     """The job's orientation: ``up`` as given (or None / "auto": :func:`auto_up`)."""
     rot = parse_rotate(rotate)
     if up is None or up == "auto":
-        axis, reason = auto_up(source)
-        return Orientation(axis, rot, True, reason)
+        axis, reason, guessed = auto_up(source)
+        return Orientation(axis, rot, True, reason, guessed)
     if up not in UP_AXES:
         raise DreamPrintError(f"--up must be auto or one of {', '.join(UP_AXES)}, got {up!r}")
     return Orientation(up, rot, False, "")

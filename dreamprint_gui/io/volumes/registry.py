@@ -18,7 +18,8 @@ from dreamprint_gui.io.volumes.ingp_volume import is_ingp_volume_dir, is_ingp_vo
 from dreamprint_gui.io.volumes.splat_formats import is_sog
 
 __all__ = ["FORMATS", "sniff_format", "inspect_file", "inspect_source", "open_source",
-           "reader_options", "OPTION_ALIASES"]
+           "reader_options", "OPTION_ALIASES", "parse_reader_options", "format_reader_options",
+           "interpretation_choices"]
 
 
 # format key -> (module, extensions)
@@ -144,6 +145,58 @@ def reader_options(path_or_name: str | os.PathLike) -> set[str]:
 
 OPTION_ALIASES = {"grid": "density_grid", "color": "colour", "colormap": "colormap",
                   "cmap": "colormap"}
+
+
+def interpretation_choices(path_or_name: str | os.PathLike) -> dict:
+    """What an operator may choose about how a file is read, for the GUI's controls (the
+    CLI's ``--option``): ``options`` (every option name its reader takes), ``grids`` (the
+    scalar grids a density may come from, when the reader takes ``density_grid`` and the
+    file holds more than one), ``level_set`` (the file holds a level set: read it as a solid
+    or a shell, ``level_set=``)."""
+    takes = reader_options(path_or_name)
+    out = {"options": sorted(takes), "grids": [], "level_set": False}
+    if "density_grid" not in takes:
+        return out
+    try:
+        grids = inspect_file(path_or_name).get("grids", [])
+    except DreamPrintError:
+        return out  # an unreadable file is reported when it is opened
+    scalar = [g for g in grids if str(g.get("dtype", "")).split()[0] in ("float", "double",
+                                                                        "half")]
+    if len(scalar) > 1:
+        out["grids"] = [g["name"] for g in scalar]
+    out["level_set"] = "level_set" in takes and any(g.get("class") == "level set"
+                                                     for g in scalar)
+    return out
+
+
+def _option_value(v: str):
+    for conv in (int, float):
+        try:
+            return conv(v)
+        except ValueError:
+            pass
+    return {"true": True, "false": False}.get(v.lower(), v)
+
+
+def parse_reader_options(items) -> dict:
+    """Reader options from ``KEY=VALUE`` texts (the CLI's repeated ``--option``, the GUI's
+    Reader options field, comma-separated): numbers and true/false converted."""
+    if isinstance(items, str):
+        items = [t for t in items.split(",") if t.strip()]
+    out = {}
+    for kv in items:
+        if "=" not in kv:
+            raise DreamPrintError(f"--option must be KEY=VALUE, got '{kv.strip()}'")
+        k, v = kv.split("=", 1)
+        out[k.strip()] = _option_value(v.strip())
+    return out
+
+
+def format_reader_options(options: dict) -> str:
+    """The ``KEY=VALUE, ...`` text of reader options (what :func:`parse_reader_options`
+    reads back)."""
+    return ", ".join(f"{k}={v}" for k, v in options.items())
 
 
 def _checked_options(func, options: dict, where) -> dict:

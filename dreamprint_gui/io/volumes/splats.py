@@ -306,9 +306,14 @@ def open_path(path: Path, fmt: str = "splats") -> GaussianCloud:
     if suffix == ".ksplat":
         return _cloud(path, splat_formats.decode_ksplat(path))
     with open(path, "rb") as f:
-        magic = f.read(3)
-    if suffix == ".spz" or magic != b"ply":
-        return _cloud(path, splat_formats.decode_spz(path))
+        head = f.read(4)
+    spz_like = head[:2] == b"\x1f\x8b" or head == b"NGSP"
+    if suffix == ".spz" or (head[:3] != b"ply" and spz_like):
+        return _cloud(path, splat_formats.decode_spz(path))  # also an SPZ named .ply
+    if head[:3] != b"ply":
+        what = "is empty" if not head else "does not start with the line 'ply'"
+        raise DreamPrintError(f"not a PLY file: it {what} (a splat PLY starts with 'ply', "
+                              "then its header)", path)
     _fmt, elements = _ply_header(path)
     if any(name == "chunk" for name, _, _ in elements):
         try:

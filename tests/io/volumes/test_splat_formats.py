@@ -450,3 +450,23 @@ def test_spz_from_gsply_writer_agrees_with_gsply_reader(tmp_path, version):
     np.testing.assert_allclose(g.rgb, 0.5 + SH_C0 * np.asarray(ref.sh0, float), atol=1e-5)
     _check(g, means, sig, q, a, rgb, pos=0.5 / 4096 + 1e-6, log_sig=0.5 / 16 + 1e-6, rot=2e-4,
            colour=SH_C0 * 0.5 / (0.15 * 255) + 1e-6, alpha=0.5 / 255 + 1e-6)
+
+
+def test_a_ply_that_is_not_a_ply_is_said_so(tmp_path, capsys):
+    """A text file named .ply is "not a PLY file", not "not an SPZ file" (issue 46); an SPZ
+    named .ply still opens as SPZ."""
+    p = tmp_path / "notes.ply"
+    p.write_text("hello, this is text\n")
+    with pytest.raises(DreamPrintError, match="not a PLY file: it does not start with the "
+                                              "line 'ply'") as exc:
+        open_source(p)
+    assert "SPZ" not in str(exc.value)
+    p.write_bytes(b"")
+    with pytest.raises(DreamPrintError, match="not a PLY file: it is empty"):
+        open_source(p)
+    k = _known()
+    spz = tmp_path / "t.spz"
+    write_spz(spz, 3, *k)
+    misnamed = tmp_path / "t.ply"
+    misnamed.write_bytes(spz.read_bytes())
+    assert open_source(misnamed).n_total == open_source(spz).n_total

@@ -122,3 +122,24 @@ def test_inspect_vdb_json(vdbs, capsys):
     assert main(["inspect", "--json", str(vdbs / "levelset.vdb")]) == 0
     (g,) = json.loads(capsys.readouterr().out)["grids"]
     assert g["name"] == "ls_sphere" and g["class"] == "level set" and g["active_voxels"] > 0
+
+
+def test_level_set_shell_is_the_wall_of_the_solid(vdbs):
+    """``level_set=shell``: the sphere's wall (r 2, 2 voxels of 0.1 thick): its volume is the
+    closed form 4/3 pi (2^3 - 1.8^3); thicker than the narrow band (3 voxels) is refused."""
+    with pytest.raises(DreamPrintError, match=r"level_set=solid\) or as a hollow shell"):
+        open_source(vdbs / "levelset.vdb")
+    s = open_source(vdbs / "levelset.vdb", level_set="shell", shell_voxels=2.0)
+    g = grid_for_source(s, (0.05, 0.05, 0.05), height_mm=4.6)
+    _, d = s.sample_slab(g, 0, g.shape_xyz[2])
+    cell = g.mm_per_unit ** -3 * np.prod(g.voxel_mm)          # source units^3 per voxel
+    volume = float(d.sum() * g.mm_per_unit) * cell              # solid_density 1
+    want = 4.0 / 3.0 * np.pi * (2.0 ** 3 - 1.8 ** 3)
+    assert abs(volume - want) / want < 0.02, (volume, want)
+    cz, cy, cx = np.meshgrid(*(voxel_centres(g, a) for a in (2, 1, 0)), indexing="ij")
+    r = np.sqrt(cx ** 2 + cy ** 2 + cz ** 2)
+    assert not d[r < 1.7].any() and not d[r > 2.1].any()     # hollow inside, nothing outside
+    with pytest.raises(DreamPrintError, match="shell_voxels at most 2"):
+        open_source(vdbs / "levelset.vdb", level_set="shell", shell_voxels=2.5)
+    with pytest.raises(DreamPrintError, match="level_set must be one of refuse, solid, shell"):
+        open_source(vdbs / "levelset.vdb", level_set="hollow")
