@@ -84,6 +84,7 @@ class ConvertSettings:
     up: str | None = None                 # source axis that becomes +z; None: auto (orient)
     rotate: int = 0                       # degrees about the print's z (quarter turns)
     fit: str = "occupied"                 # "occupied" (non-empty bounds) | "box" (declared)
+    resume: bool = False                  # finish an interrupted run's folder (job.resume)
 
 
 @dataclass(frozen=True)
