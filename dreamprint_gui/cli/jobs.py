@@ -110,7 +110,8 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
     warnings (mostly Clear, clamping, out of gamut) go to stderr; after the job, how many voxels
     were clamped. --quiet silences both; --json adds them to the printed manifest."""
-    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled
+    from dreamprint_gui.job.cluster import quiet_client_logs
+    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled, _scheduler_kind
     from dreamprint_gui.job.run import run_conversion
 
     up_axis, turn = placement_values(up, rotate)
@@ -139,6 +140,9 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         raise KeyboardInterrupt()
 
     old = signal.signal(signal.SIGTERM, on_term)
+    root = click.get_current_context().find_root()
+    if _scheduler_kind(settings) == "distributed" and not root.params.get("debug"):
+        quiet_client_logs()
     gen = run_conversion(settings)
     progress = _Progress(sys.stderr.isatty(), quiet)
     pf = None
@@ -165,7 +169,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
             made.unlink(missing_ok=True)
         if isinstance(exc, JobCancelled):
             raise DreamPrintError("cancelled; the partial job was removed", output) from None
-        if isinstance(exc, KeyboardInterrupt) and last is not None:
+        if isinstance(exc, KeyboardInterrupt) and last is not None and last.layers_done:
             raise KeyboardInterrupt(
                 f"at {last.layers_done} of {last.layers_total} layers; the finished layers are "
                 "kept: run the same command with --resume to finish the job") from None

@@ -16,6 +16,7 @@ slabs for ``--resume`` (:class:`.write.JobInterrupted`).
 
 from __future__ import annotations
 
+import logging
 import os
 import threading
 from collections.abc import Callable
@@ -23,10 +24,23 @@ from typing import Any
 
 from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.job.plan import JobCancelled
-from dreamprint_gui.job.write import JobInterrupted
+from dreamprint_gui.job.write import JobCancelled, JobInterrupted
 
-__all__ = ["connect", "cluster_line", "cluster_threads", "check_workers", "run_distributed"]
+__all__ = ["connect", "absolute_paths", "quiet_client_logs", "cluster_line", "cluster_threads",
+           "check_workers", "run_distributed", "WORKER_WAIT_S"]
+
+
+WORKER_WAIT_S = 10.0  # how long a job waits for a cluster's first worker
+
+
+def quiet_client_logs() -> None:
+    """Keep dask.distributed's client-side log records (a lost scheduler's reconnection
+    tracebacks) off the operator's terminal: the job says what happened in one line. For the
+    command line; ``dreamprint --debug`` leaves them."""
+    import distributed  # noqa: F401 - its import sets its loggers' levels: set ours after
+
+    for name in ("distributed", "distributed.client", "tornado", "tornado.application"):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 def connect(address: str, timeout: str = "10s") -> Any:
@@ -37,6 +51,19 @@ def connect(address: str, timeout: str = "10s") -> Any:
         return Client(address, timeout=timeout)
     except (OSError, TimeoutError) as exc:
         raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+
+
+def absolute_paths(settings: Any) -> Any:
+    """``settings`` with the files the workers open themselves (source, profile, compensation)
+    as absolute paths: a worker's folder is not the client's."""
+    from dataclasses import replace
+
+    changes = {}
+    for name in ("source", "profile", "compensation"):
+        v = getattr(settings, name)
+        if v is not None and not os.path.isabs(os.fspath(v)) and os.path.exists(v):
+            changes[name] = os.path.abspath(v)
+    return replace(settings, **changes) if changes else settings
 
 
 def _workers(client: Any) -> dict[str, Any]:
@@ -71,8 +98,11 @@ def check_workers(client: Any, source: str, folder: str) -> None:
     worker that runs another DreamPrint version, cannot read the source (a file the client
     reads: ``demo`` is built in) or cannot write into the job's temporary folder."""
     if not _workers(client):
-        raise DreamPrintError("the Dask cluster has no workers (start some with "
-                              "'dask worker tcp://HOST:PORT')")
+        try:  # workers starting with the cluster may join a little later
+            client.wait_for_workers(1, timeout=WORKER_WAIT_S)
+        except TimeoutError:
+            raise DreamPrintError(f"the Dask cluster has no workers after {WORKER_WAIT_S:g} s "
+                                  "(start some with 'dask worker tcp://HOST:PORT')") from None
     try:
         views = client.run(_worker_view, source, folder)
     except ModuleNotFoundError:

@@ -31,6 +31,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.core.threads import DaemonCall
 from dreamprint_gui.job.cluster import (
+    absolute_paths,
     check_workers,
     cluster_line,
     cluster_threads,
@@ -262,6 +263,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
         check_settings(settings)  # a missing size is reported before "opening the source"
     client = None
     if _scheduler_kind(settings) == "distributed":
+        settings = absolute_paths(settings)
         client = connect(settings.scheduler)  # an unreachable scheduler: before any work
     try:
         return (yield from _convert(settings, cancel, context, preflight, started, client))

@@ -36,7 +36,7 @@ from typing import Any
 from dreamprint_gui.core.errors import DreamPrintError
 
 __all__ = ["JobWriter", "check_target", "slice_name", "disk_error", "MANIFEST", "SLICES",
-           "CANCEL_MARKER", "IDENTITY", "SLABS", "JobInterrupted", "stale_partials",
+           "CANCEL_MARKER", "IDENTITY", "SLABS", "JobCancelled", "JobInterrupted", "stale_partials",
            "write_atomic", "TMP_SUFFIX"]
 
 MANIFEST = "manifest.json"
@@ -46,6 +46,10 @@ TMP_SUFFIX = ".tmp"
 IDENTITY = "identity.json"  # a resumable job's identity (.resume)
 SLABS = "slabs"             # its finished slabs' records (.resume)
 _DISK_FULL = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)}
+
+
+class JobCancelled(Exception):
+    """The conversion was cancelled (GUI cancel): its partial folder is removed."""
 
 
 class JobInterrupted(DreamPrintError):
@@ -89,8 +93,12 @@ def check_target(target: str | os.PathLike, overwrite: bool = False) -> Path:
     return p
 
 
-def disk_error(exc: OSError, where: str | os.PathLike) -> DreamPrintError:
+def disk_error(exc: OSError, where: str | os.PathLike, kept: bool = False) -> DreamPrintError:
     if exc.errno in _DISK_FULL:
+        if kept:
+            return DreamPrintError("the disk is full (no space left while writing the job); "
+                                   "the finished layers are kept: free some space and run the "
+                                   "same command with --resume", where)
         return DreamPrintError("the disk is full (no space left while writing the job); the "
                                "partial job was removed", where)
     return DreamPrintError(f"cannot write the job: {exc.strerror or exc}", where)
@@ -168,13 +176,23 @@ class JobWriter:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
+        kept = False
         if not self.committed:
-            if self.resumable and isinstance(exc, KeyboardInterrupt | JobInterrupted):
-                (self.tmp / CANCEL_MARKER).unlink(missing_ok=True)  # kept for --resume
+            kept = self.keeps_on(exc)
+            if kept:
+                (self.tmp / CANCEL_MARKER).unlink(missing_ok=True)  # for --resume
             else:
                 self.abort()
         if isinstance(exc, OSError) and not isinstance(exc, FileNotFoundError | FileExistsError):
-            raise disk_error(exc, self.target) from exc
+            raise disk_error(exc, self.target, kept) from exc
+
+    def keeps_on(self, exc: BaseException | None) -> bool:
+        """Whether the folder stays for ``--resume`` after ``exc``: a resumable job that has
+        finished slabs keeps them on anything but a cancel (an interruption, a lost cluster, a
+        full disk, an error); a cancel, or a folder with nothing finished, is removed."""
+        if not self.resumable or isinstance(exc, JobCancelled | GeneratorExit):
+            return False
+        return any((self.tmp / SLABS).glob("*.json"))
 
     def request_cancel(self) -> None:
         """Tell slab tasks (threads, processes or cluster workers) to stop at their next layer."""
