@@ -215,3 +215,32 @@ def test_plain_writer_interrupt_still_removes_its_folder(tmp_path):
         (w.slices_dir / "00000.png").write_bytes(b"x")
         raise KeyboardInterrupt
     assert os.listdir(tmp_path) == []
+
+
+def test_an_error_while_resuming_keeps_the_finished_layers(tmp_path, monkeypatch):
+    """A resumed run that fails (here every slab task raises) loses none of the layers it took
+    over: the folder stays, under the failed process's name, and a later --resume finishes."""
+    from dataclasses import replace
+
+    import dreamprint_gui.job.run as run
+
+    out, settings, kept = _interrupted_job(tmp_path, n_slabs=4)
+    before = len(read_slab_records(kept, 38))
+
+    def broken(*args, **kw):
+        raise RuntimeError("worker exploded")
+
+    with monkeypatch.context() as m:
+        m.setattr(run, "run_slab", broken)
+        with pytest.raises(RuntimeError, match="exploded"):
+            for _ in run_conversion(replace(settings, resume=True), preflight=False):
+                pass
+    [left] = _partials(tmp_path)
+    assert len(read_slab_records(left, 38)) == before and not out.exists()
+    left.rename(left.with_name(".JOB.partial-4194401-0"))  # its process gone
+    for _ in run_conversion(replace(settings, resume=True), preflight=False):
+        pass
+    ref = tmp_path / "REF"
+    for _ in run_conversion(replace(settings, output=ref), preflight=False):
+        pass
+    assert _digests(out) == _digests(ref)
