@@ -114,6 +114,9 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     from dreamprint_gui.job.plan import ConvertSettings, JobCancelled, _scheduler_kind
     from dreamprint_gui.job.run import run_conversion
 
+    if resume and overwrite:
+        raise DreamPrintError("give --resume (finish the interrupted run) or --overwrite (start "
+                              "again), not both")
     up_axis, turn = placement_values(up, rotate)
     opts = {}
     for kv in source_options:

@@ -244,3 +244,10 @@ def test_an_error_while_resuming_keeps_the_finished_layers(tmp_path, monkeypatch
     for _ in run_conversion(replace(settings, output=ref), preflight=False):
         pass
     assert _digests(out) == _digests(ref)
+
+
+def test_resume_and_overwrite_together_are_refused(tmp_path, capsys):
+    assert main(["convert", "demo", "-o", str(tmp_path / "JOB"), "--height-mm", "0.3",
+                 "--resume", "--overwrite"]) == 2
+    assert "not both" in capsys.readouterr().err
+    assert os.listdir(tmp_path) == []
