@@ -20,6 +20,7 @@ import math
 import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Generator
 from pathlib import Path
 from typing import Any
@@ -63,7 +64,7 @@ from dreamprint_gui.job.resume import (
 from dreamprint_gui.job.slab import load_kernels, run_slab
 from dreamprint_gui.job.write import JobWriter, check_target, slice_name
 
-__all__ = ["run_conversion"]
+__all__ = ["run_conversion", "job_description", "TimeLeft"]
 
 _LABELS = (*INKS, "empty")
 
@@ -126,6 +127,29 @@ def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
     th = threading.Thread(target=drive, name="dreamprint-dask", daemon=True)
     th.start()
     return th, stop
+
+
+class TimeLeft:
+    """The time left of a job from the rate of its last :data:`RATE_WINDOW_S` seconds of
+    finished slabs (from its start until then): it follows a cluster that loses or gains
+    workers within that window instead of the whole run's average. Layers a resumed job found
+    done took no time and are not counted in the rate."""
+
+    def __init__(self, total: int, done: int, start: float) -> None:
+        self.total = total
+        self.recent: deque[tuple[float, int]] = deque([(start, done)])
+
+    def update(self, done: int, now: float | None = None) -> float:
+        now = time.perf_counter() if now is None else now
+        self.recent.append((now, done))
+        while len(self.recent) > 2 and now - self.recent[1][0] >= RATE_WINDOW_S:
+            self.recent.popleft()  # keep one point at or before the window's start
+        t0, d0 = self.recent[0]
+        rate = (done - d0) / max(1e-9, now - t0)
+        return (self.total - done) / rate if rate > 0 else float("inf")
+
+
+RATE_WINDOW_S = 30.0
 
 
 # ----------------------------------------------------------------------------- driver
@@ -359,6 +383,7 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
         error: BaseException | None = None
         layers = resumed
         t_conv = time.perf_counter()
+        eta = TimeLeft(nz, resumed, t_conv)
         try:
             while True:
                 try:
@@ -374,10 +399,8 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
                         stage_t[k] += v
                     layers += payload["z1"] - payload["z0"]
                     el = time.perf_counter() - started
-                    # this run's rate: the layers a resumed job found done took no time
-                    rate = (layers - resumed) / max(1e-9, time.perf_counter() - t_conv)
                     yield ConvertProgress("converting", layers, nz, layers * nx * ny,
-                                          nx * ny * nz, el, (nz - layers) / rate)
+                                          nx * ny * nz, el, eta.update(layers))
                 elif what == "error":
                     error = payload
                 elif what == "closed":

@@ -251,3 +251,20 @@ def test_resume_and_overwrite_together_are_refused(tmp_path, capsys):
                  "--resume", "--overwrite"]) == 2
     assert "not both" in capsys.readouterr().err
     assert os.listdir(tmp_path) == []
+
+
+def test_time_left_follows_the_recent_rate():
+    """A cluster halving its speed (a worker lost): after a window the time left is that of
+    the new rate, not of the whole run's mean; a resumed job's kept layers took no time."""
+    from dreamprint_gui.job.run import RATE_WINDOW_S, TimeLeft
+
+    eta = TimeLeft(1000, 0, 0.0)
+    for t in range(1, 41):  # 10 layers/s for 40 s
+        left = eta.update(10 * t, float(t))
+    assert left == pytest.approx(600 / 10)
+    for t in range(41, 81):  # then 5 layers/s
+        left = eta.update(400 + 5 * (t - 40), float(t))
+    assert RATE_WINDOW_S <= 40 and left == pytest.approx(400 / 5)  # the mean would say 53 s
+    resumed = TimeLeft(100, 50, 0.0)
+    assert resumed.update(60, 10.0) == pytest.approx(40 / 1.0)
+    assert TimeLeft(10, 0, 0.0).update(0, 5.0) == float("inf")  # no progress: unknown
