@@ -124,13 +124,17 @@ def check_workers(client: Any, source: str, folder: str) -> None:
                                   "same path", os.path.dirname(folder))
 
 
-def _lost(exc: BaseException) -> bool:
-    """Whether ``exc`` says the client lost its scheduler."""
+def _lost(exc: BaseException, client: Any) -> bool:
+    """Whether ``exc``, raised while waiting for results, says the client lost its scheduler:
+    its connection closed or reset (whatever the client's status says yet), or a cancel or a
+    comm error once the client is no longer running."""
     from distributed.client import FutureCancelledError
+    from distributed.comm.core import CommClosedError
 
-    text = f"{type(exc).__name__}: {exc}".lower()
-    return isinstance(exc, OSError | TimeoutError | FutureCancelledError) or any(
-        w in text for w in ("scheduler", "closed", "connection", "comm"))
+    if isinstance(exc, CommClosedError | ConnectionError):
+        return True
+    return client.status != "running" and isinstance(
+        exc, OSError | TimeoutError | FutureCancelledError)
 
 
 def run_distributed(client: Any, address: str, task: Callable[..., Any], ctx: Any,
@@ -163,7 +167,7 @@ def run_distributed(client: Any, address: str, task: Callable[..., Any], ctx: An
         except JobCancelled as exc:
             out_q.put(("error", exc))
         except BaseException as exc:  # noqa: BLE001 - handed to the consuming generator
-            if not stop.is_set() and _lost(exc) and client.status != "running":
+            if not stop.is_set() and _lost(exc, client):
                 exc = JobInterrupted(f"lost the Dask scheduler at {address}; the finished "
                                      "layers are kept: run the same command with --resume")
             out_q.put(("error", exc))

@@ -52,6 +52,9 @@ def job_identity(description: dict[str, Any], source_stamp: tuple) -> dict[str, 
     modification time (``source_stamp``, :func:`.plan._stamp`). JSON-normalised, so that a
     stamp read back compares equal."""
     ident = {k: description[k] for k in _WHAT if k in description}
+    # the profile is known by its fingerprint (its content): the path it was given by may be
+    # relative, or absolute when a cluster job made it so
+    ident["profile"] = {k: v for k, v in ident.get("profile", {}).items() if k != "path"}
     ident["software"] = {"name": "dreamprint", "version": __version__}
     ident["source_file"] = list(source_stamp)
     return {"format": _FORMAT, **json.loads(json.dumps(ident))}

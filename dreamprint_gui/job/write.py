@@ -125,7 +125,13 @@ def stale_partials(target: str | os.PathLike) -> list[Path]:
             continue
         if pid != os.getpid() and not _pid_alive(pid) and p.is_dir():
             out.append(p)
-    return sorted(out, key=lambda p: p.stat().st_mtime, reverse=True)
+    def mtime(p: Path) -> float:
+        try:
+            return p.stat().st_mtime
+        except OSError:  # removed meanwhile
+            return 0.0
+
+    return sorted(out, key=mtime, reverse=True)
 
 
 def _remove_stale_partials(target: Path) -> None:

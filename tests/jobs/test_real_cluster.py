@@ -173,3 +173,25 @@ def test_workers_that_cannot_do_the_job_are_refused_in_one_line(tmp_path, view, 
     with pytest.raises(DreamPrintError, match=says) as e:
         check_workers(_FakeClient(view), str(src), str(tmp_path / ".J.partial-1-a" / "slices"))
     assert "tcp://10.0.0.2:4000" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_the_client_killed_then_resume_on_the_cluster(cluster, tmp_path):
+    """kill -9 of the converting client at half the job; the workers may still finish the
+    slabs they were running; --resume against the same cluster gives the local slices."""
+    height, nz = "6", 223
+    c = cluster(2)
+    ref = _reference(tmp_path, height)
+    out = tmp_path / "JOB"
+    proc = _convert(out, height, c.address, "-q")
+    _wait_done(proc, tmp_path, 0.5, nz)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    left = find_interrupted(out)
+    assert left is not None and left[1] < nz and not out.exists()
+    res = subprocess.run(
+        [sys.executable, "-m", "dreamprint_gui.cli", "convert", "demo", "-o", str(out),
+         "--height-mm", height, *JOB, "--scheduler", c.address, "--resume", "-q"],
+        capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=str(REPO)), timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "layers kept from the interrupted run" in res.stdout
+    assert _digests(out) == ref
