@@ -85,11 +85,9 @@ def cluster_line(client: Any, address: str) -> str:
 
 
 def _worker_view(source: str, folder: str) -> dict[str, Any]:
-    """Run on a worker: its DreamPrint version, and whether it reads the source and writes
-    into the job's folder."""
-    from dreamprint_gui import __version__ as version
-
-    return {"version": version, "source": os.access(source, os.R_OK),
+    """Run on a worker (this module imported there: ``__version__`` is the worker's): its
+    DreamPrint version, and whether it reads the source and writes into the job's folder."""
+    return {"version": __version__, "source": os.access(source, os.R_OK),
             "folder": os.access(folder, os.W_OK | os.X_OK)}
 
 
