@@ -81,7 +81,22 @@ def cluster_line(client: Any, address: str) -> str:
     line = (f"cluster {address}: {len(ws)} worker{'s' if len(ws) != 1 else ''}, "
             f"{cluster_threads(client)} threads")
     link = getattr(client, "dashboard_link", None)
-    return f"{line}; dashboard {link}" if link and ws else line
+    if not (link and ws):
+        return line
+    try:  # the dashboard is the scheduler's: it shows a page asking for bokeh without it
+        served = client.run_on_scheduler(_has_bokeh)
+    except Exception:  # noqa: BLE001 - a scheduler that cannot tell: give the link
+        served = True
+    return f"{line}; dashboard {link}" + (
+        "" if served else " (install bokeh on the scheduler's machine to see it: pip install "
+        "'dreamprint[cluster]')")
+
+
+def _has_bokeh() -> bool:
+    """Run on the scheduler: whether it can serve the dashboard."""
+    import importlib.util
+
+    return importlib.util.find_spec("bokeh") is not None
 
 
 def _worker_view(source: str, folder: str) -> dict[str, Any]:

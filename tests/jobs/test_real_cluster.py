@@ -123,6 +123,11 @@ def test_a_worker_killed_mid_job_gives_the_slices_of_a_local_run(cluster, tmp_pa
     assert _digests(out) == ref
     text = err.decode()
     assert f"cluster {c.address}: 2 workers, 2 threads; dashboard http://127.0.0.1:" in text
+    import importlib.util
+
+    # the scheduler runs in this environment: without bokeh its dashboard only asks for it
+    assert ("install bokeh on the scheduler's machine" in text) == (
+        importlib.util.find_spec("bokeh") is None)
     # progress stayed honest: layers counted once each, never past the job
     layers = [int(line.split()[1].split("/")[0]) for line in text.splitlines()
               if line.startswith("converting:")]
