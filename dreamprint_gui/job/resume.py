@@ -1,5 +1,9 @@
 """Resumable print jobs: what an interrupted job folder holds, and what ``--resume`` finishes.
 
+Stage 5 of the pipeline (write, paper Fig. 2) made restartable. Hand-written: Dask keeps no
+task results beyond its client's life, and result caches (``dask.cache``, graphchain) key
+results by task, not by the slices already on disk nor by a job identity to refuse.
+
 A job is written into a hidden temporary folder (:mod:`.write`) laid out as::
 
     .JOB.partial-<pid>-<id>/
