@@ -122,8 +122,10 @@ def main(argv: list[str] | None = None) -> int:
     except click.ClickException as exc:
         exc.show()
         return exc.exit_code
-    except (click.Abort, KeyboardInterrupt):
-        click.echo("dreamprint: interrupted", err=True)
+    except (click.Abort, KeyboardInterrupt) as exc:
+        # click turns Ctrl-C into Abort; a command's KeyboardInterrupt may say what was kept
+        why = str(exc if isinstance(exc, KeyboardInterrupt) else exc.__cause__ or "")
+        click.echo(f"dreamprint: interrupted{' ' + why if why else ''}", err=True)
         return 130
     except DreamPrintError as exc:
         if debug:

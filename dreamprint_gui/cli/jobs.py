@@ -53,10 +53,13 @@ def _fmt_time(s: float | None) -> str:
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",
               show_default=True)
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--workers", type=int, default=None, help="Worker count (default: all cores).")
+@click.option("--workers", type=int, default=None,
+              help="Threads (or processes) on this computer (default: all cores); with a "
+                   "cluster, its workers' threads are used.")
 @click.option("--scheduler", default=None,
-              help="threads (default), processes, or a dask.distributed address such as "
-                   "tcp://host:8786 (workers must see the job's folder).")
+              help="threads (default), processes, sync (one thread), or the address of a Dask "
+                   "cluster's scheduler such as tcp://host:8786: every worker must see the "
+                   "source and the job's folder at the same paths (docs/cluster.md).")
 @click.option("--background", type=click.Choice(["clear", "empty"]), default="clear",
               show_default=True, help="What voxels below the density threshold become.")
 @click.option("--density-threshold", type=float, default=None,
@@ -87,7 +90,12 @@ def _fmt_time(s: float | None) -> str:
 @click.option("--compensate", is_flag=True,
               help="Optimise a correction first (dreamprint compensate's defaults; written "
                    "beside the job as JOB.correction.npz), then convert with it.")
-@click.option("--overwrite", is_flag=True, help="Replace an existing job folder.")
+@click.option("--overwrite", is_flag=True,
+              help="Replace an existing job folder (or an interrupted run's layers).")
+@click.option("--resume", is_flag=True,
+              help="Finish the job an interrupted run left (Ctrl-C, kill, power loss, lost "
+                   "cluster): only the missing layers are converted; refused if that run was "
+                   "for another source, size, profile, printer, settings or version.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the manifest (with the pre-flight estimate and warnings) as JSON.")
 @click.option("-q", "--quiet", is_flag=True,
@@ -96,15 +104,19 @@ def _fmt_time(s: float | None) -> str:
 def convert(source, output, profile, printer, height_mm, size_mm, density_scale, halftone, seed,
             workers, scheduler, background, density_threshold, slab_layers, source_options,
             content, sampling, objective, intent, table_size, compensation, compensate,
-            overwrite, as_json, quiet, up, rotate, fit) -> None:
+            overwrite, resume, as_json, quiet, up, rotate, fit) -> None:
     """Convert SOURCE (a volume file, or 'demo') into a halftoned PNG slice stack.
 
     Before any work a pre-flight estimate (grid, slices, disk, material fractions, time) and its
     warnings (mostly Clear, clamping, out of gamut) go to stderr; after the job, how many voxels
     were clamped. --quiet silences both; --json adds them to the printed manifest."""
-    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled
+    from dreamprint_gui.job.cluster import quiet_client_logs
+    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled, _scheduler_kind
     from dreamprint_gui.job.run import run_conversion
 
+    if resume and overwrite:
+        raise DreamPrintError("give --resume (finish the interrupted run) or --overwrite (start "
+                              "again), not both")
     up_axis, turn = placement_values(up, rotate)
     from dreamprint_gui.io.volumes.registry import parse_reader_options
 
@@ -116,7 +128,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
         objective=objective, intent=intent, table_size=table_size, source_options=opts,
         content=content, sampling=sampling, up=up_axis, rotate=turn, fit=fit,
-        compensation=compensation)
+        compensation=compensation, resume=resume)
     made = None
     if compensate:
         if compensation is not None:
@@ -128,9 +140,13 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         raise KeyboardInterrupt()
 
     old = signal.signal(signal.SIGTERM, on_term)
+    root = click.get_current_context().find_root()
+    if _scheduler_kind(settings) == "distributed" and not root.params.get("debug"):
+        quiet_client_logs()
     gen = run_conversion(settings)
     progress = _Progress(sys.stderr.isatty(), quiet)
     pf = None
+    last = None
     try:
         while True:
             try:
@@ -145,6 +161,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
                         click.echo(line, err=True)
             elif p.stage == "converting" and p.layers_total:
                 progress.update(p)
+                last = p
             elif p.message and p.stage not in ("done", "finishing") and not quiet:
                 click.echo(p.message, err=True)
     except BaseException as exc:
@@ -152,6 +169,10 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
             made.unlink(missing_ok=True)
         if isinstance(exc, JobCancelled):
             raise DreamPrintError("cancelled; the partial job was removed", output) from None
+        if isinstance(exc, KeyboardInterrupt) and last is not None and last.layers_done:
+            raise KeyboardInterrupt(
+                f"at {last.layers_done} of {last.layers_total} layers; the finished layers are "
+                "kept: run the same command with --resume to finish the job") from None
         raise
     finally:
         progress.close()
@@ -168,10 +189,12 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         click.echo(json.dumps(manifest, indent=2))
     else:
         size = manifest["physical_size_mm"]
+        kept = manifest["execution"].get("resumed_layers", 0)
         click.echo(f"wrote {output}: {nz} slices of {nx} x {ny} voxels "
                    f"({size[0]:.2f} x {size[1]:.2f} x {size[2]:.2f} mm), "
                    f"{nx * ny * nz:,} voxels in {t['total']:.1f} s "
-                   f"({t['voxels_per_second'] / 1e6:.1f} Mvox/s)")
+                   f"({t['voxels_per_second'] / 1e6:.1f} Mvox/s)"
+                   + (f"; {kept} layers kept from the interrupted run" if kept else ""))
 
 
 def _compensate_for(settings, quiet: bool) -> Path:
@@ -220,6 +243,7 @@ class _Progress:
         self.rate = 0.0
         self.eta: float | None = None
         self.start: float | None = None
+        self.first = 0
 
     def _info(self, _item=None) -> str:
         return f"{self.rate / 1e6:.1f} Mvox/s, {_fmt_time(self.eta)} left"
@@ -227,9 +251,10 @@ class _Progress:
     def update(self, p) -> None:
         if self.quiet:
             return
-        if self.start is None:  # the conversion's own rate, without the preparation
-            self.start = p.elapsed_s
-        self.rate = p.voxels_done / max(p.elapsed_s - self.start, 1e-9)
+        if self.start is None:  # the conversion's own rate, without the preparation (nor
+            self.start = p.elapsed_s  # the layers a resumed job found done)
+            self.first = p.voxels_done
+        self.rate = (p.voxels_done - self.first) / max(p.elapsed_s - self.start, 1e-9)
         self.eta = p.eta_s
         if self.tty:
             if self.bar is None:

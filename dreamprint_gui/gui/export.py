@@ -4,8 +4,10 @@ Defines :func:`convert_settings` (the GUI's choices as the engine's ``ConvertSet
 same object ``dreamprint convert`` builds), :func:`export_job` (``job.run.run_conversion`` as
 a worker job) and :class:`ExportDialog`, which runs it on a worker thread with a progress bar,
 time remaining and Cancel (the engine removes a cancelled job's partial folder), then shows a
-summary from the manifest. "Compensate appearance" first optimises a correction through the
-print proof (:func:`dreamprint_gui.proof.compensated.run_compensated_conversion`, as
+summary from the manifest; an export that was interrupted (the application or computer
+stopped, a cluster lost) is offered to resume or start again on the next Export to the same
+job (:mod:`dreamprint_gui.job.resume`). "Compensate appearance" first optimises a correction
+through the print proof (:func:`dreamprint_gui.proof.compensated.run_compensated_conversion`, as
 ``dreamprint convert --compensate``; written beside the job as ``NAME.correction.npz``), then
 converts with it; one progress bar and time left over both. Where the slabs run is the
 engine's choice too (``ConvertSettings.workers`` and ``.scheduler``): this computer's threads
@@ -36,6 +38,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QLineEdit,
+    QMessageBox,
     QProgressBar,
     QPushButton,
     QRadioButton,
@@ -166,7 +169,8 @@ def _same_job(a, b) -> bool:
 
     if a is None or b is None:
         return False
-    where = {"output": None, "overwrite": False, "workers": None, "scheduler": None}
+    where = {"output": None, "overwrite": False, "workers": None, "scheduler": None,
+             "resume": False}
     return replace(a, **where) == replace(b, **where)
 
 
@@ -679,6 +683,9 @@ class ExportDialog(QDialog):
         except DreamPrintError as exc:
             self.error.setText(str(exc))
             return
+        settings = self._resume_or_restart(settings)
+        if settings is None:
+            return
         self.settings.set("export/printer", self.printer.currentData())
         self.settings.set("export/halftone", self.halftone.currentData())
         self.settings.set("export/intent", self.intent.currentData())
@@ -703,6 +710,43 @@ class ExportDialog(QDialog):
         task.failed.connect(self._failed)
         task.cancelled.connect(self._cancelled)
         self.task = run_task(task)
+
+    def _resume_or_restart(self, settings):
+        """``settings`` to resume or to start again when an earlier export of this job was
+        interrupted (the application or computer stopped, the cluster lost) and left finished
+        layers (:func:`dreamprint_gui.job.resume.find_interrupted`); None if the operator
+        chose neither. An existing finished job is the engine's to refuse, as without this."""
+        from dataclasses import replace
+
+        from dreamprint_gui.job.resume import find_interrupted
+
+        if settings.overwrite or Path(settings.output).exists():
+            return settings
+        left = find_interrupted(settings.output)
+        if left is None:
+            return settings
+        choice = self.ask_resume(Path(settings.output).name, left[1], left[2])
+        if choice == "resume":
+            return replace(settings, resume=True)
+        if choice == "restart":
+            return replace(settings, overwrite=True)
+        return None
+
+    def ask_resume(self, name: str, done: int, total: int) -> str | None:
+        """Ask whether to resume an interrupted export: "resume", "restart" or None."""
+        box = QMessageBox(QMessageBox.Icon.Question, "DreamPrint: interrupted export",
+                          f"An earlier export of \u201c{name}\u201d was interrupted with {done} "
+                          f"of {total} layers done.\n\nResume converts only the missing layers "
+                          "(the same slices as an uninterrupted export, if the settings are "
+                          "the same; otherwise it is refused). Start again discards them.",
+                          QMessageBox.StandardButton.NoButton, self)
+        resume = box.addButton("Resume", QMessageBox.ButtonRole.AcceptRole)
+        restart = box.addButton("Start again", QMessageBox.ButtonRole.DestructiveRole)
+        box.addButton(QMessageBox.StandardButton.Cancel)
+        box.setDefaultButton(resume)
+        box.exec()
+        clicked = box.clickedButton()
+        return "resume" if clicked is resume else "restart" if clicked is restart else None
 
     def _progress(self, p) -> None:
         if hasattr(p, "fraction"):  # compensating, then converting: one bar over both
@@ -765,6 +809,11 @@ class ExportDialog(QDialog):
         self.adjustSize()
 
     def _failed(self, message: str, _tb: str) -> None:
+        from dreamprint_gui.job.resume import find_interrupted
+
+        if self.target is not None and find_interrupted(self.target) is not None:
+            message = message.replace("run the same command with --resume",
+                                      "Export again to resume")
         self.error.setText(message)
         self.remaining.setText("")
         self._finish_run()

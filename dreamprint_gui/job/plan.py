@@ -43,6 +43,7 @@ from dreamprint_gui.io.volumes.registry import reader_options
 from dreamprint_gui.job.content import CONTENT_MODES, apply_content
 from dreamprint_gui.job.correction import check_correction, load_correction, placement_key
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
+from dreamprint_gui.job.write import JobCancelled
 from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
@@ -51,10 +52,6 @@ __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "c
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
-
-
-class JobCancelled(Exception):
-    """The conversion was cancelled (GUI cancel, Ctrl-C)."""
 
 
 @dataclass(frozen=True)
@@ -84,6 +81,7 @@ class ConvertSettings:
     up: str | None = None                 # source axis that becomes +z; None: auto (orient)
     rotate: int = 0                       # degrees about the print's z (quarter turns)
     fit: str = "occupied"                 # "occupied" (non-empty bounds) | "box" (declared)
+    resume: bool = False                  # finish an interrupted run's folder (job.resume)
 
 
 @dataclass(frozen=True)

@@ -3,13 +3,14 @@
 Defines :func:`run_conversion`: a generator driven by the CLI and the GUI alike; it plans the
 job (:mod:`.plan`), runs its slabs (:func:`.slab.run_slab`: sample -> label -> encode -> write)
 on Dask, yields progress and returns the manifest dict once the job folder is complete and
-renamed into place (:mod:`.write`). Only a slab is ever in memory per worker. Slabs run through
+renamed into place (:mod:`.write`); an interrupted job is finished by ``--resume``
+(:mod:`.resume`). Only a slab is ever in memory per worker. Slabs run through
 Dask: the threaded scheduler (default, all cores), the multiprocessing scheduler
 (``scheduler="processes"``), or a ``dask.distributed`` cluster (``scheduler="tcp://host:8786"``)
 whose workers write the slices into the job's temporary folder directly, so that folder must be
-on a path every worker sees (docs/print-jobs.md). Every label is a function of the voxel's
-position, the seed and its concentrations, never of the slab or worker, so the slices are
-byte-identical whatever the slab size, worker count or scheduler.
+on a path every worker sees (:mod:`.cluster`, docs/cluster.md). Every label is a function of
+the voxel's position, the seed and its concentrations, never of the slab or worker, so the
+slices are byte-identical whatever the slab size, worker count or scheduler.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import math
 import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Generator
 from pathlib import Path
 from typing import Any
@@ -29,6 +31,14 @@ from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.core.threads import DaemonCall
+from dreamprint_gui.job.cluster import (
+    absolute_paths,
+    check_workers,
+    cluster_line,
+    cluster_threads,
+    connect,
+    run_distributed,
+)
 from dreamprint_gui.job.plan import (
     ConvertProgress,
     ConvertSettings,
@@ -42,10 +52,19 @@ from dreamprint_gui.job.plan import (
 )
 from dreamprint_gui.job.preflight import preflight as estimate
 from dreamprint_gui.job.preflight import record_rate
+from dreamprint_gui.job.resume import (
+    check_identity,
+    find_interrupted,
+    job_identity,
+    layers_in,
+    missing_slabs,
+    read_slab_records,
+    write_identity,
+)
 from dreamprint_gui.job.slab import load_kernels, run_slab
 from dreamprint_gui.job.write import JobWriter, check_target, slice_name
 
-__all__ = ["run_conversion"]
+__all__ = ["run_conversion", "job_description", "TimeLeft"]
 
 _LABELS = (*INKS, "empty")
 
@@ -110,40 +129,27 @@ def _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q):
     return th, stop
 
 
-def _distributed_results(ctx, slabs, slices_dir, address, out_q, cancel):
-    from distributed import Client, as_completed
+class TimeLeft:
+    """The time left of a job from the rate of its last :data:`RATE_WINDOW_S` seconds of
+    finished slabs (from its start until then): it follows a cluster that loses or gains
+    workers within that window instead of the whole run's average. Layers a resumed job found
+    done took no time and are not counted in the rate."""
 
-    try:
-        client = Client(address, timeout="10s")
-    except (OSError, TimeoutError) as exc:
-        raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
-    stop = threading.Event()
+    def __init__(self, total: int, done: int, start: float) -> None:
+        self.total = total
+        self.recent: deque[tuple[float, int]] = deque([(start, done)])
 
-    def drive():
-        futs = []
-        try:
-            ctx_f = client.scatter(ctx, broadcast=True, hash=False)
-            futs = [client.submit(run_slab, ctx_f, z0, z1, slices_dir, pure=False)
-                    for z0, z1 in slabs]
-            for f in as_completed(futs):
-                if stop.is_set() or (cancel is not None and cancel.is_set()):
-                    raise JobCancelled()
-                out_q.put(("result", f.result()))
-            out_q.put(("done", None))
-        except BaseException as exc:  # noqa: BLE001
-            out_q.put(("error", exc))
-        finally:
-            stop.set()
-            try:
-                if futs:
-                    client.cancel(futs)
-                client.close()
-            finally:
-                out_q.put(("closed", None))
+    def update(self, done: int, now: float | None = None) -> float:
+        now = time.perf_counter() if now is None else now
+        self.recent.append((now, done))
+        while len(self.recent) > 2 and now - self.recent[1][0] >= RATE_WINDOW_S:
+            self.recent.popleft()  # keep one point at or before the window's start
+        t0, d0 = self.recent[0]
+        rate = (done - d0) / max(1e-9, now - t0)
+        return (self.total - done) / rate if rate > 0 else float("inf")
 
-    th = threading.Thread(target=drive, name="dreamprint-distributed", daemon=True)
-    th.start()
-    return th, stop
+
+RATE_WINDOW_S = 30.0
 
 
 # ----------------------------------------------------------------------------- driver
@@ -158,20 +164,17 @@ def _sha256(path: str) -> str | None:
     return h.hexdigest()
 
 
-def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> dict[str, Any]:
-
+def job_description(ctx: JobContext) -> dict[str, Any]:
+    """What a job is, known before any slab runs: its source, profile, placement, printer,
+    grid, seed, halftoning, background, compensation, slice files and labels (the manifest's
+    fields of the same names; a resumable job's identity, :func:`.resume.job_identity`)."""
     s = ctx.settings
     nx, ny, nz = ctx.shape_xyz
-    n = nx * ny * nz
-    counts = totals["counts"]
     src_path = s.source if Path(s.source).is_file() else None
     return {
-        "format": "dreamprint-job",
-        "format_version": 1,
         "software": {"name": "dreamprint", "version": __version__},
-        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "source": {"path": str(Path(src_path).absolute()) if src_path else s.source,
-                   "sha256": totals["source_sha256"], "options": s.source_options,
+                   "options": s.source_options,
                    "density_scale": s.density_scale, "sampling": s.sampling,
                    "content": (ctx.content.to_json() if ctx.content is not None else
                                {"mode": "fog", "requested": s.content, "reason": ""})},
@@ -204,13 +207,29 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
                    "png_mode": ctx.printer.png_mode},
         "labels": {lab: {"material": (ctx.printer.material_names[i] if i < 6 else "none"),
                          "rgb": ctx.palette[i].tolist()} for i, lab in enumerate(_LABELS)},
+    }
+
+
+def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> dict[str, Any]:
+    d = job_description(ctx)
+    n = math.prod(ctx.shape_xyz)
+    counts = totals["counts"]
+    src = d["source"]
+    d["source"] = {"path": src.pop("path"), "sha256": totals["source_sha256"], **src}
+    return {
+        "format": "dreamprint-job",
+        "format_version": 1,
+        "software": d.pop("software"),
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        **d,
         "voxel_counts": {lab: int(counts[i]) for i, lab in enumerate(_LABELS)},
         "mean_concentration": {lab: totals["conc_sums"][i] / n for i, lab in enumerate(_LABELS)},
         "total_voxels": n,
         "clamped_density": totals["clamped"],
         "timings_s": {"total": time.perf_counter() - started, **timings},
-        "execution": {"scheduler": s.scheduler or "threads", "workers": totals["workers"],
-                      "slabs": totals["slabs"]},
+        "execution": {"scheduler": ctx.settings.scheduler or "threads",
+                      "workers": totals["workers"], "slabs": totals["slabs"],
+                      "resumed_layers": totals["resumed_layers"]},
     }
 
 
@@ -243,8 +262,11 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     """Convert ``settings.source`` into the job folder ``settings.output``.
 
     Yields :class:`ConvertProgress`; returns the manifest dict (also written to
-    ``manifest.json``). Setting ``cancel`` (or closing the generator, or Ctrl-C) stops the work
-    and removes the partial job; nothing is ever left under the final name unless complete.
+    ``manifest.json``). Setting ``cancel`` (or closing the generator) stops the work and
+    removes the partial job; nothing is ever left under the final name unless complete. Ctrl-C
+    (KeyboardInterrupt), a kill or a lost scheduler (:class:`.write.JobInterrupted`) keep the
+    finished slabs in the hidden temporary folder, which ``settings.resume`` finishes
+    (:mod:`.resume`); without it such a folder is refused unless ``settings.overwrite``.
     ``preflight``: True estimates the job first (:func:`.preflight.preflight`, yielded once
     with stage "preflight"), a :class:`.preflight.Preflight` already made is used as is, False
     skips it; the manifest records its estimate and warnings (``preflight``).
@@ -254,14 +276,49 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     if settings.output is None:
         raise DreamPrintError("no output folder given (-o JOB)")
     check_target(settings.output, settings.overwrite)  # before any work
+    if not settings.resume and not settings.overwrite:
+        left = find_interrupted(settings.output)
+        if left is not None:
+            raise DreamPrintError(
+                f"an interrupted run of this job left {left[1]} of {left[2]} layers done (in "
+                f"{left[0].name}): add --resume to finish it, or --overwrite to start again",
+                settings.output)
     if context is None:
         check_settings(settings)  # a missing size is reported before "opening the source"
+    client = None
+    if _scheduler_kind(settings) == "distributed":
+        settings = absolute_paths(settings)
+        client = connect(settings.scheduler)  # an unreachable scheduler: before any work
+    try:
+        return (yield from _convert(settings, cancel, context, preflight, started, client))
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _convert(settings: ConvertSettings, cancel: threading.Event | None,
+             context: JobContext | None, preflight: Any, started: float, client: Any
+             ) -> Generator[ConvertProgress, None, dict[str, Any]]:
+    if client is not None:
+        yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None,
+                              cluster_line(client, settings.scheduler))
     yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
     if context is not None:
         ctx = context
     else:
         ctx = yield from _prepare(settings, started)
     load_kernels(ctx)  # now, so that the first slab's speed is the conversion's
+    identity = job_identity(job_description(ctx), ctx.source_stamp)
+    claim = None
+    if settings.resume:
+        left = find_interrupted(settings.output)
+        if left is not None:
+            check_identity(left[0], identity)  # before anything is run, moved or removed
+            claim = left[0]
+        else:
+            yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None,
+                                  "--resume: no interrupted run of this job was found; "
+                                  "converting from the first layer")
     pf = None
     t_pf = 0.0
     if preflight is True:
@@ -278,35 +335,57 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                               pf.short_line(), preflight=pf)
     t_prep = time.perf_counter() - started
     kind = _scheduler_kind(settings)
-    workers = job_workers(settings)
+    workers = cluster_threads(client) if client is not None else job_workers(settings)
     slabs = slab_plan(ctx, workers)
     nx, ny, nz = ctx.shape_xyz
     # Per-layer sums, added exactly (math.fsum) once all are in: the total is then the same
-    # whatever the slab size, the number of workers or the order in which slabs finish.
+    # whatever the slab size, the number of workers, the order in which slabs finish, or
+    # which run of a resumed job made them.
     layer_sums = np.zeros((nz, 7))
     totals: dict[str, Any] = {"counts": np.zeros(7, np.int64),
                               "clamped": {}, "workers": workers, "slabs": len(slabs)}
     stage_t = {"sample": 0.0, "lookup_halftone": 0.0, "sample_lookup_halftone": 0.0, "png": 0.0,
                "write": 0.0}
-    with JobWriter(settings.output, settings.overwrite) as writer:
+
+    def add(result: dict[str, Any]) -> None:
+        totals["counts"] += np.asarray(result["counts"], np.int64)
+        layer_sums[result["z0"]:result["z1"]] = result["conc_sums"]
+        _merge_clamped(totals["clamped"], result["clamped"])
+
+    with JobWriter(settings.output, settings.overwrite, claim=claim) as writer:
+        write_identity(writer.tmp, identity)
+        writer.resumable = True
+        kept = read_slab_records(writer.tmp, nz) if claim is not None else []
+        for rec in kept:
+            add(rec)
+        todo = missing_slabs(slabs, kept)
+        resumed = layers_in(kept)
+        totals["resumed_layers"] = resumed
+        if claim is not None:
+            yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None,
+                                  f"resuming: {resumed} of {nz} layers were finished by the "
+                                  f"interrupted run; converting the other {nz - resumed}")
+        slices_dir = str(writer.slices_dir)
+        if client is not None:
+            check_workers(client, settings.source, slices_dir)
         sha_box: dict[str, str | None] = {}
         sha_th = threading.Thread(target=lambda: sha_box.update(v=_sha256(settings.source)),
                                   daemon=True)
         sha_th.start()  # hashing a big source overlaps the conversion
-        yield ConvertProgress("converting", 0, nz, 0, nx * ny * nz,
+        yield ConvertProgress("converting", resumed, nz, resumed * nx * ny, nx * ny * nz,
                               time.perf_counter() - started, None)
         out_q: queue.Queue = queue.Queue()
-        slices_dir = str(writer.slices_dir)
-        if kind == "distributed":
-            th, stop = _distributed_results(ctx, slabs, slices_dir, settings.scheduler, out_q,
-                                            cancel)
+        if client is not None:
+            th, stop = run_distributed(client, settings.scheduler, run_slab, ctx, todo,
+                                       (slices_dir,), out_q, cancel)
         elif kind == "sync":
-            th, stop = _local_results(ctx, slabs, slices_dir, 1, "threads", cancel, out_q)
+            th, stop = _local_results(ctx, todo, slices_dir, 1, "threads", cancel, out_q)
         else:
-            th, stop = _local_results(ctx, slabs, slices_dir, workers, kind, cancel, out_q)
+            th, stop = _local_results(ctx, todo, slices_dir, workers, kind, cancel, out_q)
         error: BaseException | None = None
-        layers = 0
+        layers = resumed
         t_conv = time.perf_counter()
+        eta = TimeLeft(nz, resumed, t_conv)
         try:
             while True:
                 try:
@@ -317,23 +396,20 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
                         stop.set()
                     continue
                 if what == "result":
-                    totals["counts"] += np.asarray(payload["counts"], np.int64)
-                    layer_sums[payload["z0"]:payload["z1"]] = payload["conc_sums"]
-                    _merge_clamped(totals["clamped"], payload["clamped"])
+                    add(payload)
                     for k, v in payload["seconds"].items():
                         stage_t[k] += v
                     layers += payload["z1"] - payload["z0"]
                     el = time.perf_counter() - started
-                    rate = layers / max(1e-9, time.perf_counter() - t_conv)
                     yield ConvertProgress("converting", layers, nz, layers * nx * ny,
-                                          nx * ny * nz, el, (nz - layers) / rate)
+                                          nx * ny * nz, el, eta.update(layers))
                 elif what == "error":
                     error = payload
                 elif what == "closed":
                     break
         except BaseException:
             # GeneratorExit (closed by the GUI), KeyboardInterrupt: stop the tasks, wait for
-            # them, then JobWriter removes the partial folder.
+            # them, then JobWriter removes the partial folder (or keeps it for --resume).
             writer.request_cancel()
             stop.set()
             th.join()
@@ -362,7 +438,8 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
             manifest["warnings"] = [w.to_json() for w in pf.warnings]
         writer.commit(manifest)
 
-    record_rate(nx * ny * nz, timings["convert"])
+    if resumed == 0:  # a resumed job's rate is not the conversion's
+        record_rate(nx * ny * nz, timings["convert"])
     yield ConvertProgress("done", nz, nz, nx * ny * nz, nx * ny * nz,
                           time.perf_counter() - started, 0.0, str(writer.target))
     return manifest

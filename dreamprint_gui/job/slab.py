@@ -38,13 +38,14 @@ from dreamprint_gui.job.plan import (
     _scheduler_kind,
     prepare_job,
 )
+from dreamprint_gui.job.resume import write_slab_record
 from dreamprint_gui.job.sample_label.dense_job import dense_slab_labels, window_slab_labels
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
 from dreamprint_gui.job.sample_label.leaf_grid_job import (
     leaf_grid_colour_slab_labels,
     leaf_grid_slab_labels,
 )
-from dreamprint_gui.job.write import slice_name
+from dreamprint_gui.job.write import slice_name, write_atomic
 
 __all__ = ["run_slab", "encode_slab", "halftone_layer"]
 
@@ -123,15 +124,9 @@ def _oriented(ctx: JobContext, labels: np.ndarray) -> np.ndarray:
 
 
 def _write_new(path: str, data: bytes) -> None:
-    """Write a new file (never an existing one); os-level calls: a slice costs one open, one
-    write and one close, which matters for small jobs of many layers."""
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-    try:
-        view = memoryview(data)
-        while view:
-            view = view[os.write(fd, view):]
-    finally:
-        os.close(fd)
+    """A slice written under a temporary name and renamed into place (:func:`.write.write_atomic`):
+    a slab run again after its worker died replaces identical bytes."""
+    write_atomic(path, data)
 
 
 def _cancelled(slices_dir: str, event: threading.Event | None) -> bool:
@@ -178,7 +173,10 @@ def encode_slab(ctx: JobContext, z0: int, z1: int
 
 def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
              cancel: threading.Event | None = None) -> dict[str, Any]:
-    """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings."""
+    """Convert layers ``[z0, z1)`` and write their PNGs; returns counts and stage timings.
+
+    Idempotent: each slice is renamed into place, then the slab's record (:mod:`.resume`), so a
+    slab run twice (its worker killed, a resumed job) leaves the same files."""
 
     nz = ctx.shape_xyz[2]
     if _cancelled(slices_dir, cancel):
@@ -197,9 +195,11 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
         # Never create folders here: after a cancel the job's temporary folder is removed and
         # a straggling task must fail rather than recreate it.
         _write_new(prefix + slice_name(z0 + k, nz), png)
+    result = {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
+              "clamped": _clamp_report(stats)}
+    write_slab_record(os.path.dirname(slices_dir), result, [len(png) for png in pngs])
     seconds["write"] = time.perf_counter() - t3
-    return {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
-            "clamped": _clamp_report(stats), "seconds": seconds}
+    return {**result, "seconds": seconds}
 
 
 def halftone_layer(settings: ConvertSettings, layer: int,

@@ -406,3 +406,70 @@ def test_export_compensation_cancel_leaves_nothing(qtbot, tmp_path, table_size):
     qtbot.waitUntil(lambda: "cancelled" in dlg.remaining.text(), timeout=5000)
     assert list(tmp_path.iterdir()) == []
     assert dlg.start_button.isEnabled() and dlg.compensate.isEnabled()
+
+
+def _interrupted_export(settings, layers):
+    """Leave the folder an export interrupted after ``layers`` layers leaves (its process gone:
+    renamed to a pid above Linux's pid_max)."""
+    from dataclasses import replace
+
+    from dreamprint_gui.job.run import run_conversion
+
+    gen = run_conversion(replace(settings, workers=1, slab_layers=2, scheduler="sync"),
+                         preflight=False)
+    with pytest.raises(KeyboardInterrupt):
+        for p in gen:
+            if p.stage == "converting" and p.layers_done >= layers:
+                gen.throw(KeyboardInterrupt())
+    out = settings.output
+    [kept] = [p for p in out.parent.iterdir() if p.name.startswith(f".{out.name}.partial-")]
+    kept.rename(kept.with_name(f".{out.name}.partial-4194400-0"))
+
+
+def test_export_offers_to_resume_an_interrupted_export(qtbot, tmp_path, table_size):
+    import hashlib
+    from dataclasses import replace
+    from pathlib import Path
+
+    from dreamprint_gui.job.run import run_conversion
+
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    settings = replace(dlg.settings_for_job(), output=Path(dlg.target_path()))
+    _interrupted_export(settings, 20)
+    asked = []
+    dlg.ask_resume = lambda name, done, total: asked.append((name, done, total)) or None
+    dlg.start()  # the operator cancels the question: nothing starts, nothing is touched
+    assert asked and asked[0][0] == "job" and 20 <= asked[0][1] < asked[0][2]
+    assert dlg.task is None and dlg.start_button.isEnabled()
+    dlg.ask_resume = lambda name, done, total: "resume"
+    dlg.start()
+    with qtbot.waitSignal(dlg.task.done, timeout=180000):
+        pass
+    assert dlg.task.outcome == "succeeded", dlg.error.text()
+    assert dlg.manifest["execution"]["resumed_layers"] == asked[0][1]
+    ref = tmp_path / "ref"
+    for _ in run_conversion(replace(settings, output=ref), preflight=False):
+        pass
+
+    def digests(job):
+        return [hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in sorted((job / "slices").iterdir())]
+
+    assert digests(tmp_path / "job") == digests(ref)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job", "ref"]
+
+
+def test_export_can_start_an_interrupted_export_again(qtbot, tmp_path, table_size):
+    from dataclasses import replace
+    from pathlib import Path
+
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    settings = replace(dlg.settings_for_job(), output=Path(dlg.target_path()))
+    _interrupted_export(settings, 10)
+    dlg.ask_resume = lambda name, done, total: "restart"
+    dlg.start()
+    with qtbot.waitSignal(dlg.task.done, timeout=180000):
+        pass
+    assert dlg.task.outcome == "succeeded", dlg.error.text()
+    assert dlg.manifest["execution"]["resumed_layers"] == 0
+    assert [p.name for p in tmp_path.iterdir()] == ["job"]
