@@ -8,11 +8,11 @@ import click
 
 from dreamprint_gui.cli import cli
 from dreamprint_gui.cli.gamut import (
-    _INTENT_HELP,
-    _INTENTS,
-    _OBJECTIVE_HELP,
-    _OBJECTIVES,
-    _progress_bar,
+    INTENT_HELP,
+    INTENTS,
+    OBJECTIVE_HELP,
+    OBJECTIVES,
+    progress_bar,
 )
 
 
@@ -25,9 +25,9 @@ from dreamprint_gui.cli.gamut import (
               help="Built-in printer name (voxelprint-27um, voxelprint-14um, j850-paper) or a "
                    "printer .toml file; named in the profile's description. Default "
                    "voxelprint-27um.")
-@click.option("--intent", type=_INTENTS, default=None, help=_INTENT_HELP + " The profile "
+@click.option("--intent", type=INTENTS, default=None, help=INTENT_HELP + " The profile "
               "describes the print of RGB through the table of this intent.")
-@click.option("--objective", type=_OBJECTIVES, default=None, help=_OBJECTIVE_HELP)
+@click.option("--objective", type=OBJECTIVES, default=None, help=OBJECTIVE_HELP)
 @click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True,
               help="Nodes per axis of DreamPrint's colour table (as convert uses).")
 @click.option("--icc-version", type=click.Choice(["2", "4"]), default="2", show_default=True,
@@ -59,7 +59,7 @@ def icc(output, profile_path, printer, intent, objective, size, icc_version, gri
     profile = load_profile(profile_path)
     objective, intent = resolve_choice(profile, objective, intent)
     tables = get_tables(profile, objective, size, intent=intent,
-                        progress=_progress_bar(f"{objective}, {intent}"))
+                        progress=progress_bar(f"{objective}, {intent}"))
     report = export_icc(output, profile, tables, printer=printer_profile.display_name,
                         version=int(icc_version), a2b_grid=grid, b2a_grid=grid, cgats=cgats,
                         patches=patches, progress=lambda msg: click.echo(msg, err=True))
