@@ -40,7 +40,7 @@ encoding.
 from __future__ import annotations
 
 import os
-import tempfile
+import secrets
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
@@ -186,11 +186,14 @@ def check_target(path: str | os.PathLike) -> None:
 
 def write_atomically(path: str | os.PathLike, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder and a rename, so
-    a failure never leaves a half-written file."""
+    a failure never leaves a half-written file. The file gets the permissions of any new file
+    (0666 less the umask), not ``tempfile.mkstemp``'s owner-only 0600: a profile installed for
+    the colour daemon or shared with a RIP must be readable by others."""
     p = Path(path)
     check_target(p)
+    tmp = p.with_name(f".{p.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     except FileNotFoundError:
         raise DreamPrintError("the folder does not exist", p.parent) from None
     except OSError as exc:
@@ -200,5 +203,5 @@ def write_atomically(path: str | os.PathLike, data: bytes) -> None:
             f.write(data)
         os.replace(tmp, p)
     except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise DreamPrintError(f"cannot write: {exc.strerror or exc}", p) from None
