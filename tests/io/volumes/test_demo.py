@@ -5,6 +5,7 @@ it holds solid, translucent and faint parts, and its pre-flight at 40 mm has no 
 import numpy as np
 import pytest
 
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import default_profile
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_lab
@@ -55,7 +56,7 @@ def test_deterministic_and_bounded():
     a, b = open_source("demo"), open_source("demo")
     assert np.array_equal(a.volume.data, b.volume.data)
     assert a.bounds == ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
-    with pytest.raises(Exception, match="resolution"):
+    with pytest.raises(DreamPrintError, match="demo resolution must be 8..512"):
         open_source("demo", resolution=4)
 
 
