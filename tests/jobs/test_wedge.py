@@ -63,6 +63,8 @@ def test_wedge_job_slabs_labels_and_sheet(tmp_path, capsys):
     (("--thickness-mm", "1,two"), "--thickness-mm must be numbers in mm"),
     (("--slab-mm", "2"), "--slab-mm must be at least 5 mm"),
     (("--thickness-mm", "300"), "tray"),
+    (("--thickness-mm", "1,0.5,1"), "--thickness-mm 1 and 1 both print 37 layer(s), 0.999 mm"),
+    (("--thickness-mm", "0.01,0.02"), "0.01 and 0.02 both print 1 layer(s)"),
 ])
 def test_wedge_bad_input_one_line_no_folder(tmp_path, capsys, args, message):
     job = tmp_path / "w"
