@@ -18,6 +18,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import (
@@ -32,6 +33,10 @@ from PySide6.QtWidgets import (
 
 from dreamprint_gui.gui.workers import Task, run_task
 
+if TYPE_CHECKING:  # not loaded with the window: the export imports the engine when it runs
+    from dreamprint_gui.core.profile import InkProfile
+    from dreamprint_gui.gamut.tables import ColourTables
+
 __all__ = ["IccExportBox", "IccRequest", "summary"]
 
 log = logging.getLogger(__name__)
@@ -42,8 +47,8 @@ class IccRequest:
     """What to export: the ink profile, its tables when already loaded (else built from
     ``intent`` / ``size``), and the printer's name for the description."""
 
-    profile: object
-    tables: object | None = None
+    profile: InkProfile
+    tables: ColourTables | None = None
     intent: str | None = None
     size: int | None = None
     printer: str = ""
