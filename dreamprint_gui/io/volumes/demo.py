@@ -38,7 +38,8 @@ from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume
 from dreamprint_gui.io.volumes.sampling import rasterise_gaussians
 from dreamprint_gui.io.volumes.splats import GaussianCloud
 
-__all__ = ["DemoCloud", "demo_fields", "demo_colours", "PALETTE", "PRINTABLE_WHITE",
+__all__ = ["DemoCloud", "demo_fields", "demo_colours", "occupied_height", "PALETTE",
+           "PRINTABLE_WHITE",
            "DESIGN_HEIGHT_MM"]
 
 DESIGN_HEIGHT_MM = 40.0
@@ -150,7 +151,7 @@ def demo_colours(count: int = 400) -> np.ndarray:
     return cols[::step][:int(count)]
 
 
-def _occupied_height(sigma: np.ndarray) -> float:
+def occupied_height(sigma: np.ndarray) -> float:
     """The z extent (source units) of the non-empty cells: what --fit occupied prints."""
     n = sigma.shape[0]
     zs = np.nonzero(sigma.reshape(n, -1).max(axis=1) > 0)[0]
@@ -162,7 +163,7 @@ def _baked(seed: int, resolution: int) -> np.ndarray:
     """(n, n, n, 4) float32: density per source unit and density-premultiplied colour."""
     sigma, rgb = demo_fields(resolution, seed)
     # per source unit, for a print DESIGN_HEIGHT_MM high: sigma [1/mm] * mm per unit
-    dens = sigma * np.float32(DESIGN_HEIGHT_MM / _occupied_height(sigma))
+    dens = sigma * np.float32(DESIGN_HEIGHT_MM / occupied_height(sigma))
     data = np.concatenate([dens[..., None], dens[..., None] * rgb], axis=3)
     data.flags.writeable = False  # shared by every DemoCloud of this process
     return data

@@ -41,7 +41,7 @@ def test_every_colour_it_holds_is_printable():
 def test_solid_translucent_and_faint_parts():
     """Optical depth (at the design height) across the planet, the ring and the haze."""
     sigma, _ = demo.demo_fields(128)
-    mm_per_cell = demo.DESIGN_HEIGHT_MM / (demo._occupied_height(sigma) * 128)
+    mm_per_cell = demo.DESIGN_HEIGHT_MM / (demo.occupied_height(sigma) * 128)
     k = int(demo.CENTRE[2] * 128)
     through_planet = sigma[k, 64, :].sum() * mm_per_cell
     assert through_planet > 30            # reads as solid
