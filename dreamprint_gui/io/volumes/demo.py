@@ -39,8 +39,7 @@ from dreamprint_gui.io.volumes.sampling import rasterise_gaussians
 from dreamprint_gui.io.volumes.splats import GaussianCloud
 
 __all__ = ["DemoCloud", "demo_fields", "demo_colours", "occupied_height", "PALETTE",
-           "PRINTABLE_WHITE",
-           "DESIGN_HEIGHT_MM"]
+           "PRINTABLE_WHITE", "DESIGN_HEIGHT_MM"]
 
 DESIGN_HEIGHT_MM = 40.0
 
