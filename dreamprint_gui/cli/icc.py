@@ -48,13 +48,10 @@ def icc(output, profile_path, printer, intent, objective, size, icc_version, gri
     from dreamprint_gui.core.printer import load_printer
     from dreamprint_gui.core.profile import load_profile
     from dreamprint_gui.gamut import get_tables
-    from dreamprint_gui.gamut.icc import check_target
-    from dreamprint_gui.gamut.icc_export import export_icc
+    from dreamprint_gui.gamut.icc_export import check_outputs, export_icc
     from dreamprint_gui.gamut.tables import resolve_choice
 
-    for target in (output, cgats):
-        if target is not None:
-            check_target(target)
+    check_outputs(output, cgats)
     printer_profile = load_printer(printer)
     profile = load_profile(profile_path)
     objective, intent = resolve_choice(profile, objective, intent)

@@ -133,12 +133,9 @@ class IccExportBox(QWidget):
 
         def job(report, cancel):
             from dreamprint_gui.gamut import get_tables
-            from dreamprint_gui.gamut.icc import check_target
-            from dreamprint_gui.gamut.icc_export import export_icc
+            from dreamprint_gui.gamut.icc_export import check_outputs, export_icc
 
-            for target in (path, cgats):
-                if target is not None:
-                    check_target(target)
+            check_outputs(path, cgats)
             tables = req.tables
             if tables is None:
                 kwargs = {} if req.size is None else {"size": req.size}

@@ -55,3 +55,11 @@ def test_icc_errors_name_the_file(capsys, tmp_path):
     code, _, err = _run(capsys, "icc", "-o", str(tmp_path / "p.icc"), "--profile", str(bad))
     assert code == 2 and str(bad) in err
     assert not (tmp_path / "p.icc").exists()
+
+
+def test_icc_refuses_a_characterisation_file_named_as_the_profile(capsys, tmp_path):
+    out_icc = tmp_path / "p.icc"
+    code, _, err = _run(capsys, "icc", "-o", str(out_icc), "--cgats", str(out_icc))
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "would overwrite the ICC profile" in err and str(out_icc) in err
+    assert not list(tmp_path.iterdir())
