@@ -120,7 +120,9 @@ def test_a2b_is_dreamprints_print(built, profile, small_tables, source_colours):
     _, data = built
     got = lcms.transform(data, source_colours, "absolute")
     de = delta_E2000(got, _expected_absolute_lab(profile, small_tables, source_colours))
-    assert de.mean() <= 1.0 and np.percentile(de, 95) <= 2.5, (de.mean(), de.max())
+    # measured with these grids (17^3 A2B over a 9^3 table): mean 0.13, p95 0.38 on these
+    # colours (0.06 / 0.24 on the check colours alone); the bound is about twice that
+    assert de.mean() <= 0.25 and np.percentile(de, 95) <= 0.75, (de.mean(), de.max())
     # media-relative: the same colours scaled by the media white (ICC.1 6.3.2.2)
     rel = lcms.transform(data, source_colours, "relative")
     pcs = PrintPCS.for_tables(profile, small_tables)
@@ -253,7 +255,9 @@ def test_iccdev_reads_and_validates(built, profile, small_tables, source_colours
     enc = np.array(cmm.apply_multi(source_colours.tolist()))  # PCS Lab as fractions (v4)
     lab = np.stack([enc[:, 0] * 100.0, enc[:, 1] * 255.0 - 128.0, enc[:, 2] * 255.0 - 128.0], 1)
     de = delta_E2000(lab, _expected_absolute_lab(profile, small_tables, source_colours))
-    assert de.mean() <= 1.0 and np.percentile(de, 95) <= 2.5, (de.mean(), de.max())
+    # measured with these grids (17^3 A2B over a 9^3 table): mean 0.13, p95 0.38 on these
+    # colours (0.06 / 0.24 on the check colours alone); the bound is about twice that
+    assert de.mean() <= 0.25 and np.percentile(de, 95) <= 0.75, (de.mean(), de.max())
 
 
 def test_written_atomically_and_readable_by_others(tmp_path):
