@@ -31,7 +31,7 @@ def test_icc_writes_a_profile_and_reports_its_check(capsys, tmp_path):
     assert (info["class"], info["colour_space"], info["pcs"]) == ("prtr", "RGB ", "Lab ")
     for key in ("a2b_dE2000", "round_trip_dE2000"):
         assert set(rep["check"][key]) == {"mean", "p95", "max"}
-    assert rep["check"]["a2b_dE2000"]["mean"] <= 1.0
+    assert rep["check"]["a2b_dE2000"]["mean"] <= 0.1  # measured 0.046 (p95 0.18)
     # the relative intent prints RGB white as the printable white, the media white: L* 100
     assert lcms.transform(data, np.ones((1, 3)), "relative")[0, 0] == pytest.approx(100, abs=0.1)
     assert rep["cgats"]["layout"] == "argyll" and ti3.read_text().startswith("CTI3")
