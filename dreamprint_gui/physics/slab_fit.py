@@ -20,9 +20,11 @@ the exact inverses (:func:`~dreamprint_gui.physics.saunderson.slab_remove`, then
 minimises the summed chi^2: a grid over 0-0.9 (step 0.02, every 5th wavelength) finds the valley,
 Brent's bounded search (``scipy.optimize.minimize_scalar``) refines it within one step.
 
-Uncertainty: ``cov = s^2 (J^T J)^-1`` at the solution (J of the weighted residuals in ln K,
-ln S; ``s^2 = chi^2 / (m - 2)`` with m data at that wavelength, or 1, the noise model, when
-m <= 2), so ``sigma_K = K sigma_lnK``: one standard deviation, conditional on k1 and k2.
+Uncertainty: ``cov = s^2 (J^T J)^-1`` at the solution (J in ln K, ln S of the weighted
+residuals as ``least_squares`` returns it: scaled by the Cauchy loss, so a slab far off
+counts less, and with the two faint prior rows; ``s^2 = chi^2 / (m - 2)`` with m data at that
+wavelength, or 1, the noise model, when m <= 2), so ``sigma_K = K sigma_lnK``: one standard
+deviation, conditional on k1 and k2.
 
 Per slab: rms of the R and T residuals over wavelengths, dE2000 (D65, 2 degree) between the
 measured and the fitted R and T spectra, and whether the slab fits (``MISFIT_DE2000``,
