@@ -37,9 +37,9 @@ def demo_image(n: int = 128):
     and the mask of the pixels it covers."""
     import numpy as np
 
-    from dreamprint_gui.io.volumes.demo import _baked
+    from dreamprint_gui.io.volumes.demo import DemoCloud
 
-    grid = np.asarray(_baked(7, n), dtype=np.float64)
+    grid = np.asarray(DemoCloud(seed=7, resolution=n).volume.data, dtype=np.float64)
     dens = grid[..., 0]
     col = np.where(dens[..., None] > 1e-9, grid[..., 1:] / np.maximum(dens, 1e-9)[..., None], 0)
     alpha = 1.0 - np.exp(-dens / n)  # the optical depth of a cell at the design height

@@ -12,11 +12,11 @@ import click
 from dreamprint_gui.cli import cli
 from dreamprint_gui.core.errors import DreamPrintError
 
-_OBJECTIVES = click.Choice(["srgb", "cielab", "de2000"])
-_INTENTS = click.Choice(["colorimetric", "relative", "perceptual"])
-_OBJECTIVE_HELP = ("Table objective: srgb (paper eq. 10), cielab (dE76) or de2000 (CIEDE2000). "
+OBJECTIVES = click.Choice(["srgb", "cielab", "de2000"])
+INTENTS = click.Choice(["colorimetric", "relative", "perceptual"])
+OBJECTIVE_HELP = ("Table objective: srgb (paper eq. 10), cielab (dE76) or de2000 (CIEDE2000). "
                    "Default: the profile's, else de2000 (see docs/physics.md).")
-_INTENT_HELP = ("Rendering intent for colours outside the printable gamut: colorimetric "
+INTENT_HELP = ("Rendering intent for colours outside the printable gamut: colorimetric "
                 "(nearest printable colour), relative (ICC relative colorimetric: the source "
                 "white maps to the printable white, then colorimetric) or perceptual (SGCK "
                 "compression in CAM16-UCS). Default: the profile's, else colorimetric.")
@@ -73,7 +73,7 @@ def _read_rgb_file(path: str) -> list[list[float]]:
     return out
 
 
-def _progress_bar(what: str = ""):
+def progress_bar(what: str = ""):
     """A table build's progress on stderr (also with --json: stdout carries the JSON), every
     10 %. Called only while building: a table loaded from the cache prints nothing."""
     state = {"last": -1}
@@ -97,8 +97,8 @@ def _progress_bar(what: str = ""):
                    "mixture is kept).")
 @click.option("--profile", "profile_path", default=None, help="Ink profile JSON (default: "
               "built-in).")
-@click.option("--objective", type=_OBJECTIVES, default=None, help=_OBJECTIVE_HELP)
-@click.option("--intent", type=_INTENTS, default=None, help=_INTENT_HELP)
+@click.option("--objective", type=OBJECTIVES, default=None, help=OBJECTIVE_HELP)
+@click.option("--intent", type=INTENTS, default=None, help=INTENT_HELP)
 @_PRINTER
 @click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
@@ -120,7 +120,7 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, printer
         raise DreamPrintError("--density must be a finite number >= 0 (1/mm)")
     colours = [_parse_rgb(rgb_text)] if rgb_text else _read_rgb_file(rgb_file)
     profile = profile_for_printer(profile_path, printer)
-    tables = get_tables(profile, objective, size, progress=_progress_bar(), intent=intent)
+    tables = get_tables(profile, objective, size, progress=progress_bar(), intent=intent)
     rgb = np.asarray(colours, dtype=np.float64)
     conc5 = table_lookup(tables, rgb)
     pred = predict(profile, conc5)  # exactly what `dreamprint predict --mix` computes
@@ -156,8 +156,8 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, printer
 
 @cli.command()
 @click.option("--profile", "profile_path", default=None, help="Ink profile JSON.")
-@click.option("--objective", type=_OBJECTIVES, default=None, help=_OBJECTIVE_HELP)
-@click.option("--intent", type=_INTENTS, default=None, help=_INTENT_HELP)
+@click.option("--objective", type=OBJECTIVES, default=None, help=OBJECTIVE_HELP)
+@click.option("--intent", type=INTENTS, default=None, help=INTENT_HELP)
 @click.option("--compare/--no-compare", default=True, show_default=True,
               help="Also build (or load) the tables of the other objectives and report their "
                    "figures under 'objectives'.")
@@ -181,14 +181,14 @@ def gamut(profile_path, objective, intent, compare, size, samples, chart, plot, 
 
     profile = profile_for_printer(profile_path, printer)
     objective, intent = resolve_choice(profile, objective, intent)
-    tables = get_tables(profile, objective, size, progress=_progress_bar(f"{objective}, {intent}"),
+    tables = get_tables(profile, objective, size, progress=progress_bar(f"{objective}, {intent}"),
                         intent=intent)
     others = []
     if compare:
         for other in OBJECTIVES:
             if other != objective:
                 others.append(get_tables(profile, other, size, intent=intent,
-                                         progress=_progress_bar(f"{other}, {intent}")))
+                                         progress=progress_bar(f"{other}, {intent}")))
     click.echo(f"evaluating: {samples} colours solved directly vs the table"
                + (f", for {1 + len(others)} objectives" if others else ""), err=True)
     report = evaluate(tables, profile, samples, others)

@@ -8,11 +8,11 @@ import click
 
 from dreamprint_gui.cli import cli
 from dreamprint_gui.cli.gamut import (
-    _INTENT_HELP,
-    _INTENTS,
-    _OBJECTIVE_HELP,
-    _OBJECTIVES,
-    _progress_bar,
+    INTENT_HELP,
+    INTENTS,
+    OBJECTIVE_HELP,
+    OBJECTIVES,
+    progress_bar,
 )
 
 
@@ -25,9 +25,9 @@ from dreamprint_gui.cli.gamut import (
               help="Built-in printer name (voxelprint-27um, voxelprint-14um, j850-paper) or a "
                    "printer .toml file; named in the profile's description. Default "
                    "voxelprint-27um.")
-@click.option("--intent", type=_INTENTS, default=None, help=_INTENT_HELP + " The profile "
+@click.option("--intent", type=INTENTS, default=None, help=INTENT_HELP + " The profile "
               "describes the print of RGB through the table of this intent.")
-@click.option("--objective", type=_OBJECTIVES, default=None, help=_OBJECTIVE_HELP)
+@click.option("--objective", type=OBJECTIVES, default=None, help=OBJECTIVE_HELP)
 @click.option("--size", type=click.IntRange(2, 200), default=100, show_default=True,
               help="Nodes per axis of DreamPrint's colour table (as convert uses).")
 @click.option("--icc-version", type=click.Choice(["2", "4"]), default="2", show_default=True,
@@ -48,20 +48,17 @@ def icc(output, profile_path, printer, intent, objective, size, icc_version, gri
     from dreamprint_gui.core.printer import load_printer
     from dreamprint_gui.core.profile import load_profile
     from dreamprint_gui.gamut import get_tables
-    from dreamprint_gui.gamut.icc import check_target
-    from dreamprint_gui.gamut.icc_export import export_icc
+    from dreamprint_gui.gamut.icc_export import check_outputs, export_icc
     from dreamprint_gui.gamut.tables import resolve_choice
     from dreamprint_gui.job.plan import profile_for_printer
 
-    for target in (output, cgats):
-        if target is not None:
-            check_target(target)
+    check_outputs(output, cgats)
     printer_profile = load_printer(printer)
     # the profile as a job on this printer uses it: the job's (and lookup's) cached tables
     profile = profile_for_printer(load_profile(profile_path), printer_profile)
     objective, intent = resolve_choice(profile, objective, intent)
     tables = get_tables(profile, objective, size, intent=intent,
-                        progress=_progress_bar(f"{objective}, {intent}"))
+                        progress=progress_bar(f"{objective}, {intent}"))
     report = export_icc(output, profile, tables, printer=printer_profile.display_name,
                         version=int(icc_version), a2b_grid=grid, b2a_grid=grid, cgats=cgats,
                         patches=patches, progress=lambda msg: click.echo(msg, err=True))

@@ -126,10 +126,16 @@ def calibrate(measurements: Path | None, output: Path, chart: Path | None,
     from dreamprint_gui.core.profile import load_profile
 
     base = load_profile(base_profile)
+    ctx = click.get_current_context()
+    index_given = ctx.get_parameter_source("refractive_index") is not \
+        click.core.ParameterSource.DEFAULT
     if chart is not None or reflectance is not None:
         if chart is None or reflectance is None or measurements is not None:
             raise click.UsageError("a chart needs both --chart and --reflectance (and no "
                                    "MEASUREMENTS)")
+        if slabs or fit_k2 or index_given:
+            raise click.UsageError("--slabs, --refractive-index and --fit-k2 apply to "
+                                   "MEASUREMENTS of slabs, not to a chart")
         report = _calibrate_chart(base, chart, reflectance, name, parse_pair(
             saunderson, "--saunderson"), folds, output, quiet)
     else:
@@ -143,7 +149,7 @@ def calibrate(measurements: Path | None, output: Path, chart: Path | None,
                 raise DreamPrintError(f"--refractive-index must lie in 1-3, got "
                                       f"{refractive_index:g}")
             slab_options = SlabOptions(refractive_index, fit_k2)
-        elif fit_k2 or refractive_index != 1.5:
+        elif fit_k2 or index_given:
             raise click.UsageError("--refractive-index and --fit-k2 apply to --slabs")
         report = _calibrate_layers(base, measurements, name, output, slab_options)
     if as_json:

@@ -241,6 +241,9 @@ def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickn
         raise DreamPrintError("--chart proofs a chart's recipes: give no SOURCE with it")
     if chart is None:
         raise DreamPrintError("--reflectance needs --chart RECIPES.csv (the recipes measured)")
+    if kw["clear_low_bound"]:
+        raise DreamPrintError("--clear-low-bound renders a volume's print again; a chart proof "
+                              "has no Clear block to bound")
     ctx = click.get_current_context()
     spp_given = ctx.get_parameter_source("spp") is not click.core.ParameterSource.DEFAULT
     s = ChartSettings(recipes=chart, reflectance=reflectance, output=output,

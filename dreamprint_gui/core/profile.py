@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.files import write_atomically
 from dreamprint_gui.core.resources import resource_path
 
 __all__ = ["INKS", "COLOUR_INKS", "InkProfile", "load_profile", "save_profile",
@@ -325,14 +326,8 @@ def load_profile(path: str | os.PathLike | None = None) -> InkProfile:
 
 def save_profile(profile: InkProfile, path: str | os.PathLike) -> None:
     """Write the profile as JSON atomically (temporary file renamed into place)."""
-    p = Path(path)
-    tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(json.dumps(profile.to_json_dict(), indent=1) + "\n", encoding="utf-8")
-        os.replace(tmp, p)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise DreamPrintError(f"cannot write: {exc.strerror or exc}", p) from None
+    text = json.dumps(profile.to_json_dict(), indent=1) + "\n"
+    write_atomically(path, text.encode("utf-8"), "profile.json")
 
 
 _DEFAULT: InkProfile | None = None

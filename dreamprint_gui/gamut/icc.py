@@ -40,15 +40,15 @@ encoding.
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Callable
 from datetime import UTC, datetime
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.files import check_file_target
+from dreamprint_gui.core.files import write_atomically as core_write_atomically
 from dreamprint_gui.core.profile import InkProfile
 from dreamprint_gui.gamut import lcms
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
@@ -176,29 +176,9 @@ def _stats(de: NDArray) -> dict:
 
 def check_target(path: str | os.PathLike) -> None:
     """Refuse an output path that cannot be written (a folder, a missing folder), naming it."""
-    p = Path(path)
-    if p.is_dir():
-        raise DreamPrintError("is a folder; give a file name such as printer.icc", p)
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise DreamPrintError("the folder does not exist", parent)
+    check_file_target(path, "printer.icc")
 
 
 def write_atomically(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename, so
-    a failure never leaves a half-written file."""
-    p = Path(path)
-    check_target(p)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
-    except FileNotFoundError:
-        raise DreamPrintError("the folder does not exist", p.parent) from None
-    except OSError as exc:
-        raise DreamPrintError(f"cannot write: {exc.strerror or exc}", p) from None
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, p)
-    except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
-        raise DreamPrintError(f"cannot write: {exc.strerror or exc}", p) from None
+    """Write ``data`` to ``path`` atomically (:func:`.core.files.write_atomically`)."""
+    core_write_atomically(path, data, "printer.icc")

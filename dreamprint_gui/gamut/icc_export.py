@@ -12,10 +12,12 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import InkProfile
 from dreamprint_gui.gamut import lcms
 from dreamprint_gui.gamut.characterisation import write_characterisation
@@ -33,12 +35,24 @@ from dreamprint_gui.gamut.print_pcs import PrintPCS
 from dreamprint_gui.gamut.tables import ColourTables
 from dreamprint_gui.io.volumes.demo import demo_colours
 
-__all__ = ["export_icc", "check_colours"]
+__all__ = ["export_icc", "check_colours", "check_outputs"]
 
 
 def check_colours() -> NDArray[np.float64]:
     """The 9^3 lattice of the RGB cube and 400 of the colours the demo holds."""
     return np.concatenate([rgb_cube(9), demo_colours(400)])
+
+
+def check_outputs(path: str | os.PathLike, cgats: str | os.PathLike | None = None) -> None:
+    """Refuse output paths that cannot be written, or a characterisation file named as the
+    profile, naming the path: before any work (the CLI and the GUI call it before building
+    the colour tables, :func:`export_icc` again before the profile's seconds)."""
+    if cgats is not None and Path(cgats).absolute() == Path(path).absolute():
+        raise DreamPrintError("the characterisation file would overwrite the ICC profile: "
+                              "give it another name (e.g. .ti3)", cgats)
+    for target in (path, cgats):
+        if target is not None:
+            check_target(target)
 
 
 def export_icc(path: str | os.PathLike, profile: InkProfile, tables: ColourTables, *,
@@ -50,9 +64,7 @@ def export_icc(path: str | os.PathLike, profile: InkProfile, tables: ColourTable
     (:func:`check_profile` on :func:`check_colours`), write it to ``path`` (atomically) and,
     with ``cgats``, the characterisation file of a ``patches``^3 RGB lattice; a report."""
     t0 = time.perf_counter()
-    for target in (path, cgats):
-        if target is not None:
-            check_target(target)  # before the build's seconds, not after
+    check_outputs(path, cgats)
     data = build_icc(profile, tables, printer=printer, version=version, a2b_grid=a2b_grid,
                      b2a_grid=b2a_grid, progress=progress)
     if progress:

@@ -68,11 +68,6 @@ class _Measurement(ctypes.Structure):  # cmsICCMeasurementConditions
                 ("IlluminantType", ctypes.c_uint32)]
 
 
-class _Viewing(ctypes.Structure):  # cmsICCViewingConditions
-    _fields_ = [("IlluminantXYZ", _XYZ), ("SurroundXYZ", _XYZ),
-                ("IlluminantType", ctypes.c_uint32)]
-
-
 def _candidates() -> list[str]:
     names = []
     found = ctypes.util.find_library("lcms2")
@@ -116,8 +111,6 @@ def library() -> ctypes.CDLL:
         "cmsSetColorSpace": ([p, u32], None),
         "cmsSetPCS": ([p, u32], None),
         "cmsSetHeaderRenderingIntent": ([p, u32], None),
-        "cmsSetHeaderManufacturer": ([p, u32], None),
-        "cmsSetHeaderModel": ([p, u32], None),
         "cmsGetDeviceClass": ([p], u32),
         "cmsGetColorSpace": ([p], u32),
         "cmsGetPCS": ([p], u32),
@@ -182,13 +175,9 @@ class ProfileWriter:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def header(self, rendering_intent: int = 0, manufacturer: str | None = None,
-               model: str | None = None) -> None:
+    def header(self, rendering_intent: int = 0) -> None:
+        """The header's rendering intent (the intent a CMM uses when none is asked)."""
         self._lib.cmsSetHeaderRenderingIntent(self._h, rendering_intent)
-        if manufacturer:
-            self._lib.cmsSetHeaderManufacturer(self._h, sig(manufacturer))
-        if model:
-            self._lib.cmsSetHeaderModel(self._h, sig(model))
 
     def text(self, tag: str, text: str) -> None:
         """A text tag (``desc``, ``cprt``...): textDescription / text in v2, mluc in v4."""
@@ -222,13 +211,6 @@ class ProfileWriter:
         m = _Measurement(observer, _XYZ(*np.asarray(backing, float).tolist()), geometry,
                          float(flare), illuminant_type)
         _check(self._lib.cmsWriteTag(self._h, sig("meas"), ctypes.byref(m)), "write meas")
-
-    def viewing(self, illuminant_xyz: ArrayLike, surround_xyz: ArrayLike,
-                illuminant_type: int) -> None:
-        """The ``view`` tag (absolute XYZ in cd/m^2 of the illuminant and surround)."""
-        v = _Viewing(_XYZ(*np.asarray(illuminant_xyz, float).tolist()),
-                     _XYZ(*np.asarray(surround_xyz, float).tolist()), illuminant_type)
-        _check(self._lib.cmsWriteTag(self._h, sig("view"), ctypes.byref(v)), "write view")
 
     def clut(self, tag: str, table: NDArray[np.uint16]) -> None:
         """A LUT tag from a 16-bit table ``(n, ..., n, out)`` (n nodes per input, first input

@@ -109,9 +109,6 @@ class PrintPCS:
         """Step 3: media-relative XYZ."""
         return np.asarray(xyz_abs, np.float64) * (ICC_D50 / self.media_white)
 
-    def absolute_xyz_from_relative(self, xyz_rel: ArrayLike) -> NDArray[np.float64]:
-        return np.asarray(xyz_rel, np.float64) * (self.media_white / ICC_D50)
-
     def relative_lab(self, rgb: ArrayLike) -> NDArray[np.float64]:
         """Step 4: media-relative PCS CIELAB of the print (what the A2B tables hold)."""
         return lab_d50(self.relative_xyz_from_absolute(self.absolute_xyz(rgb)))

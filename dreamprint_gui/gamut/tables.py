@@ -62,8 +62,7 @@ from dreamprint_gui.physics.density import scalar_sigma
 from dreamprint_gui.physics.kubelka_munk import mix
 
 __all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "printed_xyz",
-           "interpolate_fields",
-           "tetrahedral_nodes", "mixture_sigma",
+           "interpolate_fields", "tetrahedral_nodes", "mixture_sigma",
            "DEFAULT_OBJECTIVE", "DEFAULT_INTENT", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS",
            "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice"]
 
@@ -386,8 +385,6 @@ def lookup(tables: ColourTables, rgb: ArrayLike) -> NDArray[np.float64]:
     out = interpolate_fields(tables.packed, rgb.reshape(-1, 3), F_CONC)
     out /= out.sum(-1, keepdims=True)
     return out.reshape(rgb.shape[:-1] + (N_COLOUR_INKS,))
-
-
 
 
 def printed_xyz(tables: ColourTables, model: ForwardModel, rgb: ArrayLike) -> NDArray[np.float64]:

@@ -18,6 +18,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import (
@@ -32,6 +33,10 @@ from PySide6.QtWidgets import (
 
 from dreamprint_gui.gui.workers import Task, run_task
 
+if TYPE_CHECKING:  # not loaded with the window: the export imports the engine when it runs
+    from dreamprint_gui.core.profile import InkProfile
+    from dreamprint_gui.gamut.tables import ColourTables
+
 __all__ = ["IccExportBox", "IccRequest", "summary"]
 
 log = logging.getLogger(__name__)
@@ -42,8 +47,8 @@ class IccRequest:
     """What to export: the ink profile, its tables when already loaded (else built from
     ``intent`` / ``size``), and the printer's name for the description."""
 
-    profile: object
-    tables: object | None = None
+    profile: InkProfile
+    tables: ColourTables | None = None
     intent: str | None = None
     size: int | None = None
     printer: str = ""
@@ -128,12 +133,9 @@ class IccExportBox(QWidget):
 
         def job(report, cancel):
             from dreamprint_gui.gamut import get_tables
-            from dreamprint_gui.gamut.icc import check_target
-            from dreamprint_gui.gamut.icc_export import export_icc
+            from dreamprint_gui.gamut.icc_export import check_outputs, export_icc
 
-            for target in (path, cgats):
-                if target is not None:
-                    check_target(target)
+            check_outputs(path, cgats)
             tables = req.tables
             if tables is None:
                 kwargs = {} if req.size is None else {"size": req.size}

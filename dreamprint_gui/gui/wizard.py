@@ -64,9 +64,10 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.gui.icc_export import IccExportBox, IccRequest
 from dreamprint_gui.gui.settings import AppSettings
-from dreamprint_gui.gui.slab_page import SlabPage
+from dreamprint_gui.gui.slab_page import SlabPage, slab_fit_table
 from dreamprint_gui.gui.wizard_common import ERROR_STYLE, INK_COLOURS, canvas
 from dreamprint_gui.gui.workers import Task, abandonable, run_task
+from dreamprint_gui.physics.slab_fit import SlabFit, SlabOptions
 
 __all__ = ["CalibrationWizard", "MeasurementsPage", "SlabPage", "ChartPage", "FitPage",
            "ChartProofPage", "SavePage", "SPECTRA_FILTER", "INK_COLOURS", "ERROR_STYLE"]
@@ -809,9 +810,6 @@ class FitPage(_TaskPage):
         self.result = (profile, fits, chart_fit)
         self.held_out = held
         text = ""
-        from dreamprint_gui.gui.slab_page import slab_fit_table
-        from dreamprint_gui.physics.slab_fit import SlabFit
-
         if fits and isinstance(fits[0], SlabFit):
             text = slab_fit_table(fits)
         elif fits:
@@ -833,7 +831,6 @@ class FitPage(_TaskPage):
 
     def _plot_fit(self, profile, measurements, fits=()) -> None:
         from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
-        from dreamprint_gui.physics.slab_fit import SlabFit
 
         slab_fits = {f.ink: f for f in fits if isinstance(f, SlabFit)}
 
@@ -1194,7 +1191,7 @@ class CalibrationWizard(QWizard):
         if calibration_set:
             self.measurements_page.load_set(calibration_set)
 
-    def slab_options(self):
+    def slab_options(self) -> SlabOptions | None:
         """The slab fit's options when the measurements are slabs measured in air, else None
         (:class:`~dreamprint_gui.physics.slab_fit.SlabOptions`, as ``calibrate --slabs``)."""
         if not self.measurements_page.slabs_box.isChecked():

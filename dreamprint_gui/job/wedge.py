@@ -84,6 +84,13 @@ def plan_wedge(inks: list[str], thicknesses_mm: list[float], printer: PrinterPro
     if not slab_mm >= 5.0:
         raise DreamPrintError("--slab-mm must be at least 5 mm (an instrument's aperture)")
     vx, vy, vz = printer.voxel_mm
+    printed: dict[int, float] = {}
+    for t in thicknesses_mm:
+        n = max(1, round(t / vz))
+        if n in printed:
+            raise DreamPrintError(f"--thickness-mm {printed[n]:g} and {t:g} both print {n} "
+                                  f"layer(s), {n * vz:.3f} mm: give distinct thicknesses")
+        printed[n] = t
     nxs, nys = round(slab_mm / vx), round(slab_mm / vy)
     tab, gapx, gapy = round(TAB_MM / vy), round(GAP_MM / vx), round(GAP_MM / vy)
     slabs = []

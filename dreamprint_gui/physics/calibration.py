@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dreamprint_gui.core.calibration_types import LayerMeasurement
+from dreamprint_gui.core.calibration_types import LayerMeasurement, layer_arrays
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS, InkProfile, ink_origins, now_iso
 from dreamprint_gui.physics.kubelka_munk import invert_closed_form, reflectance_transmittance
@@ -74,22 +74,6 @@ class InkFit:
                 "max_rms_R": stat(self.rms_R), "max_rms_T": stat(self.rms_T)}
 
 
-def _layer_arrays(layers: list[LayerMeasurement], n_wl: int
-                  ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-    t = np.array([m.thickness_mm for m in layers], dtype=np.float64)
-    R = np.full((len(layers), n_wl), np.nan)
-    T = np.full((len(layers), n_wl), np.nan)
-    for i, m in enumerate(layers):
-        for arr, data in ((R, m.R), (T, m.T)):
-            if data is not None:
-                d = np.asarray(data, dtype=np.float64)
-                if d.shape != (n_wl,):
-                    raise DreamPrintError(f"{m.ink}: a measurement has {d.size} wavelengths, the "
-                                          f"profile grid {n_wl}", m.source or None)
-                arr[i] = d
-    return t, R, T, ~np.isnan(R), ~np.isnan(T)
-
-
 def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
     """Fit K, S of one ink to all its layers, wavelength by wavelength.
 
@@ -104,7 +88,7 @@ def fit_ink(layers: list[LayerMeasurement], n_wavelengths: int) -> InkFit:
     if not layers:
         raise ValueError("no layers to fit")
     ink = layers[0].ink
-    t, R, T, hasR, hasT = _layer_arrays(layers, n_wavelengths)
+    t, R, T, hasR, hasT = layer_arrays(layers, n_wavelengths)
     for i, m in enumerate(layers):
         if not m.thickness_mm > 0:
             raise DreamPrintError(f"ink {ink}: thickness must be > 0 mm, got {m.thickness_mm}",
@@ -286,7 +270,7 @@ def leave_one_thickness_out(layers: list[LayerMeasurement], n_wavelengths: int
                          "transmittance)")
             continue
         fit = fit_ink(rest, n_wavelengths)
-        tt, R, T, hasR, hasT = _layer_arrays(held, n_wavelengths)
+        tt, R, T, hasR, hasT = layer_arrays(held, n_wavelengths)
         Rm, Tm = reflectance_transmittance(fit.K, fit.S, tt[:, None])
         with np.errstate(invalid="ignore"):
             rms_R = np.sqrt(np.nanmean(np.where(hasR, (Rm - R) ** 2, np.nan), axis=0)) \

@@ -39,6 +39,8 @@ def clear_low_bound_K(wavelengths_nm: ArrayLike) -> NDArray[np.float64]:
 
 
 def clear_is_modelled(profile: InkProfile) -> bool:
+    """True when the profile's Clear K and S are assumed, not fitted (``provenance.ink_origin``,
+    :func:`~dreamprint_gui.core.profile.ink_origins`)."""
     return ink_origins(profile)["Cl"] == "modelled"
 
 
@@ -50,7 +52,9 @@ def clear_low_bound(profile: InkProfile) -> InkProfile:
 
 
 def describe_low_bound() -> str:
+    """The bound in words for reports: the formula and its range over 450-730 nm (computed)."""
+    lo, hi = clear_low_bound_K(np.array([730.0, 450.0]))
     return (f"K = {CLEAR_LOW_K_FLAT:g} + {_EDGE_K:g} exp(-(lambda - {_EDGE_NM:g})/"
-            f"{_EDGE_WIDTH_NM:g}) /mm (0.002-0.0023 over 450-730 nm, the low end of printed "
+            f"{_EDGE_WIDTH_NM:g}) /mm ({lo:.2g}-{hi:.2g} over 450-730 nm, the low end of printed "
             "VeroClear's plausible 0.002-0.1 /mm, with a resin's steep violet edge, "
             "MEASURED.md), S as the profile's")

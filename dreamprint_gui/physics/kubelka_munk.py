@@ -152,10 +152,11 @@ def invert_closed_form(R: ArrayLike, T: ArrayLike, t: float
                        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """K and S (1/mm) from R and T (fractions) of one layer of thickness ``t`` mm.
 
-    Exact inverse of :func:`~dreamprint_gui.physics.kubelka_munk.reflectance_transmittance`
+    Exact inverse of :func:`reflectance_transmittance`
     where it exists (``R >= 0, T > 0, R + T <= 1``). With ``R = 0`` the layer does not scatter:
     ``S = 0, K = -ln(T)/t``. Where the data are impossible (R + T > 1, T = 0) the result is NaN;
-    :func:`fit_ink` then falls back to a least-squares start.
+    the fits (:func:`~dreamprint_gui.physics.calibration.fit_ink`,
+    :func:`~dreamprint_gui.physics.slab_fit.fit_slabs`) then start elsewhere.
     """
     R = np.asarray(R, dtype=np.float64)
     T = np.asarray(T, dtype=np.float64)

@@ -11,16 +11,20 @@ reflect. The forward model per wavelength and slab of thickness t:
   fitted over all wavelengths (a nearly non-scattering slab keeps its light collimated, which
   reflects inside much less than diffuse light does: the thickness series sees it).
 
-Per wavelength, ``scipy.optimize.least_squares`` (Levenberg-Marquardt) on (ln K, ln S)
-minimises the measured R and T residuals of every slab, each divided by the noise model
-``sigma = rel_noise * value + abs_noise`` (1 % and 0.001 by default), started from the exact
-inverse (:func:`~dreamprint_gui.physics.saunderson.slab_remove`, then
-:func:`~dreamprint_gui.physics.calibration.invert_closed_form`) of each slab. The fitted k2 is
-the bounded scalar minimum (``scipy.optimize.minimize_scalar``) of the summed chi^2.
+Per wavelength, ``scipy.optimize.least_squares`` (trust-region reflective with a Cauchy loss of
+scale 3 sigma, so that one bad slab does not drag the others off) on (ln K, ln S) minimises the
+measured R and T residuals of every slab, each divided by the noise model
+``sigma = rel_noise * value + abs_noise`` (1 % and 0.001 by default), started from the median of
+the exact inverses (:func:`~dreamprint_gui.physics.saunderson.slab_remove`, then
+:func:`~dreamprint_gui.physics.kubelka_munk.invert_closed_form`) of the slabs. The fitted k2
+minimises the summed chi^2: a grid over 0-0.9 (step 0.02, every 5th wavelength) finds the valley,
+Brent's bounded search (``scipy.optimize.minimize_scalar``) refines it within one step.
 
-Uncertainty: ``cov = s^2 (J^T J)^-1`` at the solution (J of the weighted residuals in ln K,
-ln S; ``s^2 = chi^2 / (m - 2)`` with m data at that wavelength, or 1, the noise model, when
-m <= 2), so ``sigma_K = K sigma_lnK``: one standard deviation, conditional on k1 and k2.
+Uncertainty: ``cov = s^2 (J^T J)^-1`` at the solution (J in ln K, ln S of the weighted
+residuals as ``least_squares`` returns it: scaled by the Cauchy loss, so a slab far off
+counts less, and with the two faint prior rows; ``s^2 = chi^2 / (m - 2)`` with m data at that
+wavelength, or 1, the noise model, when m <= 2), so ``sigma_K = K sigma_lnK``: one standard
+deviation, conditional on k1 and k2.
 
 Per slab: rms of the R and T residuals over wavelengths, dE2000 (D65, 2 degree) between the
 measured and the fitted R and T spectra, and whether the slab fits (``MISFIT_DE2000``,
@@ -37,7 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dreamprint_gui.core.calibration_types import LayerMeasurement
+from dreamprint_gui.core.calibration_types import LayerMeasurement, layer_arrays
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.physics import saunderson
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
@@ -179,12 +183,10 @@ class SlabFit:
                 "slabs": [s.record() for s in self.slabs], "warnings": self.warnings}
 
 
-def _arrays(layers: list[LayerMeasurement], n_wl: int
-            ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-    t = np.array([m.thickness_mm for m in layers], dtype=np.float64)
-    R = np.full((len(layers), n_wl), np.nan)
-    T = np.full((len(layers), n_wl), np.nan)
-    for i, m in enumerate(layers):
+def _check_slabs(layers: list[LayerMeasurement]) -> None:
+    """What a slab series needs beyond :func:`~dreamprint_gui.core.calibration_types.
+    layer_arrays`'s checks: thicknesses > 0, R or T per slab, no T of an opaque slab."""
+    for m in layers:
         if not m.thickness_mm > 0:
             raise DreamPrintError(f"ink {m.ink}: thickness must be > 0 mm, got "
                                   f"{m.thickness_mm}", m.source or None)
@@ -193,15 +195,6 @@ def _arrays(layers: list[LayerMeasurement], n_wl: int
         if np.isinf(m.thickness_mm) and m.T is not None:
             raise DreamPrintError(f"ink {m.ink}: an optically thick slab (thickness inf) has "
                                   "no transmittance; give its R only", m.source or None)
-        for arr, data in ((R, m.R), (T, m.T)):
-            if data is not None:
-                d = np.asarray(data, dtype=np.float64)
-                if d.shape != (n_wl,):
-                    raise DreamPrintError(f"ink {m.ink}: a measurement has {d.size} "
-                                          f"wavelengths, the profile grid {n_wl}",
-                                          m.source or None)
-                arr[i] = d
-    return t, R, T, np.isfinite(R), np.isfinite(T)
 
 
 class _Problem:
@@ -273,7 +266,8 @@ def fit_slabs(layers: list[LayerMeasurement], wavelengths_nm: ArrayLike, *,
     ink = layers[0].ink
     wl = np.asarray(wavelengths_nm, dtype=np.float64)
     n_wl = wl.size
-    t, R, T, hasR, hasT = _arrays(layers, n_wl)
+    _check_slabs(layers)
+    t, R, T, hasR, hasT = layer_arrays(layers, n_wl)
     if not hasT.any():
         raise DreamPrintError(f"ink {ink}: no transmittance measured; K and S cannot be "
                               "separated from reflectance alone")

@@ -6,10 +6,7 @@ import pytest
 
 from dreamprint_gui.cli import main
 
-
-@pytest.fixture(autouse=True)
-def _private_cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "xdg-cache"))
+pytestmark = pytest.mark.usefixtures("private_cache")
 
 
 def _run(capsys, *args):

@@ -8,10 +8,7 @@ import pytest
 from dreamprint_gui.cli import main
 from dreamprint_gui.gamut import lcms
 
-
-@pytest.fixture(autouse=True)
-def _private_cache(tmp_path_factory, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "xdg-cache"))
+pytestmark = pytest.mark.usefixtures("private_cache")
 
 
 def _run(capsys, *args):
@@ -34,7 +31,7 @@ def test_icc_writes_a_profile_and_reports_its_check(capsys, tmp_path):
     assert (info["class"], info["colour_space"], info["pcs"]) == ("prtr", "RGB ", "Lab ")
     for key in ("a2b_dE2000", "round_trip_dE2000"):
         assert set(rep["check"][key]) == {"mean", "p95", "max"}
-    assert rep["check"]["a2b_dE2000"]["mean"] <= 1.0
+    assert rep["check"]["a2b_dE2000"]["mean"] <= 0.1  # measured 0.046 (p95 0.18)
     # the relative intent prints RGB white as the printable white, the media white: L* 100
     assert lcms.transform(data, np.ones((1, 3)), "relative")[0, 0] == pytest.approx(100, abs=0.1)
     assert rep["cgats"]["layout"] == "argyll" and ti3.read_text().startswith("CTI3")
@@ -50,7 +47,7 @@ def test_icc_errors_name_the_file(capsys, tmp_path):
     missing = tmp_path / "no" / "p.icc"
     code, _, err = _run(capsys, "icc", "-o", str(missing), "--size", "9", "--grid", "9")
     assert code == 2 and str(missing.parent) in err and "does not exist" in err
-    assert err.count("\n") <= 12 and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     code, _, err = _run(capsys, "icc", "-o", str(tmp_path / "p.icc"), "--printer", "nope")
     assert code == 2 and "unknown printer 'nope'" in err
     bad = tmp_path / "bad.json"
@@ -58,3 +55,11 @@ def test_icc_errors_name_the_file(capsys, tmp_path):
     code, _, err = _run(capsys, "icc", "-o", str(tmp_path / "p.icc"), "--profile", str(bad))
     assert code == 2 and str(bad) in err
     assert not (tmp_path / "p.icc").exists()
+
+
+def test_icc_refuses_a_characterisation_file_named_as_the_profile(capsys, tmp_path):
+    out_icc = tmp_path / "p.icc"
+    code, _, err = _run(capsys, "icc", "-o", str(out_icc), "--cgats", str(out_icc))
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "would overwrite the ICC profile" in err and str(out_icc) in err
+    assert not list(tmp_path.iterdir())

@@ -84,3 +84,18 @@ def test_slab_options_need_slabs(tmp_path, capsys):
     toml = write_set(tmp_path, "W", P.K[4], P.S[4], thickness=[1.0])
     code, _, err = run(capsys, "calibrate", str(toml), "--fit-k2", "-o", str(tmp_path / "w.json"))
     assert code == 2 and "--fit-k2 apply to --slabs" in err
+
+
+def test_slab_options_do_not_apply_to_a_chart(tmp_path, capsys):
+    recipes, refl = tmp_path / "r.csv", tmp_path / "refl.csv"
+    recipes.write_text("C,M,Y,K,W,Cl\n0.2,0,0,0,0.8,0\n")
+    refl.write_text("400,500\n0.5,0.5\n")
+    for extra in (["--slabs"], ["--refractive-index", "1.5"]):
+        code, _, err = run(capsys, "calibrate", "--chart", str(recipes), "--reflectance",
+                           str(refl), "-o", str(tmp_path / "c.json"), *extra)
+        assert code == 2 and "apply to MEASUREMENTS of slabs, not to a chart" in err
+    toml = write_set(tmp_path, "W", P.K[4], P.S[4], thickness=[1.0])
+    code, _, err = run(capsys, "calibrate", str(toml), "--refractive-index", "1.5", "-o",
+                       str(tmp_path / "w.json"))
+    assert code == 2 and "--refractive-index and --fit-k2 apply to --slabs" in err
+    assert not list(tmp_path.glob("*.json"))

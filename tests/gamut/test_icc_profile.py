@@ -10,6 +10,7 @@ product's figures (100^3 table, 33^3 grids) are in the commit messages and the R
 from __future__ import annotations
 
 import io
+import os
 import shutil
 import struct
 import subprocess
@@ -18,9 +19,10 @@ import colour
 import numpy as np
 import pytest
 
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gamut import lcms, lookup
 from dreamprint_gui.gamut.characterisation import characterisation_text
-from dreamprint_gui.gamut.icc import build_icc, rgb_cube
+from dreamprint_gui.gamut.icc import build_icc, rgb_cube, write_atomically
 from dreamprint_gui.gamut.icc_export import check_colours
 from dreamprint_gui.gamut.mapping import RelativeMap
 from dreamprint_gui.gamut.print_pcs import PrintPCS, decode_lab, encode_lab
@@ -118,7 +120,9 @@ def test_a2b_is_dreamprints_print(built, profile, small_tables, source_colours):
     _, data = built
     got = lcms.transform(data, source_colours, "absolute")
     de = delta_E2000(got, _expected_absolute_lab(profile, small_tables, source_colours))
-    assert de.mean() <= 1.0 and np.percentile(de, 95) <= 2.5, (de.mean(), de.max())
+    # measured with these grids (17^3 A2B over a 9^3 table): mean 0.13, p95 0.38 on these
+    # colours (0.06 / 0.24 on the check colours alone); the bound is about twice that
+    assert de.mean() <= 0.25 and np.percentile(de, 95) <= 0.75, (de.mean(), de.max())
     # media-relative: the same colours scaled by the media white (ICC.1 6.3.2.2)
     rel = lcms.transform(data, source_colours, "relative")
     pcs = PrintPCS.for_tables(profile, small_tables)
@@ -251,4 +255,21 @@ def test_iccdev_reads_and_validates(built, profile, small_tables, source_colours
     enc = np.array(cmm.apply_multi(source_colours.tolist()))  # PCS Lab as fractions (v4)
     lab = np.stack([enc[:, 0] * 100.0, enc[:, 1] * 255.0 - 128.0, enc[:, 2] * 255.0 - 128.0], 1)
     de = delta_E2000(lab, _expected_absolute_lab(profile, small_tables, source_colours))
-    assert de.mean() <= 1.0 and np.percentile(de, 95) <= 2.5, (de.mean(), de.max())
+    # measured with these grids (17^3 A2B over a 9^3 table): mean 0.13, p95 0.38 on these
+    # colours (0.06 / 0.24 on the check colours alone); the bound is about twice that
+    assert de.mean() <= 0.25 and np.percentile(de, 95) <= 0.75, (de.mean(), de.max())
+
+
+def test_written_atomically_and_readable_by_others(tmp_path):
+    """A profile is installed for the colour daemon or handed to a RIP: any new file's
+    permissions (0666 less the umask), no temporary file left, a folder refused by name."""
+    target = tmp_path / "print.icc"
+    write_atomically(target, b"first")
+    write_atomically(target, b"second")
+    umask = os.umask(0o022)
+    os.umask(umask)
+    assert target.read_bytes() == b"second"
+    assert target.stat().st_mode & 0o777 == 0o666 & ~umask
+    assert [p.name for p in tmp_path.iterdir()] == ["print.icc"]
+    with pytest.raises(DreamPrintError, match="is a folder"):
+        write_atomically(tmp_path, b"x")

@@ -78,3 +78,13 @@ def test_evaluate_methods_carries_the_bounds_per_row(capsys):
     code, out, err = run(capsys, "evaluate", "methods", "demo", *TINY, "--method", "paper")
     assert code == 0, err
     assert "Clear: modelled (the Clear is modelled; --clear-low-bound renders" in out
+
+
+def test_a_chart_proof_refuses_the_option(tmp_path, capsys):
+    recipes = tmp_path / "r.csv"
+    recipes.write_text("C,M,Y,K,W,Cl\n0.2,0,0,0,0.8,0\n")
+    code, _, err = run(capsys, "proof", "--chart", recipes, "-o", tmp_path / "c",
+                       "--clear-low-bound")
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "--clear-low-bound renders a volume's print again" in err
+    assert not (tmp_path / "c").exists()

@@ -5,6 +5,7 @@ it holds solid, translucent and faint parts, and its pre-flight at 40 mm has no 
 import numpy as np
 import pytest
 
+from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import default_profile
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_lab
@@ -40,7 +41,7 @@ def test_every_colour_it_holds_is_printable():
 def test_solid_translucent_and_faint_parts():
     """Optical depth (at the design height) across the planet, the ring and the haze."""
     sigma, _ = demo.demo_fields(128)
-    mm_per_cell = demo.DESIGN_HEIGHT_MM / (demo._occupied_height(sigma) * 128)
+    mm_per_cell = demo.DESIGN_HEIGHT_MM / (demo.occupied_height(sigma) * 128)
     k = int(demo.CENTRE[2] * 128)
     through_planet = sigma[k, 64, :].sum() * mm_per_cell
     assert through_planet > 30            # reads as solid
@@ -55,7 +56,7 @@ def test_deterministic_and_bounded():
     a, b = open_source("demo"), open_source("demo")
     assert np.array_equal(a.volume.data, b.volume.data)
     assert a.bounds == ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
-    with pytest.raises(Exception, match="resolution"):
+    with pytest.raises(DreamPrintError, match="demo resolution must be 8..512"):
         open_source("demo", resolution=4)
 
 
