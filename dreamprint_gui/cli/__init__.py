@@ -48,30 +48,6 @@ def cli(debug: bool) -> None:
     """DreamPrint: radiance volumes to PolyJet print jobs."""
 
 
-def placement_options(f):
-    """``--up``, ``--rotate`` and ``--fit``: how a source stands and what its size measures
-    (:mod:`..io.volumes.orient`)."""
-    opts = [
-        click.option("--up", type=click.Choice(["auto", "x", "-x", "y", "-y", "z", "-z"]),
-                     default="auto", show_default=True,
-                     help="The source axis that becomes the print's up (+z). auto: what "
-                          "the file says (OpenVDB: Houdini/Maya y, Blender z, or an up axis in "
-                          "its metadata; a 3DGS splat: its cameras.json), else a guess said as "
-                          "one (splats PLY/.splat/SOG -y, SPZ y, InstantNGP z, else z)."),
-        click.option("--rotate", default="0", show_default=True,
-                     help="Turn the print about its z: 0, 90, 180 or 270 degrees "
-                          "(counter-clockwise seen from above)."),
-        click.option("--fit", type=click.Choice(["occupied", "box"]), default="occupied",
-                     show_default=True,
-                     help="What --height-mm / --size-mm measure: occupied (the object's "
-                          "non-empty bounds, empty margins cropped) or box (the file's "
-                          "declared box)."),
-    ]
-    for o in reversed(opts):
-        f = o(f)
-    return f
-
-
 def step_progress(label: str, quiet: bool = False):
     """``progress(done, total)`` printing ``label: done/total steps, elapsed, about T left``
     on stderr after each step (a step of the slow commands, seconds each: fits, render
@@ -94,13 +70,6 @@ def step_progress(label: str, quiet: bool = False):
         click.echo(f"{label}: {done}/{total} ({el:.0f} s{tail})", err=True)
 
     return report
-
-
-def placement_values(up: str, rotate: str) -> tuple[str | None, int]:
-    """(up or None for auto, rotate in degrees) from the CLI's values."""
-    from dreamprint_gui.io.volumes.orient import parse_rotate
-
-    return (None if up == "auto" else up), parse_rotate(rotate)
 
 
 @cli.group()

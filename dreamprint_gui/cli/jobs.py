@@ -12,20 +12,15 @@ from pathlib import Path
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
+from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli.options import (
+    parse_size,
+    placement_options,
+    placement_values,
+    rendering_options,
+    size_options,
+)
 from dreamprint_gui.core.errors import DreamPrintError
-
-
-def _size(text: str | None) -> tuple[float, float, float] | None:
-    if text is None:
-        return None
-    try:
-        v = tuple(float(x) for x in text.replace("x", ",").split(","))
-    except ValueError:
-        raise DreamPrintError(f"--size-mm must be X,Y,Z in mm, got '{text}'") from None
-    if len(v) != 3 or not all(math.isfinite(x) and x > 0 for x in v):
-        raise DreamPrintError(f"--size-mm must be three positive numbers X,Y,Z, got '{text}'")
-    return v
 
 
 def _fmt_time(s: float | None) -> str:
@@ -46,8 +41,7 @@ def _fmt_time(s: float | None) -> str:
               help="Built-in printer name (voxelprint-27um, voxelprint-14um, j850-paper) or a "
                    "printer .toml file. Default voxelprint-27um (GrabCAD Voxel Print, 600 x "
                    "300 dpi, 27 um layers).")
-@click.option("--height-mm", type=float, default=None, help="Height (z) of the print in mm.")
-@click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm (aspect kept).")
+@size_options
 @click.option("--density-scale", type=float, default=1.0, show_default=True,
               help="Multiplies the source density (1/mm = source density x scale / mm per unit).")
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",
@@ -67,21 +61,7 @@ def _fmt_time(s: float | None) -> str:
 @click.option("--slab-layers", type=int, default=None, help="Layers per task (default: auto).")
 @click.option("--option", "source_options", multiple=True,
               help="Source reader option KEY=VALUE (e.g. grid=density); repeatable.")
-@click.option("--content", type=click.Choice(["auto", "fog", "solid"]), default="auto",
-              show_default=True,
-              help="Material intent: fog (density as the source states it), solid (occupied "
-                   "voxels printed as undiluted colour, the rest empty/Clear), or auto (solid "
-                   "for voxel models, level sets and binary masks; fog otherwise).")
-@click.option("--sampling", type=click.Choice(["nearest", "linear"]), default=None,
-              help="Voxel models (.vox): nearest (default, sharp edges) or linear (smooth).")
-@click.option("--objective", type=click.Choice(["srgb", "cielab", "de2000"]), default=None,
-              help="Colour table objective (default: the profile's, else de2000).")
-@click.option("--intent", type=click.Choice(["colorimetric", "relative", "perceptual"]),
-              default=None,
-              help="Rendering intent: colorimetric (nearest printable colour), relative (the "
-                   "source white maps to the printable white, then colorimetric) or perceptual "
-                   "(sRGB compressed into the gamut). Default: the profile's, else "
-                   "colorimetric.")
+@rendering_options
 @click.option("--table-size", type=int, default=100, hidden=True,
               help="Colour table nodes per axis (tests use small tables).")
 @click.option("--compensation", type=click.Path(), default=None,
@@ -123,7 +103,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     opts = parse_reader_options(source_options)
     settings = ConvertSettings(
         source=source, output=output, profile=profile, printer=printer, height_mm=height_mm,
-        size_mm=_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
+        size_mm=parse_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
         workers=workers, scheduler=scheduler, background=background,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
         objective=objective, intent=intent, table_size=table_size, source_options=opts,

@@ -11,8 +11,15 @@ from pathlib import Path
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate, placement_options, placement_values
-from dreamprint_gui.cli.jobs import _fmt_time, _size
+from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli.jobs import _fmt_time
+from dreamprint_gui.cli.options import (
+    parse_size,
+    placement_options,
+    placement_values,
+    rendering_options,
+    size_options,
+)
 from dreamprint_gui.core.errors import DreamPrintError
 
 # Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
@@ -84,8 +91,6 @@ def _common(f, halftones: bool = False):
                 click.option("--halftone", type=click.Choice(HALFTONE_CHOICES),
                              default="blue-noise", show_default=True))
     opts = [
-        click.option("--height-mm", type=float, default=None, help="Height (z) of the print."),
-        click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm."),
         click.option("--printer", default=None, help="Printer name or .toml (default "
                      "voxelprint-27um)."),
         click.option("--profile", default=None, help="Ink profile JSON (default: built-in)."),
@@ -142,14 +147,14 @@ def _common(f, halftones: bool = False):
     ]
     for o in reversed(opts):
         f = o(f)
-    return placement_options(f)
+    return size_options(placement_options(rendering_options(f)))
 
 
 def _settings(source, output, method, kw, overwrite=False, compensation=None):
     from dreamprint_gui.proof.runner import ProofSettings
 
     return ProofSettings(compensation=compensation,
-        source=source, output=output, height_mm=kw["height_mm"], size_mm=_size(kw["size_mm"]),
+        source=source, output=output, height_mm=kw["height_mm"], size_mm=parse_size(kw["size_mm"]),
         printer=kw["printer"], profile=kw["profile"], views=kw["views"],
         resolution=kw["resolution"], spp=kw["spp"], method=method, halftone=kw["halftone"],
         seed=kw["seed"], density_scale=kw["density_scale"], background=kw["background"],
@@ -161,7 +166,12 @@ def _settings(source, output, method, kw, overwrite=False, compensation=None):
         table_size=kw["table_size"], source_options=_options(kw["source_options"]),
         up=placement_values(kw["up"], kw["rotate"])[0],
         rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"],
-        clear_low_bound=kw["clear_low_bound"])
+        clear_low_bound=kw["clear_low_bound"], **_rendering(kw))
+
+
+def _rendering(kw: dict) -> dict:
+    """The rendering options (:func:`.options.rendering_options`) of a command's keywords."""
+    return {k: kw[k] for k in ("content", "sampling", "objective", "intent")}
 
 
 def _check_source(source: str) -> None:
@@ -390,7 +400,7 @@ def _held_out_correction(source, kw, prefix, iterations, views):
     fd, name = tempfile.mkstemp(suffix=".npz", prefix="dreamprint-correction-")
     os.close(fd)
     cs = CompensateSettings(
-        source=source, output=name, height_mm=kw["height_mm"], size_mm=_size(kw["size_mm"]),
+        source=source, output=name, height_mm=kw["height_mm"], size_mm=parse_size(kw["size_mm"]),
         printer=kw["printer"], profile=kw["profile"], views=views, iterations=iterations,
         seed=kw["seed"] + 1, resolution=kw["resolution"], spp=kw["spp"],
         max_cells=kw["max_cells"], halftone=kw["halftone"], density_scale=kw["density_scale"],
@@ -399,7 +409,7 @@ def _held_out_correction(source, kw, prefix, iterations, views):
         layers_per_block=kw["layers_per_block"], overwrite=True,
         up=placement_values(kw["up"], kw["rotate"])[0],
         rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"],
-        clear_low_bound=kw["clear_low_bound"])
+        clear_low_bound=kw["clear_low_bound"], **_rendering(kw))
     try:
         report = _drive(run_compensate(cs), prefix=prefix + "optimise: ")
     except BaseException:
@@ -412,8 +422,7 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.argument("source")
 @click.option("-o", "--output", required=True, type=click.Path(),
               help="Correction file to write (.npz).")
-@click.option("--height-mm", type=float, default=None, help="Height (z) of the print.")
-@click.option("--size-mm", default=None, help="Fit into the box X,Y,Z mm.")
+@size_options
 @click.option("--printer", default=None, help="Printer name or .toml (default voxelprint-27um).")
 @click.option("--profile", default=None, help="Ink profile JSON (default: built-in).")
 @click.option("--views", type=int, default=3, show_default=True,
@@ -439,9 +448,11 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.option("--overwrite", is_flag=True, help="Replace an existing correction file.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @placement_options
+@rendering_options
 def compensate(source, output, height_mm, size_mm, printer, profile, views, iterations, seed,
                resolution, spp, max_cells, field_cells, halftone, density_scale, background,
-               source_options, table_size, overwrite, as_json, up, rotate, fit) -> None:
+               source_options, table_size, overwrite, as_json, up, rotate, fit,
+               **rendering) -> None:
     """Optimise a correction (colour and density factors on a coarse field) so that the proof
     of the print of SOURCE matches its render; apply it with convert --compensation."""
     from dreamprint_gui.proof.compare import empty_source_note
@@ -449,12 +460,13 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
 
     _check_source(source)
     cs = CompensateSettings(
-        source=source, output=output, height_mm=height_mm, size_mm=_size(size_mm),
+        source=source, output=output, height_mm=height_mm, size_mm=parse_size(size_mm),
         printer=printer, profile=profile, views=views, iterations=iterations, seed=seed,
         resolution=resolution, spp=spp, max_cells=max_cells, field_cells=field_cells,
         halftone=halftone, density_scale=density_scale, background=background,
         table_size=table_size, source_options=_options(source_options), overwrite=overwrite,
-        up=placement_values(up, rotate)[0], rotate=placement_values(up, rotate)[1], fit=fit)
+        up=placement_values(up, rotate)[0], rotate=placement_values(up, rotate)[1], fit=fit,
+        **rendering)
     report = _drive(run_compensate(cs))
     if as_json:
         click.echo(json.dumps(report, indent=2))

@@ -7,7 +7,13 @@ import json
 
 import click
 
-from dreamprint_gui.cli import cli, placement_options, placement_values
+from dreamprint_gui.cli import cli
+from dreamprint_gui.cli.options import (
+    parse_size,
+    placement_options,
+    placement_values,
+    size_options,
+)
 from dreamprint_gui.core.errors import DreamPrintError
 
 
@@ -218,9 +224,7 @@ def _ingp_lines(info: dict) -> list[str]:
 @cli.command()
 @click.argument("file")
 @click.option("--json", "as_json", is_flag=True, help="Print the description as JSON.")
-@click.option("--height-mm", type=float, default=None,
-              help="Also give the size in mm at this print height.")
-@click.option("--size-mm", default=None, help="Also give the size in mm fitted into X,Y,Z mm.")
+@size_options
 @placement_options
 def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | None,
             up: str, rotate: str, fit: str) -> None:
@@ -233,7 +237,6 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     MagicaVoxel file, InstantNGP snapshot (.ingp/.msgpack) or volume export (RGBA PNG slice
     folder, WxHxD_C.bin), or "demo".
     """
-    from dreamprint_gui.cli.jobs import _size
 
     if height_mm is not None and size_mm is not None:
         raise DreamPrintError("give at most one of --height-mm and --size-mm")
@@ -244,4 +247,4 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     if as_json:
         click.echo(json.dumps(info, indent=2))
     else:
-        click.echo(format_info(file, info, height_mm, _size(size_mm)))
+        click.echo(format_info(file, info, height_mm, parse_size(size_mm)))

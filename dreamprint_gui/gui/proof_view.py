@@ -305,7 +305,9 @@ class ProofPage(QWidget):
             density_scale=js.density_scale, background=js.background,
             max_cells=self.cells.value(), table_size=js.table_size or 100,
             source_options=tuple(sorted(js.source_options.items())),
-            clear_low_bound=self.clear_low_bound.isChecked())
+            clear_low_bound=self.clear_low_bound.isChecked(),
+            up=js.up, rotate=js.rotate, fit=js.fit, content=js.content,
+            objective=js.objective, intent=js.intent, sampling=js.sampling)
 
     def render(self, settings=None) -> None:
         """Start a render (of ``settings``, default :meth:`proof_settings`)."""

@@ -28,9 +28,16 @@ is :mod:`dreamprint_gui.proof.compensate` (the proof layer; this module only rea
 File (``.npz``, numpy's zip of arrays, no pickles): ``gain`` float32, and ``meta`` a JSON
 string: format, version, the source (path and fingerprint: file size and modification time, or
 those of a folder's entries), the print size in mm, the printer, the ink profile's fingerprint,
-the background, and the optimiser's report (figures before and after). A job refuses, in one
-line, a file that is not a correction, or one made for another source, size, printer, profile
-or background.
+the background, the placement, the rendering (colour table objective, rendering intent and
+content mode, as resolved for the job: :func:`rendering_key`) and the optimiser's report
+(figures before and after). A job refuses, in one line, a file that is not a correction, or one
+made for another source, size, printer, profile, placement, background, objective, intent or
+content.
+
+A file written before the rendering was recorded (no ``rendering`` in its meta) is read as made
+under the defaults (content auto, the profile's objective and intent): every such file was
+trained through the proof, whose settings then carried none of the three, so the defaults are
+what it was made under, not a guess; a job with other choices refuses it.
 """
 
 from __future__ import annotations
@@ -53,11 +60,13 @@ from dreamprint_gui.gamut.alignment import SOLID_TARGET
 
 __all__ = ["Correction", "save_correction", "load_correction", "check_correction",
            "source_fingerprint", "apply_correction", "axis_weights", "placement_key",
-           "FORMAT", "VERSION", "MAX_CELLS"]
+           "rendering_key", "RENDERING_FIELDS", "FORMAT", "VERSION", "MAX_CELLS"]
 
 FORMAT = "dreamprint-correction"
 VERSION = 1
 MAX_CELLS = 128
+# what a correction is trained under besides the placement, as the job resolved it
+RENDERING_FIELDS = ("objective", "intent", "content")
 
 
 @dataclass(frozen=True)
@@ -71,6 +80,9 @@ class Correction:
     background: str = "clear"
     report: dict[str, Any] = field(default_factory=dict)
     placement: str = ""                       # the job's orientation and fit (JSON text)
+    # the job's objective, intent and content (rendering_key); None: a file from before they
+    # were recorded, made under the defaults
+    rendering: dict[str, str] | None = None
 
     @property
     def is_identity(self) -> bool:
@@ -82,6 +94,7 @@ class Correction:
                 "print_size_mm": [float(v) for v in self.print_size_mm],
                 "printer": self.printer, "profile_fingerprint": self.profile_fingerprint,
                 "background": self.background, "placement": self.placement,
+                "rendering": self.rendering,
                 "cells_xyz": list(self.gain.shape[2::-1]),
                 "report": self.report}
 
@@ -163,7 +176,7 @@ def load_correction(path: str | os.PathLike) -> Correction:
         corr = Correction(gain, str(meta["source"]), str(meta["source_fingerprint"]),
                           size, str(meta["printer"]), str(meta["profile_fingerprint"]),
                           str(meta.get("background", "clear")), dict(meta.get("report") or {}),
-                          str(meta.get("placement", "")))
+                          str(meta.get("placement", "")), _rendering(meta.get("rendering")))
     except (KeyError, TypeError, ValueError) as exc:
         raise DreamPrintError(f"correction file lacks or has a malformed field: {exc}",
                               p) from None
@@ -172,11 +185,24 @@ def load_correction(path: str | os.PathLike) -> Correction:
     return corr
 
 
+def _rendering(value: Any) -> dict[str, str] | None:
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise TypeError(f"rendering is {type(value).__name__}, not an object")
+    return {k: str(value[k]) for k in RENDERING_FIELDS}
+
+
 def check_correction(corr: Correction, path: str | os.PathLike, *, source: str,
                      print_size_mm: tuple[float, float, float], printer: str,
-                     profile_fingerprint: str, background: str, placement: str = "") -> None:
-    """Refuse (one line) a correction made for another source, size, printer, profile or
-    background than the job's."""
+                     profile_fingerprint: str, background: str, placement: str = "",
+                     rendering: dict[str, str] | None = None,
+                     default_rendering: dict[str, str] | None = None) -> None:
+    """Refuse (one line) a correction made for another source, size, printer, profile,
+    placement, background or rendering (:func:`rendering_key`) than the job's.
+
+    ``default_rendering``: what the defaults resolve to for this job, the rendering of a file
+    that records none (see the module docstring)."""
     fp = source_fingerprint(source)
     if corr.source_fingerprint != fp:
         raise DreamPrintError(f"the correction was made for another source "
@@ -199,6 +225,14 @@ def check_correction(corr: Correction, path: str | os.PathLike, *, source: str,
     if corr.background != background:
         raise DreamPrintError(f"the correction was made with --background {corr.background}, "
                               f"this job has {background}", path)
+    made = corr.rendering if corr.rendering is not None else default_rendering
+    if rendering is not None and made is not None:
+        for k in RENDERING_FIELDS:
+            if made[k] != rendering[k]:
+                old = "" if corr.rendering is not None else \
+                    " (the defaults: the file predates recorded choices)"
+                raise DreamPrintError(f"the correction was made with --{k} {made[k]}{old}, "
+                                      f"this job has {rendering[k]}", path)
 
 
 def placement_key(ctx: Any) -> str:
@@ -207,6 +241,13 @@ def placement_key(ctx: Any) -> str:
     pj = ctx.placement_json() if hasattr(ctx, "placement_json") else {}
     return json.dumps({"orientation": pj.get("orientation"),
                        "fit": (pj.get("fit") or {}).get("mode")}, sort_keys=True)
+
+
+def rendering_key(ctx: Any) -> dict[str, str]:
+    """The colour table objective, rendering intent and content mode a job (a prepared
+    :class:`..plan.JobContext`) resolved: what a correction records and is checked against."""
+    return {"objective": str(ctx.tables.objective), "intent": str(ctx.tables.intent),
+            "content": ctx.content.mode if ctx.content is not None else "fog"}
 
 
 def axis_weights(n: int, g: int, start: int = 0, count: int | None = None

@@ -40,8 +40,13 @@ from dreamprint_gui.io.volumes.orient import (
     orient_source,
 )
 from dreamprint_gui.io.volumes.registry import reader_options
-from dreamprint_gui.job.content import CONTENT_MODES, apply_content
-from dreamprint_gui.job.correction import check_correction, load_correction, placement_key
+from dreamprint_gui.job.content import CONTENT_MODES, apply_content, choose_content
+from dreamprint_gui.job.correction import (
+    check_correction,
+    load_correction,
+    placement_key,
+    rendering_key,
+)
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
 from dreamprint_gui.job.write import JobCancelled
 from dreamprint_gui.physics.density import scalar_sigma
@@ -414,6 +419,7 @@ def prepare_job(settings: ConvertSettings,
             notify(f"building the blue-noise mask for {vx:g} x {vy:g} x {vz:g} um voxels: "
                    f"first use, about {_seconds(est)}; cached after")
     ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
+    oriented = source
     source, content = apply_content(source, s.content, thr)
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
                      palette=printer.palette(), profile_name=profile.name,
@@ -422,11 +428,16 @@ def prepare_job(settings: ConvertSettings,
                      fit=fit)
     if s.compensation is not None:
         corr = load_correction(s.compensation)
+        auto = content.mode if content.requested == "auto" else choose_content(oriented)[0]
         check_correction(corr, s.compensation, source=s.source,
                          print_size_mm=tuple(n * v for n, v in zip(shape, printer.voxel_mm,
                                                                     strict=True)),
                          printer=printer.name, profile_fingerprint=ctx.profile_fingerprint,
-                         background=s.background, placement=placement_key(ctx))
+                         background=s.background, placement=placement_key(ctx),
+                         rendering=rendering_key(ctx),
+                         default_rendering=dict(zip(("objective", "intent"),
+                                                    resolve_choice(profile, None, None),
+                                                    strict=True), content=auto))
         ctx.correction = corr
     return ctx
 

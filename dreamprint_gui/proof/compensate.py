@@ -53,6 +53,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.job.correction import (
     Correction,
     placement_key,
+    rendering_key,
     save_correction,
     source_fingerprint,
 )
@@ -132,6 +133,10 @@ class CompensateSettings:
     up: str | None = None
     rotate: int = 0
     fit: str = "occupied"
+    content: str = "auto"
+    objective: str | None = None
+    intent: str | None = None
+    sampling: str | None = None
 
     def proof_settings(self, method: str = "paper") -> ProofSettings:
         return ProofSettings(source=self.source, height_mm=self.height_mm, size_mm=self.size_mm,
@@ -143,7 +148,9 @@ class CompensateSettings:
                              layers_per_block=self.layers_per_block,
                              bands=self.bands, max_depth=self.max_depth,
                              table_size=self.table_size, source_options=self.source_options,
-                             up=self.up, rotate=self.rotate, fit=self.fit)
+                             up=self.up, rotate=self.rotate, fit=self.fit,
+                             content=self.content, objective=self.objective,
+                             intent=self.intent, sampling=self.sampling)
 
 
 def validate(s: CompensateSettings) -> None:
@@ -306,7 +313,7 @@ class _Loop:
         return Correction(np.asarray(gain, np.float32), self.s.source,
                           source_fingerprint(self.s.source), self.print_size,
                           ctx.printer.name, ctx.profile_fingerprint, self.s.background,
-                          report or {}, placement_key(ctx))
+                          report or {}, placement_key(ctx), rendering_key(ctx))
 
     def medium(self, gain: NDArray, progress=None):
         self.lab.ctx.correction = self.correction(gain)

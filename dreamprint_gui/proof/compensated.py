@@ -52,7 +52,8 @@ def compensate_settings_for(s: ConvertSettings, output: str | None = None,
         profile=None if s.profile is None else str(s.profile), seed=s.seed,
         halftone=s.halftone, density_scale=s.density_scale, background=s.background,
         table_size=s.table_size, source_options=tuple(sorted(s.source_options.items())),
-        up=s.up, rotate=s.rotate, fit=s.fit, overwrite=s.overwrite, **overrides)
+        up=s.up, rotate=s.rotate, fit=s.fit, content=s.content, objective=s.objective,
+        intent=s.intent, sampling=s.sampling, overwrite=s.overwrite, **overrides)
 
 
 @dataclass(frozen=True)
@@ -186,7 +187,8 @@ def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = Non
         resolution=train_resolution, spp=train_spp, max_cells=ps.max_cells,
         field_cells=field_cells, halftone=ps.halftone, density_scale=ps.density_scale,
         background=ps.background, table_size=ps.table_size, source_options=ps.source_options,
-        up=ps.up, rotate=ps.rotate, fit=ps.fit)
+        up=ps.up, rotate=ps.rotate, fit=ps.fit, content=ps.content, objective=ps.objective,
+        intent=ps.intent, sampling=ps.sampling)
     train = (iterations + 1) * training_views * train_resolution ** 2 * train_spp
     proof = ps.views * ps.resolution ** 2 * ps.spp * (2 if ps.noise_floor else 1)
     clock = PhaseClock({"compensating": float(train), "proof (open loop)": float(proof),

@@ -51,7 +51,8 @@ def _convert_settings(s: Any):
                            density_scale=s.density_scale, halftone=s.halftone, seed=s.seed,
                            background=s.background,
                            table_size=s.table_size, source_options=dict(s.source_options),
-                           up=s.up, rotate=s.rotate, fit=s.fit,
+                           up=s.up, rotate=s.rotate, fit=s.fit, content=s.content,
+                           objective=s.objective, intent=s.intent, sampling=s.sampling,
                            compensation=getattr(s, "compensation", None))
 
 

@@ -116,6 +116,10 @@ class ProofSettings:
     rotate: int = 0                  # degrees about the print's z
     fit: str = "occupied"            # "occupied" or "box"
     clear_low_bound: bool = False    # a modelled Clear: render again at its low bound
+    content: str = "auto"            # fog | solid | auto (job.content)
+    objective: str | None = None     # colour table objective (None: the profile's/default)
+    intent: str | None = None        # rendering intent (None: the profile's/colorimetric)
+    sampling: str | None = None      # None: the reader's default; "nearest" | "linear"
 
 
 @dataclass(frozen=True)

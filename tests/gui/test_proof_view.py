@@ -18,6 +18,19 @@ def _page(qtbot, table_size):
     return page
 
 
+def test_proof_page_proofs_the_previews_placement_and_rendering(qtbot):
+    """The tab proofs the job the Preview shows and the export prints: its placement (up,
+    rotate, fit) and rendering (content, objective, intent, sampling) come with the settings."""
+    js = ConvertSettings(source="demo", height_mm=3.0, table_size=17, up="x", rotate=90,
+                         fit="box", content="solid", objective="srgb", intent="relative",
+                         sampling="linear")
+    page = ProofPage(job_settings=lambda: js)
+    qtbot.addWidget(page)
+    ps = page.proof_settings()
+    for name in ("up", "rotate", "fit", "content", "objective", "intent", "sampling"):
+        assert getattr(ps, name) == getattr(js, name), name
+
+
 def test_proof_page_renders_and_shows_pixels(qtbot, table_size):
     page = _page(qtbot, table_size)
     with qtbot.waitSignal(page.finished, timeout=600_000) as sig:

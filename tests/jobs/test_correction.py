@@ -13,6 +13,7 @@ from dreamprint_gui.job.correction import (
     apply_correction,
     load_correction,
     placement_key,
+    rendering_key,
     save_correction,
     source_fingerprint,
 )
@@ -108,6 +109,46 @@ def test_mismatched_corrections_are_refused(tmp_path, capsys, field, value, word
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("dreamprint: error:") and err.count("\n") == 1
     assert not (tmp_path / "job").exists()
+
+
+@pytest.mark.parametrize("field, value, option", [
+    ("intent", "relative", "--intent"), ("objective", "srgb", "--objective"),
+    ("content", "solid", "--content")])
+def test_a_correction_made_under_another_rendering_is_refused(tmp_path, capsys, field, value,
+                                                              option):
+    """Made under another intent, objective or content than the job's: one line, no job."""
+    ctx = prepare_job(_settings())
+    made = rendering_key(ctx)
+    assert made[field] != value
+    p = tmp_path / "c.npz"
+    save_correction(_matching(np.ones((2, 2, 2, 4)), rendering={**made, field: value}), p)
+    assert load_correction(p).rendering == {**made, field: value}
+    with pytest.raises(DreamPrintError, match=f"made with {option} {value}, this job has "
+                                              f"{made[field]}"):
+        prepare_job(_settings(compensation=str(p)))
+    code = main(["convert", "demo", "-o", str(tmp_path / "job"), "--height-mm", str(H),
+                 "--table-size", "17", "--compensation", str(p), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2 and option in err and err.count("\n") == 1
+    assert not (tmp_path / "job").exists()
+    # the job made under the correction's own choices takes it
+    assert prepare_job(_settings(compensation=str(p), **{field: value})).correction is not None
+
+
+def test_a_correction_without_recorded_rendering_counts_as_made_under_the_defaults(tmp_path):
+    """Files written before the rendering was recorded were trained under content auto and the
+    profile's objective and intent: taken by such a job, refused by one with other choices."""
+    p = tmp_path / "c.npz"
+    save_correction(_matching(np.ones((2, 2, 2, 4))), p)
+    meta = json.loads(str(np.load(p)["meta"]))
+    del meta["rendering"]
+    np.savez(p, gain=np.ones((2, 2, 2, 4), np.float32), meta=np.array(json.dumps(meta)))
+    assert load_correction(p).rendering is None
+    assert prepare_job(_settings(compensation=str(p))).correction is not None
+    # "fog" is what auto picks for the demo, so it is the default's content too
+    assert prepare_job(_settings(compensation=str(p), content="fog")).correction is not None
+    with pytest.raises(DreamPrintError, match=r"--intent colorimetric \(the defaults"):
+        prepare_job(_settings(compensation=str(p), intent="relative"))
 
 
 def test_identity_leaves_the_samples_and_the_slices_unchanged(tmp_path):

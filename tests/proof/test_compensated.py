@@ -57,6 +57,23 @@ def test_compensate_settings_follow_the_job():
     assert str(correction_path_for("/tmp/x/job")) == "/tmp/x/job.correction.npz"
 
 
+def test_compensation_trains_under_the_jobs_intent_objective_and_content():
+    """The correction of a job is trained on the job's own rendering choices: the labels the
+    optimiser proofs are made with the job's intent, objective, content and sampling."""
+    from dreamprint_gui.proof.methods import method_labels
+
+    s = ConvertSettings(source="demo", output="/tmp/x/job", height_mm=2.0, table_size=17,
+                        intent="relative", objective="srgb", content="solid",
+                        sampling="linear")
+    ps = compensate_settings_for(s, "/tmp/x/job.correction.npz").proof_settings()
+    labels = method_labels(ps)
+    cs = labels.ctx.settings
+    assert (cs.intent, cs.objective, cs.content, cs.sampling) == (
+        "relative", "srgb", "solid", "linear")
+    assert (labels.ctx.tables.intent, labels.ctx.tables.objective) == ("relative", "srgb")
+    assert labels.ctx.content.mode == "solid"
+
+
 def test_compensated_export_refuses_an_existing_job_before_optimising(tmp_path):
     (tmp_path / "job").mkdir()
     s = ConvertSettings(source="demo", output=str(tmp_path / "job"), height_mm=2.0,

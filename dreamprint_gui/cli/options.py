@@ -1,0 +1,100 @@
+"""The command line's shared options, each declared once: the print's size (``--height-mm`` /
+``--size-mm``), its placement (``--up`` / ``--rotate`` / ``--fit``) and its rendering
+(``--content`` / ``--sampling`` / ``--objective`` / ``--intent``), and their parsing.
+
+``convert``, ``proof``, ``evaluate methods``, ``compensate`` and ``inspect`` take them from
+here, so a print is stated the same way by every command.
+"""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+from dreamprint_gui.core.errors import DreamPrintError
+
+__all__ = ["size_options", "placement_options", "rendering_options", "placement_values",
+           "parse_size"]
+
+
+def _apply(f, opts: list):
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def size_options(f):
+    """``--height-mm`` and ``--size-mm``: the print's size (exactly one of them)."""
+    return _apply(f, [
+        click.option("--height-mm", type=float, default=None,
+                     help="Height (z) of the print in mm."),
+        click.option("--size-mm", default=None,
+                     help="Fit into the box X,Y,Z mm (aspect kept)."),
+    ])
+
+
+def placement_options(f):
+    """``--up``, ``--rotate`` and ``--fit``: how a source stands and what its size measures
+    (:mod:`..io.volumes.orient`)."""
+    return _apply(f, [
+        click.option("--up", type=click.Choice(["auto", "x", "-x", "y", "-y", "z", "-z"]),
+                     default="auto", show_default=True,
+                     help="The source axis that becomes the print's up (+z). auto: what "
+                          "the file says (OpenVDB: Houdini/Maya y, Blender z, or an up axis in "
+                          "its metadata; a 3DGS splat: its cameras.json), else a guess said as "
+                          "one (splats PLY/.splat/SOG -y, SPZ y, InstantNGP z, else z)."),
+        click.option("--rotate", default="0", show_default=True,
+                     help="Turn the print about its z: 0, 90, 180 or 270 degrees "
+                          "(counter-clockwise seen from above)."),
+        click.option("--fit", type=click.Choice(["occupied", "box"]), default="occupied",
+                     show_default=True,
+                     help="What --height-mm / --size-mm measure: occupied (the object's "
+                          "non-empty bounds, empty margins cropped) or box (the file's "
+                          "declared box)."),
+    ])
+
+
+def rendering_options(f):
+    """``--content``, ``--sampling``, ``--objective`` and ``--intent``: how the source's colour
+    and density become inks (a correction is made for, and checked against, these)."""
+    return _apply(f, [
+        click.option("--content", type=click.Choice(["auto", "fog", "solid"]), default="auto",
+                     show_default=True,
+                     help="Material intent: fog (density as the source states it), solid "
+                          "(occupied voxels printed as undiluted colour, the rest empty/Clear), "
+                          "or auto (solid for voxel models, level sets and binary masks; fog "
+                          "otherwise)."),
+        click.option("--sampling", type=click.Choice(["nearest", "linear"]), default=None,
+                     help="Voxel models (.vox): nearest (default, sharp edges) or linear "
+                          "(smooth)."),
+        click.option("--objective", type=click.Choice(["srgb", "cielab", "de2000"]),
+                     default=None,
+                     help="Colour table objective (default: the profile's, else de2000)."),
+        click.option("--intent", type=click.Choice(["colorimetric", "relative", "perceptual"]),
+                     default=None,
+                     help="Rendering intent: colorimetric (nearest printable colour), relative "
+                          "(the source white maps to the printable white, then colorimetric) "
+                          "or perceptual (sRGB compressed into the gamut). Default: the "
+                          "profile's, else colorimetric."),
+    ])
+
+
+def placement_values(up: str, rotate: str) -> tuple[str | None, int]:
+    """(up or None for auto, rotate in degrees) from the CLI's values."""
+    from dreamprint_gui.io.volumes.orient import parse_rotate
+
+    return (None if up == "auto" else up), parse_rotate(rotate)
+
+
+def parse_size(text: str | None) -> tuple[float, float, float] | None:
+    """``--size-mm X,Y,Z`` (or ``XxYxZ``) as three positive millimetres; None when not given."""
+    if text is None:
+        return None
+    try:
+        v = tuple(float(x) for x in text.replace("x", ",").split(","))
+    except ValueError:
+        raise DreamPrintError(f"--size-mm must be X,Y,Z in mm, got '{text}'") from None
+    if len(v) != 3 or not all(math.isfinite(x) and x > 0 for x in v):
+        raise DreamPrintError(f"--size-mm must be three positive numbers X,Y,Z, got '{text}'")
+    return v
