@@ -14,9 +14,8 @@ import click
 
 from dreamprint_gui.cli import cli, evaluate
 from dreamprint_gui.cli.options import (
-    parse_size,
     placement_options,
-    placement_values,
+    print_spec,
     rendering_options,
     size_options,
 )
@@ -97,18 +96,11 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     if resume and overwrite:
         raise DreamPrintError("give --resume (finish the interrupted run) or --overwrite (start "
                               "again), not both")
-    up_axis, turn = placement_values(up, rotate)
-    from dreamprint_gui.io.volumes.registry import parse_reader_options
-
-    opts = parse_reader_options(source_options)
-    settings = ConvertSettings(
-        source=source, output=output, profile=profile, printer=printer, height_mm=height_mm,
-        size_mm=parse_size(size_mm), density_scale=density_scale, halftone=halftone, seed=seed,
-        workers=workers, scheduler=scheduler, background=background,
+    spec = print_spec(source, locals(), compensation)
+    settings = ConvertSettings.from_spec(
+        spec, output=output, workers=workers, scheduler=scheduler,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
-        objective=objective, intent=intent, table_size=table_size, source_options=opts,
-        content=content, sampling=sampling, up=up_axis, rotate=turn, fit=fit,
-        compensation=compensation, resume=resume)
+        resume=resume)
     made = None
     if compensate:
         if compensation is not None:

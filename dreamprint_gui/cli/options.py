@@ -15,7 +15,7 @@ import click
 from dreamprint_gui.core.errors import DreamPrintError
 
 __all__ = ["size_options", "placement_options", "rendering_options", "placement_values",
-           "parse_size"]
+           "parse_size", "print_spec"]
 
 
 def _apply(f, opts: list):
@@ -98,3 +98,20 @@ def parse_size(text: str | None) -> tuple[float, float, float] | None:
     if len(v) != 3 or not all(math.isfinite(x) and x > 0 for x in v):
         raise DreamPrintError(f"--size-mm must be three positive numbers X,Y,Z, got '{text}'")
     return v
+
+
+def print_spec(source: str, kw: dict, compensation: str | None = None):
+    """The :class:`..job.spec.PrintSpec` of a command's options (``kw``: its keywords; an
+    option the command does not take keeps the spec's default)."""
+    from dataclasses import fields
+
+    from dreamprint_gui.io.volumes.registry import parse_reader_options
+    from dreamprint_gui.job.spec import PrintSpec
+
+    up, rotate = placement_values(kw.get("up", "auto"), kw.get("rotate", "0"))
+    spec = {f.name: kw[f.name] for f in fields(PrintSpec) if f.name in kw}
+    spec.update(source=source, up=up, rotate=rotate, size_mm=parse_size(kw.get("size_mm")),
+                source_options=tuple(sorted(parse_reader_options(
+                    kw.get("source_options", ())).items())),
+                compensation=compensation)
+    return PrintSpec(**spec)

@@ -14,9 +14,8 @@ import click
 from dreamprint_gui.cli import cli, evaluate
 from dreamprint_gui.cli.jobs import _fmt_time
 from dreamprint_gui.cli.options import (
-    parse_size,
     placement_options,
-    placement_values,
+    print_spec,
     rendering_options,
     size_options,
 )
@@ -30,12 +29,6 @@ BACKGROUND_CHOICES = ("clear", "empty")
 
 _STAGES = {"preparing": "preparing", "labels": "labels", "source": "source render",
            "print": "print render (Mitsuba)", "compare": "comparing", "writing": "writing"}
-
-
-def _options(items: tuple[str, ...]) -> tuple[tuple[str, object], ...]:
-    from dreamprint_gui.io.volumes.registry import parse_reader_options
-
-    return tuple(parse_reader_options(items).items())
 
 
 def _drive(gen, prefix: str = "", quiet: bool = False):
@@ -153,25 +146,12 @@ def _common(f, halftones: bool = False):
 def _settings(source, output, method, kw, overwrite=False, compensation=None):
     from dreamprint_gui.proof.runner import ProofSettings
 
-    return ProofSettings(compensation=compensation,
-        source=source, output=output, height_mm=kw["height_mm"], size_mm=parse_size(kw["size_mm"]),
-        printer=kw["printer"], profile=kw["profile"], views=kw["views"],
-        resolution=kw["resolution"], spp=kw["spp"], method=method, halftone=kw["halftone"],
-        seed=kw["seed"], density_scale=kw["density_scale"], background=kw["background"],
-        max_cells=kw["max_cells"], layers_per_block=kw["layers_per_block"], bands=kw["bands"],
-        max_depth=kw["max_depth"], key_light=kw["key_light"], floor=kw["floor"],
-        viewing_distance_mm=kw["viewing_distance_mm"], noise_floor=kw["noise_floor"],
-        sampler=kw["sampler"], thick_spp=kw["thick_spp"], surface=kw["surface"],
-        phase=kw["phase"], overwrite=overwrite,
-        table_size=kw["table_size"], source_options=_options(kw["source_options"]),
-        up=placement_values(kw["up"], kw["rotate"])[0],
-        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"],
-        clear_low_bound=kw["clear_low_bound"], **_rendering(kw))
-
-
-def _rendering(kw: dict) -> dict:
-    """The rendering options (:func:`.options.rendering_options`) of a command's keywords."""
-    return {k: kw[k] for k in ("content", "sampling", "objective", "intent")}
+    own = ("views", "resolution", "spp", "max_cells", "layers_per_block", "bands", "max_depth",
+           "key_light", "floor", "viewing_distance_mm", "noise_floor", "sampler", "thick_spp",
+           "surface", "phase", "clear_low_bound")
+    return ProofSettings.from_spec(print_spec(source, kw, compensation), output=output,
+                                   method=method, overwrite=overwrite,
+                                   **{k: kw[k] for k in own})
 
 
 def _check_source(source: str) -> None:
@@ -399,17 +379,11 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 
     fd, name = tempfile.mkstemp(suffix=".npz", prefix="dreamprint-correction-")
     os.close(fd)
-    cs = CompensateSettings(
-        source=source, output=name, height_mm=kw["height_mm"], size_mm=parse_size(kw["size_mm"]),
-        printer=kw["printer"], profile=kw["profile"], views=views, iterations=iterations,
-        seed=kw["seed"] + 1, resolution=kw["resolution"], spp=kw["spp"],
-        max_cells=kw["max_cells"], halftone=kw["halftone"], density_scale=kw["density_scale"],
-        background=kw["background"], bands=kw["bands"], max_depth=kw["max_depth"],
-        table_size=kw["table_size"], source_options=_options(kw["source_options"]),
-        layers_per_block=kw["layers_per_block"], overwrite=True,
-        up=placement_values(kw["up"], kw["rotate"])[0],
-        rotate=placement_values(kw["up"], kw["rotate"])[1], fit=kw["fit"],
-        clear_low_bound=kw["clear_low_bound"], **_rendering(kw))
+    spec = print_spec(source, dict(kw, seed=kw["seed"] + 1))
+    cs = CompensateSettings.from_spec(
+        spec, output=name, views=views, iterations=iterations, resolution=kw["resolution"],
+        spp=kw["spp"], max_cells=kw["max_cells"], bands=kw["bands"],
+        max_depth=kw["max_depth"], layers_per_block=kw["layers_per_block"], overwrite=True)
     try:
         report = _drive(run_compensate(cs), prefix=prefix + "optimise: ")
     except BaseException:
@@ -459,14 +433,10 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
 
     _check_source(source)
-    cs = CompensateSettings(
-        source=source, output=output, height_mm=height_mm, size_mm=parse_size(size_mm),
-        printer=printer, profile=profile, views=views, iterations=iterations, seed=seed,
-        resolution=resolution, spp=spp, max_cells=max_cells, field_cells=field_cells,
-        halftone=halftone, density_scale=density_scale, background=background,
-        table_size=table_size, source_options=_options(source_options), overwrite=overwrite,
-        up=placement_values(up, rotate)[0], rotate=placement_values(up, rotate)[1], fit=fit,
-        **rendering)
+    cs = CompensateSettings.from_spec(
+        print_spec(source, {**locals(), **rendering}), output=output, views=views,
+        iterations=iterations, resolution=resolution, spp=spp, max_cells=max_cells,
+        field_cells=field_cells, overwrite=overwrite)
     report = _drive(run_compensate(cs))
     if as_json:
         click.echo(json.dumps(report, indent=2))

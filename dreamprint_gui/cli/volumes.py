@@ -238,10 +238,9 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     folder, WxHxD_C.bin), or "demo".
     """
 
-    if height_mm is not None and size_mm is not None:
-        raise DreamPrintError("give at most one of --height-mm and --size-mm")
-    if height_mm is not None and not height_mm > 0:
-        raise DreamPrintError(f"--height-mm must be positive, got {height_mm}")
+    from dreamprint_gui.core.print_size import check_print_size
+
+    check_print_size(height_mm, parse_size(size_mm), required=False)
     up_axis, turn = placement_values(up, rotate)
     info = describe(file, up_axis, turn, fit)
     if as_json:

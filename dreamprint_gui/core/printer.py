@@ -35,7 +35,8 @@ from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.core.resources import resource_path
 
 __all__ = ["PrinterProfile", "load_printer", "builtin_printers", "check_tray", "EMPTY_LABEL",
-           "DEFAULT_PRINTER", "printer_from_dict", "material_legend", "PRINTER_NAMES"]
+           "DEFAULT_PRINTER", "printer_from_dict", "material_legend", "PRINTER_NAMES",
+           "printer_choice"]
 
 FORMAT = "dreamprint-printer"
 FORMAT_VERSION = 1
@@ -129,6 +130,19 @@ def builtin_printers() -> list[str]:
     """Names of the printer profiles shipped in ``resources/printers``."""
     folder = resource_path("printers")
     return sorted(p.stem for p in folder.glob("*.toml"))
+
+
+def printer_choice(printer: PrinterProfile | str | os.PathLike | None) -> str | None:
+    """How a job states a printer: a built-in loaded from its own file by its name, another
+    by its file (or, read from no file, its name); a name or path given as text as it is."""
+    if printer is None or isinstance(printer, str | os.PathLike):
+        return None if printer is None else os.fspath(printer)
+    if printer.path is None:
+        return printer.name
+    builtin = resource_path("printers", f"{Path(printer.path).stem}.toml")
+    if Path(printer.path).resolve() == Path(builtin).resolve():
+        return Path(printer.path).stem
+    return printer.path
 
 
 def _positive_triple(d: dict, key: str, src: str) -> tuple[float, float, float]:

@@ -106,10 +106,10 @@ def convert_settings(source_path: str, profile_path: str | None, printer, *,
     becomes +z, None or "auto" for the source's convention; ``rotate`` quarter turns about z
     in degrees; ``fit`` "occupied" or "box"; ``source_options`` the reader's options, as the
     CLI's ``--option``)."""
+    from dreamprint_gui.core.printer import printer_choice
     from dreamprint_gui.job.plan import ConvertSettings
 
-    if printer is not None and not isinstance(printer, str | os.PathLike):
-        printer = printer.path or printer.name
+    printer = printer_choice(printer)
     extra = {} if table_size is None else {"table_size": int(table_size)}
     if intent is not None:
         extra["intent"] = intent

@@ -16,6 +16,7 @@ the aspect kept, pixels shown as blocks when enlarged) and the dE2000 map has it
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -294,20 +295,12 @@ class ProofPage(QWidget):
         js = self._job_settings() if self._job_settings is not None else None
         if js is None or not getattr(js, "source", None):
             return None
-        printer = js.printer
-        return ProofSettings(
-            source=str(js.source), height_mm=js.height_mm, size_mm=js.size_mm,
-            printer=printer if isinstance(printer, str | type(None)) else str(printer),
-            profile=None if js.profile is None else str(js.profile),
-            views=self.views.value(), resolution=self.resolution.value(),
+        spec = replace(js.spec, halftone=str(self.halftone.currentData()))
+        return ProofSettings.from_spec(
+            spec, views=self.views.value(), resolution=self.resolution.value(),
             spp=self.spp.value(), method=str(self.method.currentData()),
-            halftone=str(self.halftone.currentData()), seed=js.seed,
-            density_scale=js.density_scale, background=js.background,
-            max_cells=self.cells.value(), table_size=js.table_size or 100,
-            source_options=tuple(sorted(js.source_options.items())),
-            clear_low_bound=self.clear_low_bound.isChecked(),
-            up=js.up, rotate=js.rotate, fit=js.fit, content=js.content,
-            objective=js.objective, intent=js.intent, sampling=js.sampling)
+            max_cells=self.cells.value(),
+            clear_low_bound=self.clear_low_bound.isChecked())
 
     def render(self, settings=None) -> None:
         """Start a render (of ``settings``, default :meth:`proof_settings`)."""

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.print_size import check_print_size
 from dreamprint_gui.core.printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from dreamprint_gui.core.profile import INKS, load_profile
 from dreamprint_gui.gamut import get_tables
@@ -48,6 +49,7 @@ from dreamprint_gui.job.correction import (
     rendering_key,
 )
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
+from dreamprint_gui.job.spec import HasSpec
 from dreamprint_gui.job.write import JobCancelled
 from dreamprint_gui.physics.density import scalar_sigma
 
@@ -60,7 +62,10 @@ MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for lay
 
 
 @dataclass(frozen=True)
-class ConvertSettings:
+class ConvertSettings(HasSpec):
+    """A conversion: the print (the :class:`..spec.PrintSpec` fields, ``.spec``) and the job's
+    own options (output, workers, scheduler, threshold, slabs, overwrite)."""
+
     source: str
     output: str | os.PathLike | None = None
     profile: str | os.PathLike | None = None
@@ -327,8 +332,7 @@ def check_settings(settings: ConvertSettings) -> None:
             raise DreamPrintError(str(exc)) from None
     if s.background not in ("clear", "empty"):
         raise DreamPrintError(f"--background must be clear or empty, not '{s.background}'")
-    if (s.height_mm is None) == (s.size_mm is None):
-        raise DreamPrintError("give exactly one of --height-mm and --size-mm")
+    check_print_size(s.height_mm, s.size_mm)
     if not (np.isfinite(s.density_scale) and s.density_scale >= 0):
         raise DreamPrintError(f"--density-scale must be >= 0, got {s.density_scale}")
     if s.workers is not None and s.workers < 1:

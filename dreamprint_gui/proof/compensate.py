@@ -57,12 +57,12 @@ from dreamprint_gui.job.correction import (
     save_correction,
     source_fingerprint,
 )
-from dreamprint_gui.job.plan import JobCancelled
+from dreamprint_gui.job.plan import ConvertSettings, JobCancelled
+from dreamprint_gui.job.spec import HasSpec
 from dreamprint_gui.proof.cameras import View, orbit_views
 from dreamprint_gui.proof.compare import EMPTY_SOURCE_KEYS, compare_view, summarise
 from dreamprint_gui.proof.labels import EngineLabels
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
-from dreamprint_gui.proof.methods import _convert_settings
 from dreamprint_gui.proof.optics import resolve_optics
 from dreamprint_gui.proof.print_render import render_print
 from dreamprint_gui.proof.runner import (
@@ -100,7 +100,10 @@ _ALPHA_MIN = 0.02
 
 
 @dataclass(frozen=True)
-class CompensateSettings:
+class CompensateSettings(HasSpec):
+    """A compensation: the print it is made for (the :class:`..job.spec.PrintSpec` fields,
+    ``.spec``; no correction applied) and the optimiser's own options."""
+
     source: str
     output: str | None = None
     height_mm: float | None = None
@@ -137,23 +140,20 @@ class CompensateSettings:
     objective: str | None = None
     intent: str | None = None
     sampling: str | None = None
+    compensation: str | None = None  # always None: a correction is made from the open loop
 
     def proof_settings(self, method: str = "paper") -> ProofSettings:
-        return ProofSettings(source=self.source, height_mm=self.height_mm, size_mm=self.size_mm,
-                             printer=self.printer, profile=self.profile, views=self.views,
-                             resolution=self.resolution, spp=self.spp, method=method,
-                             halftone=self.halftone, seed=self.seed,
-                             density_scale=self.density_scale, background=self.background,
-                             max_cells=self.max_cells,
-                             layers_per_block=self.layers_per_block,
-                             bands=self.bands, max_depth=self.max_depth,
-                             table_size=self.table_size, source_options=self.source_options,
-                             up=self.up, rotate=self.rotate, fit=self.fit,
-                             content=self.content, objective=self.objective,
-                             intent=self.intent, sampling=self.sampling)
+        return ProofSettings.from_spec(self.spec, views=self.views,
+                                       resolution=self.resolution, spp=self.spp,
+                                       method=method, max_cells=self.max_cells,
+                                       layers_per_block=self.layers_per_block,
+                                       bands=self.bands, max_depth=self.max_depth)
 
 
 def validate(s: CompensateSettings) -> None:
+    if s.compensation is not None:
+        raise DreamPrintError("a correction is optimised for the job without one: give no "
+                              "--compensation")
     if not 1 <= int(s.views) <= 16:
         raise DreamPrintError(f"--views must be 1..16, got {s.views}")
     if not 0 <= int(s.iterations) <= 50:
@@ -294,7 +294,7 @@ class _Loop:
                  cancelled: Callable[[], bool]) -> None:
         self.s = s
         self.cancelled = cancelled
-        self.lab = EngineLabels(_convert_settings(s.proof_settings()))
+        self.lab = EngineLabels(ConvertSettings.from_spec(s.spec))
         lab = self.lab
         self.bands = spectral_bands(lab.profile, s.bands)
         self.print_size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))

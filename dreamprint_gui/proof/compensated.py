@@ -46,14 +46,8 @@ def compensate_settings_for(s: ConvertSettings, output: str | None = None,
     """The compensation of the job ``s`` (its source, size, placement, printer, profile, seed,
     halftoning, density, background, table), written to ``output``; ``overrides`` set the
     optimiser's own settings (views, iterations, resolution, spp)."""
-    return CompensateSettings(
-        source=str(s.source), output=output, height_mm=s.height_mm, size_mm=s.size_mm,
-        printer=None if s.printer is None else str(s.printer),
-        profile=None if s.profile is None else str(s.profile), seed=s.seed,
-        halftone=s.halftone, density_scale=s.density_scale, background=s.background,
-        table_size=s.table_size, source_options=tuple(sorted(s.source_options.items())),
-        up=s.up, rotate=s.rotate, fit=s.fit, content=s.content, objective=s.objective,
-        intent=s.intent, sampling=s.sampling, overwrite=s.overwrite, **overrides)
+    return CompensateSettings.from_spec(replace(s.spec, compensation=None), output=output,
+                                        overwrite=s.overwrite, **overrides)
 
 
 @dataclass(frozen=True)
@@ -181,14 +175,10 @@ def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = Non
     No file stays behind (the correction lives in a temporary file while the proof reads it).
     """
     ps = replace(ps, method="paper", compensation=None, output=None)
-    cs = CompensateSettings(
-        source=ps.source, height_mm=ps.height_mm, size_mm=ps.size_mm, printer=ps.printer,
-        profile=ps.profile, views=training_views, iterations=iterations, seed=ps.seed + 1,
+    cs = CompensateSettings.from_spec(
+        replace(ps.spec, seed=ps.seed + 1), views=training_views, iterations=iterations,
         resolution=train_resolution, spp=train_spp, max_cells=ps.max_cells,
-        field_cells=field_cells, halftone=ps.halftone, density_scale=ps.density_scale,
-        background=ps.background, table_size=ps.table_size, source_options=ps.source_options,
-        up=ps.up, rotate=ps.rotate, fit=ps.fit, content=ps.content, objective=ps.objective,
-        intent=ps.intent, sampling=ps.sampling)
+        field_cells=field_cells)
     train = (iterations + 1) * training_views * train_resolution ** 2 * train_spp
     proof = ps.views * ps.resolution ** 2 * ps.spp * (2 if ps.noise_floor else 1)
     clock = PhaseClock({"compensating": float(train), "proof (open loop)": float(proof),

@@ -44,22 +44,10 @@ METHODS = ("paper", "no-alignment", "brute-force")
 _CL = INKS.index("Cl")
 
 
-def _convert_settings(s: Any):
-
-    return ConvertSettings(source=s.source, output=None, profile=s.profile, printer=s.printer,
-                           height_mm=s.height_mm, size_mm=s.size_mm,
-                           density_scale=s.density_scale, halftone=s.halftone, seed=s.seed,
-                           background=s.background,
-                           table_size=s.table_size, source_options=dict(s.source_options),
-                           up=s.up, rotate=s.rotate, fit=s.fit, content=s.content,
-                           objective=s.objective, intent=s.intent, sampling=s.sampling,
-                           compensation=getattr(s, "compensation", None))
-
-
 def method_labels(s: Any):
     """The label source of ``s.method`` for proof settings ``s``."""
 
-    cs = _convert_settings(s)
+    cs = ConvertSettings.from_spec(s.spec)
     if s.method == "paper":
         return EngineLabels(cs)
     if s.method == "brute-force":

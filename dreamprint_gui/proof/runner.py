@@ -29,6 +29,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gamut.alignment import predicted_appearance
 from dreamprint_gui.job.halftone import HALFTONE_METHODS
 from dreamprint_gui.job.plan import JobCancelled
+from dreamprint_gui.job.spec import HasSpec
 from dreamprint_gui.physics.clear_bounds import clear_is_modelled, clear_low_bound
 from dreamprint_gui.proof.cameras import orbit_views
 from dreamprint_gui.proof.clear_report import clear_report
@@ -81,7 +82,10 @@ THICK_T = 0.1     # direct transmittance (luminance) below which a pixel gets th
 
 
 @dataclass(frozen=True)
-class ProofSettings:
+class ProofSettings(HasSpec):
+    """A proof: the print (the :class:`..job.spec.PrintSpec` fields, ``.spec``; or a job
+    folder as the source) and the proof's own options (cameras, renderer, figures)."""
+
     source: str                      # a volume file, 'demo', or a job folder
     output: str | None = None
     height_mm: float | None = None

@@ -93,16 +93,16 @@ def test_cancel_writes_nothing(tmp_path):
 def test_gamut_floor_of_an_identity_table_is_the_source(monkeypatch):
     """With tables that deposit exactly the asked colour and density the floor's render is the
     source's own: dE2000 0 and coverage error 0 (the plumbing of runner.gamut_floor)."""
+    from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.proof import runner
     from dreamprint_gui.proof.cameras import orbit_views
     from dreamprint_gui.proof.labels import EngineLabels
-    from dreamprint_gui.proof.methods import _convert_settings
     from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
     from dreamprint_gui.proof.source_render import render_source
     from dreamprint_gui.proof.spectral import spectral_bands
 
-    lab = EngineLabels(_convert_settings(ProofSettings(source="demo", height_mm=2,
-                                                       table_size=17)))
+    lab = EngineLabels(ConvertSettings.from_spec(ProofSettings(source="demo", height_mm=2,
+                                                               table_size=17).spec))
     rng = np.random.default_rng(0)
     sigma = rng.uniform(0, 20, (6, 6, 6)).astype(np.float32)
     sigma[sigma < 5] = 0.0

@@ -2,18 +2,18 @@
 
 import numpy as np
 
+from dreamprint_gui.job.plan import ConvertSettings
 from dreamprint_gui.proof.methods import (
     BruteForceLabels,
     JointLabels,
-    _convert_settings,
     _softmax,
 )
 from dreamprint_gui.proof.runner import ProofSettings
 
 
 def _settings(method):
-    return _convert_settings(ProofSettings(source="demo", height_mm=1.5, method=method,
-                                           table_size=17, seed=4))
+    ps = ProofSettings(source="demo", height_mm=1.5, method=method, table_size=17, seed=4)
+    return ConvertSettings.from_spec(ps.spec)
 
 
 def test_brute_force_hypervoxels_share_their_concentrations():

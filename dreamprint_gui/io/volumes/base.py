@@ -32,6 +32,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.print_size import check_print_size
 from dreamprint_gui.io.volumes.srgb_encode import encode_inplace
 
 __all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
@@ -68,8 +69,7 @@ def grid_for_source(source, voxel_mm, *, height_mm: float | None = None,
     Exactly one must be given.  The grid covers the source's bounds (or ``bounds``, e.g. the
     occupied part: ``--fit occupied``) and is centred on them.
     """
-    if (height_mm is None) == (size_mm is None):
-        raise DreamPrintError("give exactly one of a height (mm) or a box size (mm)")
+    check_print_size(height_mm, size_mm)
     vox = tuple(float(v) for v in voxel_mm)
     if len(vox) != 3 or not all(math.isfinite(v) and v > 0 for v in vox):
         raise DreamPrintError(f"printer voxel size must be three positive numbers, got {voxel_mm}")
