@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_convert import PRINTER, jobs_dir  # noqa: E402
 from bench_convert import height_for as demo_height
 
-from dreamprint_gui.io.volumes.dense import _window_kernel  # noqa: E402
+from dreamprint_gui.io.volumes.dense import window_kernel  # noqa: E402
 from dreamprint_gui.io.volumes.dense_sampler import (  # noqa: E402
     COLOUR,
     COLOUR_WHERE_DENSE,
@@ -97,7 +97,7 @@ def _sample_window(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, w
             dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx, vx,
                         rslot, srows, planes, planes_nz, plane_layer, row, cpl, values, values,
                         dens[k], RAW, np.float32(1.0))
-            _window_kernel(values, low, inv_width, lut, density, rgb[k], dens[k])
+            window_kernel(values, low, inv_width, lut, density, rgb[k], dens[k])
         if use_outside:
             d = dens[k]
             for j in range(d.shape[0] // nx):

@@ -1,126 +1,31 @@
 """The ``dreamprint`` command line: thin over the layers below (proof, job, gamut, physics, io).
 
-Every command reports a problem the same way: exit status 2 and one line
-``dreamprint: error: <file>: <problem>`` on stderr, no traceback (``--debug`` shows one).
-Command groups live in sibling modules, each registering its commands on :data:`cli`. A
-command imports the layers it calls inside its function, so that ``dreamprint --help`` and a
-mistyped option answer at once, without loading numba, colour-science and the colour tables
-(the one reason for an import of the package's own modules inside a function).
+:mod:`.group` holds the command group and :func:`main`; :mod:`.options` the options every
+command shares (the print's size, placement and rendering, stated once); :mod:`.progress` the
+progress lines; the sibling modules register their commands on the group when this package
+imports them. A command imports the layers it calls inside its function, so that
+``dreamprint --help`` and a mistyped option answer at once, without loading numba,
+colour-science and the colour tables (the one reason for an import of the package's own
+modules inside a function).
 """
 
 from __future__ import annotations
 
-import os
 import sys
 
-import click
+from dreamprint_gui.cli import (  # noqa: F401 - each registers its commands on the group
+    gamut,
+    icc,
+    jobs,
+    physics,
+    proof,
+    spectra,
+    target,
+    volumes,
+)
+from dreamprint_gui.cli.group import cli, main
 
-from dreamprint_gui.core.errors import DreamPrintError
-
-
-class _Group(click.Group):
-    """The top-level group: a reader that closes the pipe early (``dreamprint ... | head -1``)
-    ends the command quietly with status 0, as for any Unix filter."""
-
-    def invoke(self, ctx: click.Context):
-        try:
-            return super().invoke(ctx)
-        except BrokenPipeError:
-            _stdout_to_devnull()
-            raise click.exceptions.Exit(0) from None
-
-
-def _stdout_to_devnull() -> None:
-    """Point stdout at /dev/null so that the interpreter's final flush of what is still buffered
-    does not fail on the closed pipe (Python's documented recipe, library/signal.html)."""
-    try:
-        fd = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(fd, sys.stdout.fileno())
-        os.close(fd)
-    except (OSError, ValueError, AttributeError):  # no real file descriptor (tests)
-        pass
-
-
-@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
-@click.option("--debug", is_flag=True, help="Show a traceback on error.")
-@click.version_option(package_name="dreamprint", prog_name="dreamprint")
-def cli(debug: bool) -> None:
-    """DreamPrint: radiance volumes to PolyJet print jobs."""
-
-
-def step_progress(label: str, quiet: bool = False):
-    """``progress(done, total)`` printing ``label: done/total steps, elapsed, about T left``
-    on stderr after each step (a step of the slow commands, seconds each: fits, render
-    passes); ``progress(0, total)``, called once the inputs are checked, says what started.
-    None when ``quiet``."""
-    import time
-
-    if quiet:
-        return None
-    t0 = [time.monotonic()]
-
-    def report(done: int, total: int) -> None:
-        if done == 0:
-            t0[0] = time.monotonic()
-            click.echo(f"{label}: 0/{total}, started", err=True)
-            return
-        el = time.monotonic() - t0[0]
-        left = el / done * (total - done) if done else float("nan")
-        tail = f", about {left:.0f} s left" if done < total else ", done"
-        click.echo(f"{label}: {done}/{total} ({el:.0f} s{tail})", err=True)
-
-    return report
-
-
-@cli.group()
-def evaluate() -> None:
-    """Reproduce the paper's evaluations and check finished jobs."""
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``dreamprint``; returns the exit status."""
-    args = sys.argv[1:] if argv is None else list(argv)
-    debug = "--debug" in args
-    try:
-        cli.main(args=args, prog_name="dreamprint", standalone_mode=False)
-    except click.exceptions.Exit as exc:
-        return exc.exit_code
-    except click.BadParameter as exc:  # e.g. a path that is missing or a folder
-        click.echo(f"dreamprint: error: {exc.format_message()}", err=True)
-        return 2
-    except click.ClickException as exc:
-        exc.show()
-        return exc.exit_code
-    except (click.Abort, KeyboardInterrupt) as exc:
-        # click turns Ctrl-C into Abort; a command's KeyboardInterrupt may say what was kept
-        why = str(exc if isinstance(exc, KeyboardInterrupt) else exc.__cause__ or "")
-        click.echo(f"dreamprint: interrupted{' ' + why if why else ''}", err=True)
-        return 130
-    except DreamPrintError as exc:
-        if debug:
-            raise
-        click.echo(f"dreamprint: error: {exc}", err=True)
-        return 2
-    except Exception as exc:  # noqa: BLE001 - the operator gets one line, --debug the rest
-        if debug:
-            raise
-        filename = getattr(exc, "filename", None)
-        where = f"{filename}: " if filename else ""
-        msg = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
-        click.echo(f"dreamprint: error: {where}{msg}", err=True)
-        return 2
-    return 0
-
-
-# Command modules register themselves on `cli` when imported.
-from dreamprint_gui.cli import physics  # noqa: E402,F401,I001
-from dreamprint_gui.cli import spectra  # noqa: E402,F401,I001
-from dreamprint_gui.cli import volumes  # noqa: E402,F401,I001
-from dreamprint_gui.cli import jobs  # noqa: E402,F401,I001
-from dreamprint_gui.cli import gamut  # noqa: E402,F401,I001
-from dreamprint_gui.cli import proof  # noqa: E402,F401,I001
-from dreamprint_gui.cli import icc  # noqa: E402,F401,I001
-from dreamprint_gui.cli import target  # noqa: E402,F401,I001
+__all__ = ["cli", "main"]
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -9,18 +9,10 @@ from pathlib import Path
 
 import click
 
-from dreamprint_gui.cli import cli
+from dreamprint_gui.cli.group import cli
+from dreamprint_gui.cli.options import INTENT_HELP, INTENTS, OBJECTIVE_HELP, OBJECTIVES
+from dreamprint_gui.cli.progress import progress_bar
 from dreamprint_gui.core.errors import DreamPrintError
-
-OBJECTIVES = click.Choice(["srgb", "cielab", "de2000"])
-INTENTS = click.Choice(["colorimetric", "relative", "perceptual"])
-OBJECTIVE_HELP = ("Table objective: srgb (paper eq. 10), cielab (dE76) or de2000 (CIEDE2000). "
-                   "Default: the profile's, else de2000 (see docs/physics.md).")
-INTENT_HELP = ("Rendering intent for colours outside the printable gamut: colorimetric "
-                "(nearest printable colour), relative (ICC relative colorimetric: the source "
-                "white maps to the printable white, then colorimetric) or perceptual (SGCK "
-                "compression in CAM16-UCS). Default: the profile's, else colorimetric.")
-
 
 _PRINTER = click.option(
     "--printer", default=None, metavar="P",
@@ -71,21 +63,6 @@ def _read_rgb_file(path: str) -> list[list[float]]:
     if not out:
         raise DreamPrintError("no colours after the header", p)
     return out
-
-
-def progress_bar(what: str = ""):
-    """A table build's progress on stderr (also with --json: stdout carries the JSON), every
-    10 %. Called only while building: a table loaded from the cache prints nothing."""
-    state = {"last": -1}
-    label = f"building colour tables{f' ({what})' if what else ''}"
-
-    def report(fraction: float) -> None:
-        pct = int(100 * fraction)
-        if pct // 10 != state["last"]:
-            state["last"] = pct // 10
-            click.echo(f"{label}: {pct:3d} %", err=True)
-
-    return report
 
 
 @cli.command()

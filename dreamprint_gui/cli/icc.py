@@ -6,14 +6,9 @@ import json
 
 import click
 
-from dreamprint_gui.cli import cli
-from dreamprint_gui.cli.gamut import (
-    INTENT_HELP,
-    INTENTS,
-    OBJECTIVE_HELP,
-    OBJECTIVES,
-    progress_bar,
-)
+from dreamprint_gui.cli.group import cli
+from dreamprint_gui.cli.options import INTENT_HELP, INTENTS, OBJECTIVE_HELP, OBJECTIVES
+from dreamprint_gui.cli.progress import progress_bar
 
 
 @cli.command()

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 import signal
 import sys
 import time
@@ -12,23 +11,15 @@ from pathlib import Path
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli.group import cli, evaluate
 from dreamprint_gui.cli.options import (
     placement_options,
     print_spec,
     rendering_options,
     size_options,
 )
+from dreamprint_gui.cli.progress import fmt_time
 from dreamprint_gui.core.errors import DreamPrintError
-
-
-def _fmt_time(s: float | None) -> str:
-    if s is None or not math.isfinite(s):
-        return "--:--"
-    s = int(round(s))
-    if s >= 3600:
-        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
-    return f"{s // 60}:{s % 60:02d}"
 
 
 @cli.command()
@@ -90,7 +81,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     warnings (mostly Clear, clamping, out of gamut) go to stderr; after the job, how many voxels
     were clamped. --quiet silences both; --json adds them to the printed manifest."""
     from dreamprint_gui.job.cluster import quiet_client_logs
-    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled, _scheduler_kind
+    from dreamprint_gui.job.plan import ConvertSettings, JobCancelled, scheduler_kind
     from dreamprint_gui.job.run import run_conversion
 
     if resume and overwrite:
@@ -113,7 +104,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
 
     old = signal.signal(signal.SIGTERM, on_term)
     root = click.get_current_context().find_root()
-    if _scheduler_kind(settings) == "distributed" and not root.params.get("debug"):
+    if scheduler_kind(settings) == "distributed" and not root.params.get("debug"):
         quiet_client_logs()
     gen = run_conversion(settings)
     progress = _Progress(sys.stderr.isatty(), quiet)
@@ -187,7 +178,7 @@ def _compensate_for(settings, quiet: bool) -> Path:
                 report = stop.value
                 break
             if p.stage == "iteration" and not quiet:
-                click.echo(f"[compensate] {p.message}  elapsed {_fmt_time(p.elapsed_s)}",
+                click.echo(f"[compensate] {p.message}  elapsed {fmt_time(p.elapsed_s)}",
                            err=True)
     except JobCancelled:
         raise DreamPrintError("cancelled; nothing was written", out) from None
@@ -218,7 +209,7 @@ class _Progress:
         self.first = 0
 
     def _info(self, _item=None) -> str:
-        return f"{self.rate / 1e6:.1f} Mvox/s, {_fmt_time(self.eta)} left"
+        return f"{self.rate / 1e6:.1f} Mvox/s, {fmt_time(self.eta)} left"
 
     def update(self, p) -> None:
         if self.quiet:

@@ -14,8 +14,19 @@ import click
 
 from dreamprint_gui.core.errors import DreamPrintError
 
-__all__ = ["size_options", "placement_options", "rendering_options", "placement_values",
-           "parse_size", "print_spec"]
+__all__ = ["OBJECTIVES", "INTENTS", "OBJECTIVE_HELP", "INTENT_HELP", "size_options",
+           "placement_options", "rendering_options", "placement_values", "parse_size",
+           "print_spec"]
+
+# the colour table objective and rendering intent (also of lookup, gamut and icc)
+OBJECTIVES = click.Choice(["srgb", "cielab", "de2000"])
+INTENTS = click.Choice(["colorimetric", "relative", "perceptual"])
+OBJECTIVE_HELP = ("Table objective: srgb (paper eq. 10), cielab (dE76) or de2000 (CIEDE2000). "
+                  "Default: the profile's, else de2000 (see docs/physics.md).")
+INTENT_HELP = ("Rendering intent for colours outside the printable gamut: colorimetric "
+               "(nearest printable colour), relative (ICC relative colorimetric: the source "
+               "white maps to the printable white, then colorimetric) or perceptual (SGCK "
+               "compression in CAM16-UCS). Default: the profile's, else colorimetric.")
 
 
 def _apply(f, opts: list):
@@ -68,15 +79,8 @@ def rendering_options(f):
         click.option("--sampling", type=click.Choice(["nearest", "linear"]), default=None,
                      help="Voxel models (.vox): nearest (default, sharp edges) or linear "
                           "(smooth)."),
-        click.option("--objective", type=click.Choice(["srgb", "cielab", "de2000"]),
-                     default=None,
-                     help="Colour table objective (default: the profile's, else de2000)."),
-        click.option("--intent", type=click.Choice(["colorimetric", "relative", "perceptual"]),
-                     default=None,
-                     help="Rendering intent: colorimetric (nearest printable colour), relative "
-                          "(the source white maps to the printable white, then colorimetric) "
-                          "or perceptual (sRGB compressed into the gamut). Default: the "
-                          "profile's, else colorimetric."),
+        click.option("--objective", type=OBJECTIVES, default=None, help=OBJECTIVE_HELP),
+        click.option("--intent", type=INTENTS, default=None, help=INTENT_HELP),
     ])
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate
+from dreamprint_gui.cli.group import cli, evaluate
 from dreamprint_gui.core.errors import DreamPrintError
 
 
@@ -186,7 +186,7 @@ def _calibrate_chart(base, chart: Path, reflectance: Path, name: str | None,
 
     files = read_chart(chart, reflectance, base.wavelengths_nm)
     recipes, spectra = files.recipes, files.reflectance
-    from dreamprint_gui.cli import step_progress
+    from dreamprint_gui.cli.progress import step_progress
 
     fit = fit_chart(base, recipes, spectra, folds=folds, saunderson=saunderson,
                     name=name or output.stem, source=str(chart),

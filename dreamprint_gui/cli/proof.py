@@ -11,14 +11,14 @@ from pathlib import Path
 
 import click
 
-from dreamprint_gui.cli import cli, evaluate
-from dreamprint_gui.cli.jobs import _fmt_time
+from dreamprint_gui.cli.group import cli, evaluate
 from dreamprint_gui.cli.options import (
     placement_options,
     print_spec,
     rendering_options,
     size_options,
 )
+from dreamprint_gui.cli.progress import fmt_time
 from dreamprint_gui.core.errors import DreamPrintError
 
 # Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
@@ -59,14 +59,14 @@ def _drive(gen, prefix: str = "", quiet: bool = False):
             if p.stage in ("done", "preparing") or quiet:  # a bad input stays one line
                 continue
             if p.stage == "iteration":
-                click.echo(f"{prefix}{p.message}  elapsed {_fmt_time(p.elapsed_s)}", err=True)
+                click.echo(f"{prefix}{p.message}  elapsed {fmt_time(p.elapsed_s)}", err=True)
                 continue
             if tty or now - last_line > 10 or p.done == p.total:
                 last_line = now
                 frac = p.done / p.total if p.total else 0.0
                 bar = "#" * int(frac * 30) + "-" * (30 - int(frac * 30))
                 line = (f"{prefix}{_STAGES.get(p.stage, p.stage):22s} [{bar}] {p.done}/{p.total}"
-                        f"  elapsed {_fmt_time(p.elapsed_s)}")
+                        f"  elapsed {fmt_time(p.elapsed_s)}")
                 click.echo(("\r" + line) if tty else line, err=True, nl=not tty)
     except JobCancelled:
         raise DreamPrintError("cancelled; nothing was written") from None
@@ -241,7 +241,7 @@ def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickn
                       geometry=geometry, thickness_mm=thickness_mm,
                       spp=kw["spp"] if spp_given else DEFAULT_CHART_SPP, bands=kw["bands"],
                       seed=kw["seed"], max_depth=kw["max_depth"], overwrite=overwrite)
-    from dreamprint_gui.cli import step_progress
+    from dreamprint_gui.cli.progress import step_progress
 
     rep = run_chart_proof(s, step_progress("chart proof: render passes (3 bands each)"))
     if kw["as_json"]:

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from dreamprint_gui.cli import cli
+from dreamprint_gui.cli.group import cli
 
 _QUANTITIES = ["reflectance", "transmittance", "absorbance", "spd"]
 SUMMARY_SAMPLES = 12  # more samples than this: the text lists the first SUMMARY_HEAD only

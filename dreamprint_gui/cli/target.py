@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from dreamprint_gui.cli import cli
+from dreamprint_gui.cli.group import cli
 from dreamprint_gui.core.errors import DreamPrintError
 
 

@@ -7,7 +7,7 @@ import json
 
 import click
 
-from dreamprint_gui.cli import cli
+from dreamprint_gui.cli.group import cli
 from dreamprint_gui.cli.options import (
     parse_size,
     placement_options,

@@ -11,7 +11,7 @@ Defines
   tray before any work.
 - :func:`slab_plan`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan) for
   :func:`job_workers` workers, and
-  :func:`_scheduler_kind`: which Dask scheduler runs them (:mod:`.run`).
+  :func:`scheduler_kind`: which Dask scheduler runs them (:mod:`.run`).
 """
 
 from __future__ import annotations
@@ -55,7 +55,8 @@ from dreamprint_gui.physics.density import scalar_sigma
 
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
            "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
-           "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS", "profile_for_printer"]
+           "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS", "profile_for_printer",
+           "scheduler_kind"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
@@ -472,7 +473,9 @@ def slab_plan(ctx: JobContext, workers: int) -> list[tuple[int, int]]:
     return [(z, min(nz, z + step)) for z in range(0, nz, step)]
 
 
-def _scheduler_kind(s: ConvertSettings) -> str:
+def scheduler_kind(s: ConvertSettings) -> str:
+    """The kind of scheduler ``--scheduler`` names: threads, sync, processes or distributed
+    (an address); anything else is refused in one line."""
     sch = (s.scheduler or "threads").strip()
     if sch in ("threads", "sync", "processes"):
         return sch

@@ -67,13 +67,13 @@ from dreamprint_gui.gamut.tables import F_CONC, F_GREY, F_SIGMA, interpolate_fie
 from dreamprint_gui.job.plan import (
     ConvertSettings,
     JobContext,
-    _scheduler_kind,
     job_workers,
     prepare_job,
+    scheduler_kind,
     slab_plan,
 )
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
-from dreamprint_gui.job.slab import _write_new, encode_slab
+from dreamprint_gui.job.slab import encode_slab, write_new
 from dreamprint_gui.physics.colorimetry import delta_E2000
 
 __all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measured_rate",
@@ -390,7 +390,7 @@ def _write_seconds(pngs: list[bytes]) -> float:
     try:
         t0 = time.perf_counter()
         for i, png in enumerate(pngs):
-            _write_new(os.path.join(folder, f"{i:05d}.png"), png)
+            write_new(os.path.join(folder, f"{i:05d}.png"), png)
         return (time.perf_counter() - t0) / max(1, len(pngs))
     except OSError:
         return 0.0
@@ -502,7 +502,7 @@ def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
     n_workers = job_workers(s)
     disk, spv, n_slabs, n_layers, write_s, job_slabs = _slab_estimate(ctx, n_workers)
     # the slabs that run at once: no more than the job has, one with --scheduler sync
-    workers = 1 if _scheduler_kind(s) == "sync" else max(1, min(n_workers, job_slabs))
+    workers = 1 if scheduler_kind(s) == "sync" else max(1, min(n_workers, job_slabs))
     seconds = CONVERT_OVERHEAD_S + (spv * total + write_s * nz) / (workers * PARALLEL_EFFICIENCY)
     rate = total / seconds
     rate_source = (f"timed on {n_slabs} of this job's slabs, {n_layers} layer"

@@ -44,10 +44,10 @@ from dreamprint_gui.job.plan import (
     ConvertSettings,
     JobCancelled,
     JobContext,
-    _scheduler_kind,
     check_settings,
     job_workers,
     prepare_job,
+    scheduler_kind,
     slab_plan,
 )
 from dreamprint_gui.job.preflight import preflight as estimate
@@ -286,7 +286,7 @@ def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = N
     if context is None:
         check_settings(settings)  # a missing size is reported before "opening the source"
     client = None
-    if _scheduler_kind(settings) == "distributed":
+    if scheduler_kind(settings) == "distributed":
         settings = absolute_paths(settings)
         client = connect(settings.scheduler)  # an unreachable scheduler: before any work
     try:
@@ -334,7 +334,7 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
         yield ConvertProgress("preflight", 0, 0, 0, 0, time.perf_counter() - started, None,
                               pf.short_line(), preflight=pf)
     t_prep = time.perf_counter() - started
-    kind = _scheduler_kind(settings)
+    kind = scheduler_kind(settings)
     workers = cluster_threads(client) if client is not None else job_workers(settings)
     slabs = slab_plan(ctx, workers)
     nx, ny, nz = ctx.shape_xyz

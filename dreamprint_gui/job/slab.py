@@ -35,8 +35,8 @@ from dreamprint_gui.job.plan import (
     ConvertSettings,
     JobCancelled,
     JobContext,
-    _scheduler_kind,
     prepare_job,
+    scheduler_kind,
 )
 from dreamprint_gui.job.resume import write_slab_record
 from dreamprint_gui.job.sample_label.dense_job import dense_slab_labels, window_slab_labels
@@ -47,7 +47,7 @@ from dreamprint_gui.job.sample_label.leaf_grid_job import (
 )
 from dreamprint_gui.job.write import slice_name, write_atomic
 
-__all__ = ["run_slab", "encode_slab", "halftone_layer"]
+__all__ = ["run_slab", "encode_slab", "halftone_layer", "write_new"]
 
 # A source's ``layer_kind`` -> the compiled call that samples and labels its layers (the
 # arguments: the source's ``layer_plan``, one layer's rgb and density arrays, z0, the kernel's).
@@ -123,7 +123,7 @@ def _oriented(ctx: JobContext, labels: np.ndarray) -> np.ndarray:
     return ctx.printer.slice_images(labels)
 
 
-def _write_new(path: str, data: bytes) -> None:
+def write_new(path: str, data: bytes) -> None:
     """A slice written under a temporary name and renamed into place (:func:`.write.write_atomic`):
     a slab run again after its worker died replaces identical bytes."""
     write_atomic(path, data)
@@ -194,7 +194,7 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
             raise JobCancelled()
         # Never create folders here: after a cancel the job's temporary folder is removed and
         # a straggling task must fail rather than recreate it.
-        _write_new(prefix + slice_name(z0 + k, nz), png)
+        write_new(prefix + slice_name(z0 + k, nz), png)
     result = {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
               "clamped": _clamp_report(stats)}
     write_slab_record(os.path.dirname(slices_dir), result, [len(png) for png in pngs])
@@ -230,5 +230,5 @@ def load_kernels(ctx: JobContext) -> None:
                np.zeros(4))
     encode_labels_pngs(_oriented(ctx, labels), ctx.palette, ctx.printer.png_mode,
                        ctx.printer.pixels_per_metre())
-    if _scheduler_kind(ctx.settings) != "distributed":
+    if scheduler_kind(ctx.settings) != "distributed":
         import dask.threaded  # noqa: F401 - the local scheduler's import, ~0.1 s

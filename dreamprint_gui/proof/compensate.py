@@ -69,14 +69,14 @@ from dreamprint_gui.proof.runner import (
     DEFAULT_MAX_CELLS,
     ProofProgress,
     ProofSettings,
-    _in_thread,
+    in_thread,
     print_xyz,
 )
 from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import (
     SourceField,
-    _box,
     optical_depth,
+    ray_box,
     render_source,
     sample_source,
 )
@@ -201,7 +201,7 @@ def _backproject(origins, d, lo, cell, sigma, h, box_lo, box_size, values, num, 
     gf = np.empty(3)
     for r in range(origins.shape[0]):
         o = origins[r]
-        t0, t1 = _box(o, d, lo, hi)  # the source render's ray-box entry and exit
+        t0, t1 = ray_box(o, d, lo, hi)  # the source render's ray-box entry and exit
         if t1 <= t0:
             continue
         T = 1.0
@@ -392,9 +392,9 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         def work() -> None:
             try:
                 box["r"] = fn(lambda d, t: prog.__setitem__("p", (d, t)))
-            except BaseException as exc:  # noqa: BLE001 - re-raised by _in_thread
+            except BaseException as exc:  # noqa: BLE001 - re-raised by in_thread
                 box["e"] = exc
-        yield from _in_thread(work, stage, prog, el, box, cancel)
+        yield from in_thread(work, stage, prog, el, box, cancel)
         return box["r"]
 
     loop = _Loop(s, [], is_cancelled)

@@ -67,7 +67,8 @@ from dreamprint_gui.proof.staging import staged_folder
 
 __all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_proof",
            "write_proof", "print_xyz", "MAX_RESOLUTION", "MAX_SPP", "DEFAULT_SPP",
-           "DEFAULT_RESOLUTION", "DEFAULT_MAX_CELLS", "DEFAULT_THICK_SPP", "THICK_T"]
+           "DEFAULT_RESOLUTION", "DEFAULT_MAX_CELLS", "DEFAULT_THICK_SPP", "THICK_T",
+           "in_thread"]
 
 MAX_RESOLUTION = 4096
 MAX_SPP = 65536
@@ -220,7 +221,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
             box["e"] = exc
 
-    yield from _in_thread(work_fractions, "labels", prog, el, box, cancel)
+    yield from in_thread(work_fractions, "labels", prog, el, box, cancel)
     medium = box["m"]
     timings["labels"] = el() - sum(timings.values())
     lo, hi = medium.box_mm
@@ -266,7 +267,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         except BaseException as exc:  # noqa: BLE001
             box["e"] = exc
 
-    yield from _in_thread(work_print, "print", prog, el, box, cancel)
+    yield from in_thread(work_print, "print", prog, el, box, cancel)
     prn_seeds, info = box["m"]
     prn_bands = prn_seeds[0]
     timings["print_render"] = time.perf_counter() - t2
@@ -377,7 +378,7 @@ def _at_clear_low_bound(s: ProofSettings, lab, medium, optics, views, src_lin: l
 
     yield ProofProgress("print", 0, 1, el(), "rendering the print with the Clear at its low "
                         "bound")
-    yield from _in_thread(work, "print", prog, el, box, cancel)
+    yield from in_thread(work, "print", prog, el, box, cancel)
     rendered = box["m"][0][0]
     to_xyz = np.linalg.inv(bands.observer.xyz_to_linear_srgb)
     both: tuple[list, list] = ([], [])
@@ -448,7 +449,10 @@ def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool,
     return bands.to_XYZ(rendered + (direct_T if hides_direct(floor, optics) else 0.0))
 
 
-def _in_thread(fn, stage, prog, el, box, cancel):
+def in_thread(fn, stage, prog, el, box, cancel):
+    """Run ``fn`` in a thread and yield :class:`ProofProgress` of ``stage`` whenever
+    ``prog["p"]`` (done, total) changes; an error ``fn`` put in ``box["e"]`` is raised here, and
+    a consumer that stops (cancel, close) sets ``cancel`` and waits for the thread."""
     th = threading.Thread(target=fn, name=f"dreamprint-proof-{stage}", daemon=True)
     th.start()
     last = None

@@ -35,7 +35,7 @@ from dreamprint_gui.io.volumes.base import PrintGrid
 from dreamprint_gui.job.content import SolidSource
 from dreamprint_gui.proof.cameras import View
 
-__all__ = ["SourceField", "sample_source", "render_source", "optical_depth"]
+__all__ = ["SourceField", "sample_source", "render_source", "optical_depth", "ray_box"]
 
 
 @dataclass(frozen=True)
@@ -64,7 +64,9 @@ def sample_source(source, grid, block_xyz: tuple[int, int, int], density_scale: 
 
 
 @nb.njit(cache=True, inline="always")
-def _box(o, d, lo, hi):
+def ray_box(o, d, lo, hi):
+    """(t0, t1): where the ray ``o + t d`` enters and leaves the box ``[lo, hi]`` (slab
+    method; t0 clamped at 0, ``t1 <= t0`` when it misses)."""
     t0, t1 = -1e30, 1e30
     for a in range(3):
         if abs(d[a]) < 1e-12:
@@ -104,7 +106,7 @@ def _march(origins, d, lo, cell, sigma, sc, h, floor_z, floor_rho, nearest, rgb_
     p = np.empty(3)
     for r in range(origins.shape[0]):
         o = origins[r]
-        t0, t1 = _box(o, d, lo, hi)
+        t0, t1 = ray_box(o, d, lo, hi)
         T = 1.0
         c0 = 0.0
         c1 = 0.0
@@ -173,7 +175,7 @@ def _depth(origins, d, lo, cell, coef, h, out):
         hi[a] = lo[a] + shape[a] * cell[a]
     for r in range(origins.shape[0]):
         o = origins[r]
-        t0, t1 = _box(o, d, lo, hi)
+        t0, t1 = ray_box(o, d, lo, hi)
         for c in range(nc):
             out[r, c] = 0.0
         if t1 <= t0:

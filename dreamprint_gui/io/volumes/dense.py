@@ -28,7 +28,7 @@ from dreamprint_gui.io.volumes.dense_sampler import (
 )
 
 __all__ = ["DenseVolume", "DenseSource", "DenseLayers", "colormap_lut", "check_claimed_size",
-           "apply_window", "bounds_list"]
+           "apply_window", "bounds_list", "window_kernel"]
 
 # zlib/gzip cannot expand data by more than ~1032:1; allow headroom for the other codecs.
 MAX_EXPANSION = 1100
@@ -109,7 +109,9 @@ def colormap_lut(name: str | None, colour=None, n: int = 256) -> np.ndarray:
 
 
 @njit(cache=True, nogil=True)
-def _window_kernel(v, lo, inv_width, lut, dens, rgb, sigma):
+def window_kernel(v, lo, inv_width, lut, dens, rgb, sigma):
+    """Window values ``v`` into ``sigma`` (``t * dens``, ``t = (v - lo) * inv_width`` clamped
+    to [0, 1]) and colour ``rgb`` (``lut`` at the nearest of its nodes to ``t``), in place."""
     n = lut.shape[0] - 1
     flat_v = v.reshape(-1)
     fs = sigma.reshape(-1)
@@ -130,7 +132,7 @@ def apply_window(v: np.ndarray, low: float, high: float, lut: np.ndarray, densit
     v = np.ascontiguousarray(v, np.float32)
     rgb = np.empty(v.shape + (3,), np.float32)
     sigma = np.empty(v.shape, np.float32)
-    _window_kernel(v, np.float32(low), np.float32(1.0 / (high - low)),
+    window_kernel(v, np.float32(low), np.float32(1.0 / (high - low)),
                    np.ascontiguousarray(lut, np.float32), np.float32(density), rgb, sigma)
     return rgb, sigma
 

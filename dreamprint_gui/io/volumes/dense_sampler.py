@@ -256,7 +256,7 @@ def dense_window_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0,
     ``clip((v - low) * inv_width, 0, 1) * density`` of the trilinear sample ``v``, in the row
     pass (a scalar image without a colour map: the paper's sec. 4.1 scalar field ->
     extinction). The bits of :func:`dense_layer` (mode ``RAW``) followed by
-    :func:`.dense._window_kernel`'s density (the same expressions and types, 0 outside the
+    :func:`.dense.window_kernel`'s density (the same expressions and types, 0 outside the
     grid), without
     the layer of samples in between (a 1e9-voxel job's layer is 2 MB, as large as L2). With
     ``nrows >= 0``, rows ``j0 .. j0 + nrows - 1`` only, into an array of those rows."""

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.io.volumes.dense import _window_kernel
+from dreamprint_gui.io.volumes.dense import window_kernel
 from dreamprint_gui.io.volumes.dense_sampler import (
     COLOUR,
     COLOUR_WHERE_DENSE,
@@ -93,7 +93,7 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
     """Labels (L, ny, nx) of layers ``z0 .. z0 + L - 1`` of a scalar image (``vol`` one
     channel): per layer, the trilinear samples (:func:`..io.volumes.dense_sampler.dense_layer`)
     into ``values`` (ny * nx), the window ``t = clip((v - low) * inv_width, 0, 1)`` -> density
-    ``t * density`` and colour ``lut[t]`` (:func:`..io.volumes.dense._window_kernel`; the
+    ``t * density`` and colour ``lut[t]`` (:func:`..io.volumes.dense.window_kernel`; the
     paper's sec. 4.1 maps a scalar field to extinction and albedo), density 0 at voxels outside
     the image (``outside_z[k] | outside_y[j] | outside_x[i]``, if ``use_outside``: a window
     below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.strip_labels`.
@@ -126,7 +126,7 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
                 dense_layer(vol, rows_nz, k, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix1, wx,
                             vx, rslot, srows, planes, planes_nz, plane_layer, row, cpl, values,
                             values, dens, RAW, np.float32(1.0), s0, nr)
-                _window_kernel(values[:nv], low, inv_width, lut, density, rgb[:nv], dens[:nv])
+                window_kernel(values[:nv], low, inv_width, lut, density, rgb[:nv], dens[:nv])
             if use_outside:
                 for jl in range(nr):
                     for i in range(nx):

@@ -133,9 +133,9 @@ def test_a_layer_is_the_same_whatever_else_the_call_samples(nz):
 @pytest.mark.parametrize("low", [2.0, -3.0])
 def test_window_layer_equals_samples_then_window(low):
     """dense_window_layer (a scalar image's window in the sampler's row pass) gives the bits of
-    sampling the layer (dense_layer, RAW) and then windowing it (dense._window_kernel's
+    sampling the layer (dense_layer, RAW) and then windowing it (dense.window_kernel's
     density), layers and rows outside the grid, empty source rows and NaN included."""
-    from dreamprint_gui.io.volumes.dense import _window_kernel
+    from dreamprint_gui.io.volumes.dense import window_kernel
     from dreamprint_gui.io.volumes.dense_sampler import (
         RAW,
         DenseLayers,
@@ -159,7 +159,7 @@ def test_window_layer_equals_samples_then_window(low):
         values = np.full(nv, 5.0, np.float32)
         want = np.full(nv, 9.0, np.float32)
         dense_layer(vol, rows, k, *a.args(), values, values, want, RAW, np.float32(1.0))
-        _window_kernel(values, lo, inv_w, np.ones((4, 3), np.float32), dens,
+        window_kernel(values, lo, inv_w, np.ones((4, 3), np.float32), dens,
                        np.empty((nv, 3), np.float32), want)
         args = b.args()
         got = np.full(nv, 9.0, np.float32)
