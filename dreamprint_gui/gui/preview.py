@@ -80,7 +80,6 @@ class PreviewPage(QWidget):
         self.source_path: str | None = None
         self.profile = None  # the active InkProfile
         self.profile_path: str | None = None  # its file (None: the built-in one)
-        self.profile_eff = None  # the profile at the printer's layer thickness
         self.tables = None
         self.printer = None
         self.ctx = None  # the engine's JobContext of the current settings
@@ -474,7 +473,7 @@ class PreviewPage(QWidget):
             report(("prepare", None))
             ctx = job_context(settings, previous)
             report(("predict", 0.0))
-            return ctx, profile, compute_preview(
+            return ctx, compute_preview(
                 ctx, profile, progress=lambda f: report(("predict", float(f))), cancel=cancel)
 
         name = Path(str(self.source_path)).name
@@ -539,7 +538,7 @@ class PreviewPage(QWidget):
         if self._pending:
             return
         self._stop_wait()
-        self.ctx, self.profile_eff, data = result
+        self.ctx, data = result
         self.data = data
         # The halftoned layer is computed on a worker while this thread draws the volumes.
         self._await_slice = True  # `rendered` once the halftoned layer is shown too
@@ -733,12 +732,3 @@ def _box(size_mm):
 
     sx, sy, sz = size_mm
     return pv.Box(bounds=(0, sx, 0, sy, 0, sz))
-
-
-def _density_threshold() -> float | None:
-    """The job pipeline's background threshold (1/mm), so the preview matches the export."""
-    try:
-        from dreamprint_gui.job import plan as pipeline
-    except ImportError:
-        return None
-    return getattr(pipeline, "DEFAULT_DENSITY_THRESHOLD", None)

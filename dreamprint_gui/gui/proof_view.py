@@ -285,9 +285,6 @@ class ProofPage(QWidget):
         self.comparison: dict | None = None  # the last compensation's result
         self.compensation_options: dict = {}  # compare_compensation's training settings
 
-    def set_job_settings(self, fn: Callable[[], Any]) -> None:
-        self._job_settings = fn
-
     def proof_settings(self):
         """The proof settings from the job settings and this page's controls (or None)."""
         from dreamprint_gui.proof.runner import ProofSettings

@@ -409,50 +409,17 @@ CONVERT_OVERHEAD_S = 0.15
 TIMED_SECONDS = 0.3
 
 
-def _context(source, grid, profile, *, density_scale, content, background, printer,
-             density_threshold, halftone, source_options, sampling, height_mm, size_mm,
-             objective, table_size, seed):
-
-    if isinstance(source, JobContext):
-        return source
-    if isinstance(source, ConvertSettings):
-        return prepare_job(source)
-    if grid is not None and height_mm is None and size_mm is None:
-        height_mm = float(grid.size_mm[2])
-    settings = ConvertSettings(
-        source=str(source), profile=profile, printer=printer, height_mm=height_mm,
-        size_mm=None if size_mm is None else tuple(size_mm), density_scale=density_scale,
-        halftone=halftone, seed=seed, background=background,
-        density_threshold=density_threshold, objective=objective, table_size=table_size,
-        source_options=dict(source_options or {}), content=content, sampling=sampling)
-    ctx = prepare_job(settings)
-    if grid is not None:
-        ctx = replace(ctx, grid=grid)
-    return ctx
-
-
-def preflight(source, grid=None, profile=None, *, density_scale: float = 1.0,
-              content: str = "auto", background: str = "clear", printer=None,
-              density_threshold: float | None = None, halftone: str = "blue-noise",
-              source_options: dict | None = None, sampling: str | None = None,
-              height_mm: float | None = None, size_mm=None, objective: str | None = None,
-              table_size: int = 100, sample_voxels: int = 200_000, seed: int = 0) -> Preflight:
+def preflight(source: JobContext | ConvertSettings, *, sample_voxels: int = 200_000,
+              seed: int = 0) -> Preflight:
     """The pre-flight estimate of a job (module doc for how each figure is made).
 
     ``source``: a prepared :class:`...job.plan.JobContext` (the CLI and the GUI pass the job's
-    own, so nothing is opened twice; the other job options are then ignored), a
-    :class:`...job.plan.ConvertSettings`, or a source spec (path or ``"demo"``) with the job's
-    options: ``grid`` (a :class:`..io.volumes.base.PrintGrid`, or ``height_mm`` / ``size_mm``),
-    ``profile`` (spec), ``printer`` (spec), ``density_scale``, ``content``, ``background``...
+    own, so nothing is opened twice), or a :class:`...job.plan.ConvertSettings` to prepare.
     ``sample_voxels``: the size of the material sample; ``seed``: its lattice offset.
     """
 
     t0 = time.perf_counter()
-    ctx = _context(source, grid, profile, density_scale=density_scale, content=content,
-                   background=background, printer=printer, density_threshold=density_threshold,
-                   halftone=halftone, source_options=source_options, sampling=sampling,
-                   height_mm=height_mm, size_mm=size_mm, objective=objective,
-                   table_size=table_size, seed=seed)
+    ctx = source if isinstance(source, JobContext) else prepare_job(source)
     s = ctx.settings
     src, tables = ctx.resources()
     nx, ny, nz = ctx.shape_xyz

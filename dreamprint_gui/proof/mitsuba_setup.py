@@ -147,10 +147,6 @@ def find_libllvm() -> tuple[str | None, str]:
     return None, "no LLVM library found"
 
 
-def _llvm_path() -> str | None:
-    return find_libllvm()[0]
-
-
 def load_mitsuba(prefer: str = "llvm") -> tuple[Any, str, str]:
     """Import Mitsuba and select a variant; returns ``(mitsuba module, variant, note)``.
 

@@ -12,6 +12,7 @@ from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_
 from dreamprint_gui.gamut.optimise import solve, targets_for
 from dreamprint_gui.io.volumes import demo
 from dreamprint_gui.io.volumes.registry import open_source
+from dreamprint_gui.job.plan import ConvertSettings
 from dreamprint_gui.job.preflight import preflight
 from dreamprint_gui.physics.colorimetry import delta_E2000
 
@@ -61,8 +62,8 @@ def test_deterministic_and_bounded():
 
 
 def test_prints_with_no_warning_at_the_default_size(tmp_path):
-    pf = preflight("demo", height_mm=demo.DESIGN_HEIGHT_MM, table_size=33,
-                   sample_voxels=60_000)
+    pf = preflight(ConvertSettings(source="demo", height_mm=demo.DESIGN_HEIGHT_MM,
+                                   table_size=33), sample_voxels=60_000)
     assert pf.warnings == [], [w.message for w in pf.warnings]
     assert pf.clamped_voxels == 0 and pf.out_of_gamut_fraction <= 0.01
     assert pf.ink_fraction > 0.02   # not a faint haze
