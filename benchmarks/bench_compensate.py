@@ -102,10 +102,10 @@ def floor_only(a) -> None:
     """The gamut floor on the proof's cameras (:func:`..proof.runner.gamut_floor`)."""
     import numpy as np
 
+    from dreamprint_gui.job.plan import ConvertSettings
     from dreamprint_gui.proof.cameras import orbit_views
     from dreamprint_gui.proof.labels import EngineLabels
     from dreamprint_gui.proof.medium import block_for_cell
-    from dreamprint_gui.proof.methods import _convert_settings
     from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
     from dreamprint_gui.proof.scielab import samples_per_degree
     from dreamprint_gui.proof.source_render import render_source, sample_source
@@ -117,7 +117,7 @@ def floor_only(a) -> None:
             ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm, views=4,
                                resolution=a.resolution, background=bg,
                                max_cells=a.cells)
-            lab = EngineLabels(_convert_settings(ps))
+            lab = EngineLabels(ConvertSettings.from_spec(ps.spec))
             size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
             block = block_for_cell(lab.voxel_mm, size, a.cells)
             cells = tuple(-(-n // b) for n, b in zip(lab.shape_xyz, block, strict=True))
