@@ -72,6 +72,8 @@ def test_every_surface_builds_the_same_spec(qtbot, monkeypatch, tmp_path):
     qtbot.addWidget(tab)
     specs["proof tab"] = tab.proof_settings().spec
 
+    # the dialog's pre-flight estimate (seconds on a worker) is not what this test reads
+    monkeypatch.setattr(ExportDialog, "update_preflight", lambda self: None)
     export = ExportDialog(None, source_path="demo", profile_path=None, table_size=17,
                           preview_params=preview.params())
     qtbot.addWidget(export)
