@@ -355,7 +355,7 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
     with JobWriter(settings.output, settings.overwrite, claim=claim) as writer:
         write_identity(writer.tmp, identity)
         writer.resumable = True
-        kept = read_slab_records(writer.tmp, nz) if claim is not None else []
+        kept = read_slab_records(writer.tmp, nz, nx * ny) if claim is not None else []
         for rec in kept:
             add(rec)
         todo = missing_slabs(slabs, kept)
