@@ -307,3 +307,41 @@ def test_a_damaged_slab_record_makes_its_slab_run_again(tmp_path, damage):
 def _layer_voxels(folder):
     nx, ny, _ = json.loads((folder / IDENTITY).read_text())["grid_dimensions"]
     return nx * ny
+
+
+def test_a_run_interrupted_in_this_process_is_found_and_resumed(tmp_path):
+    """The GUI's case: an export stopped by a lost cluster or a full disk leaves its folder
+    under the still running application's pid; Export again must find it (the CLI's message
+    says so) instead of converting from the first layer beside it or removing it."""
+    from dataclasses import replace
+
+    out = tmp_path / "JOB"
+    settings = ConvertSettings(source="demo", output=out, height_mm=1.0, table_size=TABLE,
+                               seed=3, workers=1, slab_layers=2, scheduler="sync")
+    gen = run_conversion(settings, preflight=False)
+    with pytest.raises(KeyboardInterrupt):
+        for p in gen:
+            if p.stage == "converting" and p.layers_done >= 8:
+                gen.throw(KeyboardInterrupt())
+    [kept] = _partials(tmp_path)
+    assert f"-{os.getpid()}-" in kept.name  # this process's name, not renamed
+    left = find_interrupted(out)
+    assert left is not None and left[0] == kept and left[1] >= 8
+    with pytest.raises(DreamPrintError, match="add --resume"):
+        for _ in run_conversion(settings, preflight=False):
+            pass
+    for _ in run_conversion(replace(settings, resume=True), preflight=False):
+        pass
+    ref = tmp_path / "REF"
+    for _ in run_conversion(replace(settings, output=ref), preflight=False):
+        pass
+    assert _digests(out) == _digests(ref)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["JOB", "REF"]
+
+
+def test_a_folder_being_written_is_not_stale(tmp_path):
+    """Another export of this process (the GUI may run two) never takes a folder still written."""
+    from dreamprint_gui.job.write import stale_partials
+
+    with JobWriter(tmp_path / "JOB") as w:
+        assert w.tmp.is_dir() and stale_partials(tmp_path / "JOB") == []
