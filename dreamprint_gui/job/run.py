@@ -203,7 +203,8 @@ def job_description(ctx: JobContext) -> dict[str, Any]:
                           "optimise_seconds": ctx.correction.report.get("seconds")}),
         "slices": {"folder": "slices", "count": nz, "width": nx if ctx.printer.image_columns
                    == "x" else ny, "height": ny if ctx.printer.image_columns == "x" else nx,
-                   "first": "slices/" + _slice(0, nz), "last": "slices/" + _slice(nz - 1, nz),
+                   "first": "slices/" + slice_name(0, nz),
+                   "last": "slices/" + slice_name(nz - 1, nz),
                    "png_mode": ctx.printer.png_mode},
         "labels": {lab: {"material": (ctx.printer.material_names[i] if i < 6 else "none"),
                          "rgb": ctx.palette[i].tolist()} for i, lab in enumerate(_LABELS)},
@@ -231,11 +232,6 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
                       "workers": totals["workers"], "slabs": totals["slabs"],
                       "resumed_layers": totals["resumed_layers"]},
     }
-
-
-def _slice(z: int, nz: int) -> str:
-
-    return slice_name(z, nz)
 
 
 def _prepare(settings: ConvertSettings, started: float
