@@ -427,7 +427,8 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
         manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
                                    "conc_sums": conc_sums},
                              timings, started)
-        manifest["timings_s"]["voxels_per_second"] = (nx * ny * nz) / max(
+        # the voxels this run converted: a resumed job's kept layers took none of its time
+        manifest["timings_s"]["voxels_per_second"] = (nx * ny * (nz - resumed)) / max(
             1e-9, manifest["timings_s"]["total"])
         if pf is not None:
             manifest["preflight"] = pf.to_json()

@@ -302,6 +302,10 @@ def test_a_damaged_slab_record_makes_its_slab_run_again(tmp_path, damage):
     assert got == want and _digests(out) == _digests(ref)
     assert m["execution"]["resumed_layers"] == sum(
         r["z1"] - r["z0"] for r in recs) - (recs[1]["z1"] - recs[1]["z0"])
+    nx, ny, nz = m["grid_dimensions"]
+    t = m["timings_s"]  # the rate of the layers this run converted, not of the kept ones
+    assert t["voxels_per_second"] * t["total"] == pytest.approx(
+        nx * ny * (nz - m["execution"]["resumed_layers"]))
 
 
 def _layer_voxels(folder):
