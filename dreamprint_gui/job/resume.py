@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import json
 import os
-import uuid
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +34,14 @@ import numpy as np
 
 from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.job.write import IDENTITY, SLABS, SLICES, slice_name, stale_partials
+from dreamprint_gui.job.write import (
+    IDENTITY,
+    SLABS,
+    SLICES,
+    slice_name,
+    stale_partials,
+    write_atomic,
+)
 
 __all__ = ["job_identity", "find_interrupted", "write_identity", "check_identity",
            "write_slab_record", "read_slab_records", "missing_slabs", "layers_in"]
@@ -67,10 +73,9 @@ def job_identity(description: dict[str, Any], source_stamp: tuple) -> dict[str, 
 
 
 def _atomic_json(path: Path, data: dict[str, Any]) -> None:
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(data, f)
-    os.replace(tmp, path)
+    """``data`` as JSON, renamed into place (:func:`.write.write_atomic`, as the slices: an
+    OSError such as a full disk stays one for :class:`.write.JobWriter` to report)."""
+    write_atomic(os.fspath(path), json.dumps(data).encode("utf-8"))
 
 
 def write_identity(folder: Path, identity: dict[str, Any]) -> None:
