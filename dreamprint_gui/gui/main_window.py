@@ -305,13 +305,14 @@ class MainWindow(QMainWindow):
         self.last_error = message
         self.statusBar().showMessage(message, 30000)
 
-    def set_source(self, path: str, *, reopen: bool = False) -> Task:
+    def set_source(self, path: str, *, reopen: bool = False) -> Task | None:
         """Open the volume ``path`` on a worker thread as a job would read it
         (``job.plan.source_options_for``): a new file with its reader's defaults and content
         auto (a level set as a solid), ``reopen`` with the preview's interpretation controls.
         It becomes the source once open. A file that needs a choice the preview offers (which
         grid, how to read a level set) is handed to the preview with the problem, which waits
-        for that choice."""
+        for that choice. Returns the opening task, or None when the preview's reader options
+        cannot be read (the preview then says why and waits for a choice)."""
         name = "demo volume" if path == "demo" else Path(path).name
         self._source_request = path
         if self._source_task is not None and self._source_task.outcome is None:

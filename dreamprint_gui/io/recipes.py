@@ -30,6 +30,8 @@ from numpy.typing import NDArray
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.profile import INKS
+from dreamprint_gui.io.spectra.model import parse_float
+from dreamprint_gui.io.spectra.plain_csv import csv_delimiter
 
 __all__ = ["read_recipes", "read_csv_rows"]
 
@@ -42,7 +44,9 @@ _LIST_SPLIT = re.compile(r"[\s,;/]+")
 
 
 def read_csv_rows(path: Path, min_rows: int = 2) -> list[tuple[int, list[str]]]:
-    """Non-blank, non-comment rows of a CSV file with their line numbers (header first)."""
+    """Non-blank, non-comment rows of a CSV file with their line numbers (header first); the
+    delimiter is the spectra readers' (:func:`.spectra.plain_csv.csv_delimiter`: comma,
+    semicolon or tab)."""
     try:
         text = Path(path).read_text(encoding="utf-8-sig")
     except FileNotFoundError:
@@ -51,8 +55,12 @@ def read_csv_rows(path: Path, min_rows: int = 2) -> list[tuple[int, list[str]]]:
         raise DreamPrintError("not a text CSV file", path) from None
     except IsADirectoryError:
         raise DreamPrintError("is a folder, not a CSV file", path) from None
+    except OSError as exc:
+        raise DreamPrintError(f"cannot read it: {exc.strerror or exc}", path) from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    delim = csv_delimiter(lines) or ","
     out = []
-    for n, row in enumerate(csv.reader(io.StringIO(text)), start=1):
+    for n, row in enumerate(csv.reader(io.StringIO(text), delimiter=delim), start=1):
         if not row or all(not c.strip() for c in row) or row[0].lstrip().startswith("#"):
             continue
         out.append((n, [c.strip() for c in row]))
@@ -66,7 +74,7 @@ def _number(cell: str, path: Path, line: int, what: str) -> float:
     if cell == "":
         return 0.0
     try:
-        v = float(cell.rstrip("%").strip())
+        v = parse_float(cell.rstrip("%"))  # also a decimal comma (0,5) as in a ';' file
     except ValueError:
         raise DreamPrintError(f"{what}: {cell!r} is not a number", path, line) from None
     if not np.isfinite(v):

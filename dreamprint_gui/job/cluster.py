@@ -51,6 +51,9 @@ def connect(address: str, timeout: str = "10s") -> Any:
         return Client(address, timeout=timeout)
     except (OSError, TimeoutError) as exc:
         raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    except ValueError as exc:  # Dask's parsing of the address: "missing port number in ''"
+        raise DreamPrintError(f"--scheduler {address!r} is not a Dask scheduler's address "
+                              f"(tcp://HOST:PORT): {exc}") from None
 
 
 def absolute_paths(settings: Any) -> Any:

@@ -73,7 +73,8 @@ from dreamprint_gui.job.plan import (
     slab_plan,
 )
 from dreamprint_gui.job.sample_label.layer_kernel import slab_labels
-from dreamprint_gui.job.slab import encode_slab, write_new
+from dreamprint_gui.job.slab import encode_slab
+from dreamprint_gui.job.write import write_atomic
 from dreamprint_gui.physics.colorimetry import delta_E2000
 
 __all__ = ["Preflight", "PreflightWarning", "preflight", "record_rate", "measured_rate",
@@ -390,7 +391,7 @@ def _write_seconds(pngs: list[bytes]) -> float:
     try:
         t0 = time.perf_counter()
         for i, png in enumerate(pngs):
-            write_new(os.path.join(folder, f"{i:05d}.png"), png)
+            write_atomic(os.path.join(folder, f"{i:05d}.png"), png)
         return (time.perf_counter() - t0) / max(1, len(pngs))
     except OSError:
         return 0.0

@@ -27,13 +27,21 @@ from __future__ import annotations
 
 import json
 import os
-import uuid
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.job.write import IDENTITY, SLABS, SLICES, slice_name, stale_partials
+from dreamprint_gui.job.write import (
+    IDENTITY,
+    SLABS,
+    SLICES,
+    slice_name,
+    stale_partials,
+    write_atomic,
+)
 
 __all__ = ["job_identity", "find_interrupted", "write_identity", "check_identity",
            "write_slab_record", "read_slab_records", "missing_slabs", "layers_in"]
@@ -65,10 +73,9 @@ def job_identity(description: dict[str, Any], source_stamp: tuple) -> dict[str, 
 
 
 def _atomic_json(path: Path, data: dict[str, Any]) -> None:
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
-    with open(tmp, "w", encoding="utf-8") as f:
-        json.dump(data, f)
-    os.replace(tmp, path)
+    """``data`` as JSON, renamed into place (:func:`.write.write_atomic`, as the slices: an
+    OSError such as a full disk stays one for :class:`.write.JobWriter` to report)."""
+    write_atomic(os.fspath(path), json.dumps(data).encode("utf-8"))
 
 
 def write_identity(folder: Path, identity: dict[str, Any]) -> None:
@@ -107,17 +114,39 @@ def write_slab_record(job_folder: str, record: dict[str, Any], sizes: list[int])
                  {**record, "slice_bytes": sizes})
 
 
-def read_slab_records(folder: Path, n_layers: int) -> list[dict[str, Any]]:
-    """The valid slab records of a job folder: readable, inside the job's layers, every slice
+def _sound(rec: dict[str, Any], z0: int, z1: int, layer_voxels: int | None) -> bool:
+    """Whether a record holds what the job's totals add (:func:`.slab.run_slab`'s result):
+    7 voxel counts summing to the slab's voxels, (layers, 7) finite concentration sums, the
+    clamp report's numbers. A record edited or damaged otherwise would change the manifest's
+    totals silently, or stop the resumed job with a traceback."""
+    try:
+        counts = np.asarray(rec["counts"])
+        sums = np.asarray(rec["conc_sums"], dtype=np.float64)
+        clamped = rec["clamped"]
+        ok = (counts.shape == (7,) and counts.dtype.kind in "iu" and bool(np.all(counts >= 0))
+              and sums.shape == (z1 - z0, 7) and bool(np.all(np.isfinite(sums)))
+              and isinstance(clamped, dict)
+              and all(isinstance(v, int | float) and np.isfinite(v) for v in clamped.values()))
+    except (KeyError, TypeError, ValueError):
+        return False
+    return ok and (layer_voxels is None or int(counts.sum()) == (z1 - z0) * layer_voxels)
+
+
+def read_slab_records(folder: Path, n_layers: int, layer_voxels: int | None = None
+                      ) -> list[dict[str, Any]]:
+    """The valid slab records of a job folder: readable, inside the job's layers, holding
+    sound totals (:func:`_sound`; ``layer_voxels``: a layer's voxels, when known), every slice
     named present with its recorded size; sorted by first layer, overlaps dropped."""
     out: list[dict[str, Any]] = []
     for p in sorted((folder / SLABS).glob("*.json")):
         try:
             rec = json.loads(p.read_text(encoding="utf-8"))
             z0, z1, sizes = int(rec["z0"]), int(rec["z1"]), rec["slice_bytes"]
+            if not (0 <= z0 < z1 <= n_layers) or len(sizes) != z1 - z0:
+                continue
         except (OSError, ValueError, KeyError, TypeError):
             continue
-        if not (0 <= z0 < z1 <= n_layers) or len(sizes) != z1 - z0:
+        if not _sound(rec, z0, z1, layer_voxels):
             continue
         try:
             ok = all(os.stat(folder / SLICES / slice_name(z, n_layers)).st_size == size
@@ -141,8 +170,11 @@ def find_interrupted(target: str | os.PathLike) -> tuple[Path, int, int] | None:
         ident = read_identity(folder)
         if ident is None or "grid_dimensions" not in ident:
             continue
-        nz = int(ident["grid_dimensions"][2])
-        done = layers_in(read_slab_records(folder, nz))
+        try:
+            nx, ny, nz = (int(n) for n in ident["grid_dimensions"])
+        except (TypeError, ValueError):
+            continue
+        done = layers_in(read_slab_records(folder, nz, nx * ny))
         if done:
             return folder, done, nz
     return None

@@ -203,7 +203,8 @@ def job_description(ctx: JobContext) -> dict[str, Any]:
                           "optimise_seconds": ctx.correction.report.get("seconds")}),
         "slices": {"folder": "slices", "count": nz, "width": nx if ctx.printer.image_columns
                    == "x" else ny, "height": ny if ctx.printer.image_columns == "x" else nx,
-                   "first": "slices/" + _slice(0, nz), "last": "slices/" + _slice(nz - 1, nz),
+                   "first": "slices/" + slice_name(0, nz),
+                   "last": "slices/" + slice_name(nz - 1, nz),
                    "png_mode": ctx.printer.png_mode},
         "labels": {lab: {"material": (ctx.printer.material_names[i] if i < 6 else "none"),
                          "rgb": ctx.palette[i].tolist()} for i, lab in enumerate(_LABELS)},
@@ -231,11 +232,6 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
                       "workers": totals["workers"], "slabs": totals["slabs"],
                       "resumed_layers": totals["resumed_layers"]},
     }
-
-
-def _slice(z: int, nz: int) -> str:
-
-    return slice_name(z, nz)
 
 
 def _prepare(settings: ConvertSettings, started: float
@@ -355,7 +351,7 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
     with JobWriter(settings.output, settings.overwrite, claim=claim) as writer:
         write_identity(writer.tmp, identity)
         writer.resumable = True
-        kept = read_slab_records(writer.tmp, nz) if claim is not None else []
+        kept = read_slab_records(writer.tmp, nz, nx * ny) if claim is not None else []
         for rec in kept:
             add(rec)
         todo = missing_slabs(slabs, kept)
@@ -431,7 +427,8 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
         manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
                                    "conc_sums": conc_sums},
                              timings, started)
-        manifest["timings_s"]["voxels_per_second"] = (nx * ny * nz) / max(
+        # the voxels this run converted: a resumed job's kept layers took none of its time
+        manifest["timings_s"]["voxels_per_second"] = (nx * ny * (nz - resumed)) / max(
             1e-9, manifest["timings_s"]["total"])
         if pf is not None:
             manifest["preflight"] = pf.to_json()

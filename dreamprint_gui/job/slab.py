@@ -45,9 +45,9 @@ from dreamprint_gui.job.sample_label.leaf_grid_job import (
     leaf_grid_colour_slab_labels,
     leaf_grid_slab_labels,
 )
-from dreamprint_gui.job.write import slice_name, write_atomic
+from dreamprint_gui.job.write import CANCEL_MARKER, slice_name, write_atomic
 
-__all__ = ["run_slab", "encode_slab", "halftone_layer", "write_new"]
+__all__ = ["run_slab", "encode_slab", "halftone_layer"]
 
 # A source's ``layer_kind`` -> the compiled call that samples and labels its layers (the
 # arguments: the source's ``layer_plan``, one layer's rgb and density arrays, z0, the kernel's).
@@ -123,16 +123,10 @@ def _oriented(ctx: JobContext, labels: np.ndarray) -> np.ndarray:
     return ctx.printer.slice_images(labels)
 
 
-def write_new(path: str, data: bytes) -> None:
-    """A slice written under a temporary name and renamed into place (:func:`.write.write_atomic`):
-    a slab run again after its worker died replaces identical bytes."""
-    write_atomic(path, data)
-
-
 def _cancelled(slices_dir: str, event: threading.Event | None) -> bool:
     if event is not None and event.is_set():
         return True
-    return os.path.exists(os.path.join(os.path.dirname(slices_dir), ".cancelled"))
+    return os.path.exists(os.path.join(os.path.dirname(slices_dir), CANCEL_MARKER))
 
 
 class _Workspace(threading.local):
@@ -193,8 +187,9 @@ def run_slab(ctx: JobContext, z0: int, z1: int, slices_dir: str,
         if cancel is not None and cancel.is_set():
             raise JobCancelled()
         # Never create folders here: after a cancel the job's temporary folder is removed and
-        # a straggling task must fail rather than recreate it.
-        write_new(prefix + slice_name(z0 + k, nz), png)
+        # a straggling task must fail rather than recreate it. Renamed into place: a slab run
+        # again after its worker died replaces identical bytes.
+        write_atomic(prefix + slice_name(z0 + k, nz), png)
     result = {"z0": z0, "z1": z1, "counts": counts.tolist(), "conc_sums": sums.tolist(),
               "clamped": _clamp_report(stats)}
     write_slab_record(os.path.dirname(slices_dir), result, [len(png) for png in pngs])

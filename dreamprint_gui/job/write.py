@@ -11,7 +11,8 @@ Defines
   (:mod:`.resume`), an interruption (Ctrl-C, SIGTERM, :class:`JobInterrupted` such as a lost
   scheduler) keeps it for ``--resume``, as does a process killed outright (SIGKILL, power
   loss). ``claim`` takes over such a leftover (renamed to this process's name) to finish it.
-- :func:`stale_partials`: the temporary folders beside a target whose process is gone; the
+- :func:`stale_partials`: the temporary folders beside a target whose process is gone (or that
+  an earlier export of this process left, as the GUI's after a lost cluster); the
   next export to the same target removes them (:mod:`.run` first refuses to discard one that
   holds finished slabs unless ``--overwrite``).
 - :func:`write_atomic`: a new file written under a temporary name, then renamed into place
@@ -114,8 +115,15 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
+# The temporary folders this process's JobWriters are writing now. A folder named with this
+# process's pid but not in here was left by an earlier export of this process (the GUI's: an
+# export stopped by a lost scheduler or a full disk), so it is as stale as a dead process's.
+_WRITING: set[Path] = set()
+
+
 def stale_partials(target: str | os.PathLike) -> list[Path]:
-    """The temporary folders of ``target`` whose process is gone, newest first."""
+    """The temporary folders of ``target`` whose process is gone, or that an earlier export of
+    this process left (no :class:`JobWriter` of it writes them now), newest first."""
     target = Path(target).expanduser().absolute()
     out = []
     for p in target.parent.glob(f".{target.name}.partial-*"):
@@ -123,7 +131,8 @@ def stale_partials(target: str | os.PathLike) -> list[Path]:
             pid = int(p.name.rsplit(".partial-", 1)[1].split("-", 1)[0])
         except (ValueError, IndexError):
             continue
-        if pid != os.getpid() and not _pid_alive(pid) and p.is_dir():
+        ours = pid == os.getpid()
+        if ((ours and p not in _WRITING) or (not ours and not _pid_alive(pid))) and p.is_dir():
             out.append(p)
     def mtime(p: Path) -> float:
         try:
@@ -165,6 +174,14 @@ class JobWriter:
         return self.tmp / SLICES
 
     def __enter__(self) -> JobWriter:
+        _WRITING.add(self.tmp)
+        try:
+            return self._enter()
+        except BaseException:
+            _WRITING.discard(self.tmp)
+            raise
+
+    def _enter(self) -> JobWriter:
         if self.claim is not None:
             try:  # this process's name: no other export removes it as stale
                 os.rename(self.claim, self.tmp)
@@ -183,12 +200,15 @@ class JobWriter:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         kept = False
-        if not self.committed:
-            kept = self.keeps_on(exc)
-            if kept:
-                (self.tmp / CANCEL_MARKER).unlink(missing_ok=True)  # for --resume
-            else:
-                self.abort()
+        try:
+            if not self.committed:
+                kept = self.keeps_on(exc)
+                if kept:
+                    (self.tmp / CANCEL_MARKER).unlink(missing_ok=True)  # for --resume
+                else:
+                    self.abort()
+        finally:
+            _WRITING.discard(self.tmp)
         if isinstance(exc, OSError) and not isinstance(exc, FileNotFoundError | FileExistsError):
             raise disk_error(exc, self.target, kept) from exc
 

@@ -473,3 +473,48 @@ def test_export_can_start_an_interrupted_export_again(qtbot, tmp_path, table_siz
     assert dlg.task.outcome == "succeeded", dlg.error.text()
     assert dlg.manifest["execution"]["resumed_layers"] == 0
     assert [p.name for p in tmp_path.iterdir()] == ["job"]
+
+
+def test_an_export_interrupted_in_this_session_is_offered_to_resume(qtbot, tmp_path,
+                                                                     table_size, monkeypatch):
+    """A lost cluster stops an export: the message says to Export again, and Export again
+    (the application still running) offers to resume and finishes the missing layers."""
+    import time
+    from pathlib import Path
+
+    import dreamprint_gui.job.run as run
+    from dreamprint_gui.job.write import JobInterrupted
+
+    real = run.run_slab
+
+    def lost_at_the_last_slab(ctx, z0, z1, *args, **kw):
+        nz = ctx.shape_xyz[2]
+        if z1 == nz:  # once the other thread has recorded every other slab (any order)
+            records = Path(args[0]).parent / "slabs"
+            deadline = time.time() + 60
+            while len(list(records.glob("*.json"))) < (nz - 1) // 2 and time.time() < deadline:
+                time.sleep(0.02)
+            raise JobInterrupted("lost the Dask scheduler at tcp://x:8786; the finished layers "
+                                 "are kept: run the same command with --resume")
+        return real(ctx, z0, z1, *args, **kw)
+
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    dlg.workers.setValue(2)
+    with monkeypatch.context() as m:
+        m.setattr(run, "run_slab", lost_at_the_last_slab)
+        m.setattr(run, "slab_plan", lambda ctx, workers: [
+            (z, min(z + 2, ctx.shape_xyz[2])) for z in range(0, ctx.shape_xyz[2], 2)])
+        dlg.start()
+        with qtbot.waitSignal(dlg.task.done, timeout=180000):
+            pass
+    assert dlg.task.outcome != "succeeded"
+    assert "Export again to resume" in dlg.error.text(), dlg.error.text()
+    asked = []
+    dlg.ask_resume = lambda name, done, total: asked.append((done, total)) or "resume"
+    dlg.start()
+    with qtbot.waitSignal(dlg.task.done, timeout=180000):
+        pass
+    assert dlg.task.outcome == "succeeded", dlg.error.text()
+    done, total = asked[0]
+    assert dlg.manifest["execution"]["resumed_layers"] == done == 2 * ((total - 1) // 2)
+    assert [p.name for p in tmp_path.iterdir()] == ["job"]

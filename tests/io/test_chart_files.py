@@ -129,3 +129,35 @@ def test_measurements_csv_takes_cgats_wavelength_headings(tmp_path):
     b.write_text("ink,quantity,thickness_mm,LAB_L,380,390,400\nC,R,0.1,50,0.1,0.1,0.1\n")
     with pytest.raises(DreamPrintError, match="'LAB_L' after thickness_mm is not a wavelength"):
         read_measurements_csv(b, wl)
+
+
+@pytest.mark.parametrize("text", [
+    "id;C;M;Y;K;W\np1;50;0;0;50;0\np2;0;50;50;0;0\n",                 # a ';' spreadsheet
+    "id;C;M;Y;K;W\np1;0,5;0;0;0,5;0\np2;0;0,5;0,5;0;0\n",             # and its decimal comma
+    "name\tC\tM\tY\tK\tW\np1\t50%\t0\t0\t50%\t0\np2\t0\t50\t50\t0\t0\n",  # tab, percent signs
+    '"C; M; Y; K; W",\n"50; 0; 0; 50; 0","0; 50; 50; 0; 0"\n',        # ';' lists in cells
+])
+def test_recipes_in_a_semicolon_or_tab_file_read_as_the_spectra_do(tmp_path, text):
+    """The chart's recipes take the delimiters and decimal commas its measurement file may
+    use (the one delimiter rule of the spectra readers); before, an id column in a ';' file
+    was refused as "column 'id;C;M;Y;K;W' is not an ink" and 0,5 split into two cells."""
+    p = tmp_path / "recipes.csv"
+    p.write_text(text, encoding="utf-8")
+    want = np.zeros((2, len(INKS)))
+    want[0, [INKS.index("C"), INKS.index("K")]] = 0.5
+    want[1, [INKS.index("M"), INKS.index("Y")]] = 0.5
+    np.testing.assert_allclose(read_recipes(p), want)
+
+
+def test_an_unreadable_recipe_file_is_one_line(tmp_path, monkeypatch):
+    """A file the operator may not read (permissions; tests run as root, so it is simulated)."""
+    p = tmp_path / "recipes.csv"
+    p.write_text("C,M,Y,K,W\n1,0,0,0,0\n")
+
+    def denied(self, *a, **kw):
+        raise PermissionError(13, "Permission denied", str(self))
+
+    monkeypatch.setattr(type(p), "read_text", denied)
+    with pytest.raises(DreamPrintError, match="cannot read it") as e:
+        read_recipes(p)
+    assert str(p) in str(e.value)

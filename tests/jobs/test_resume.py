@@ -268,3 +268,84 @@ def test_time_left_follows_the_recent_rate():
     resumed = TimeLeft(100, 50, 0.0)
     assert resumed.update(60, 10.0) == pytest.approx(40 / 1.0)
     assert TimeLeft(10, 0, 0.0).update(0, 5.0) == float("inf")  # no progress: unknown
+
+
+@pytest.mark.parametrize("damage", [
+    lambda r: r.pop("counts"),                              # a traceback before
+    lambda r: r.update(conc_sums=r["conc_sums"][:1]),       # wrong totals silently before
+    lambda r: r.update(counts=[c * 2 for c in r["counts"]]),
+    lambda r: r.update(clamped="none"),                     # a traceback before
+    lambda r: r.update(conc_sums=[[float("nan")] * 7] * len(r["conc_sums"])),
+])
+def test_a_damaged_slab_record_makes_its_slab_run_again(tmp_path, damage):
+    """A record whose totals are not a slab's (edited, damaged) is not taken as done: the
+    resumed job runs that slab again and its manifest's totals are those of an uninterrupted
+    run, instead of a traceback or silently wrong totals."""
+    from dataclasses import replace
+
+    out, settings, kept = _interrupted_job(tmp_path, n_slabs=4)
+    recs = read_slab_records(kept, 38, _layer_voxels(kept))
+    assert len(recs) >= 4  # sound records pass the check
+    victim = kept / SLABS / f"{recs[1]['z0']:06d}-{recs[1]['z1']:06d}.json"
+    rec = json.loads(victim.read_text())
+    damage(rec)
+    victim.write_text(json.dumps(rec))
+    assert [r["z0"] for r in read_slab_records(kept, 38, _layer_voxels(kept))] == [
+        r["z0"] for r in recs if r["z0"] != recs[1]["z0"]]
+    for _ in run_conversion(replace(settings, resume=True), preflight=False):
+        pass
+    ref = tmp_path / "REF"
+    for _ in run_conversion(replace(settings, output=ref), preflight=False):
+        pass
+    got, m = _results(out)
+    want, _ = _results(ref)
+    assert got == want and _digests(out) == _digests(ref)
+    assert m["execution"]["resumed_layers"] == sum(
+        r["z1"] - r["z0"] for r in recs) - (recs[1]["z1"] - recs[1]["z0"])
+    nx, ny, nz = m["grid_dimensions"]
+    t = m["timings_s"]  # the rate of the layers this run converted, not of the kept ones
+    assert t["voxels_per_second"] * t["total"] == pytest.approx(
+        nx * ny * (nz - m["execution"]["resumed_layers"]))
+
+
+def _layer_voxels(folder):
+    nx, ny, _ = json.loads((folder / IDENTITY).read_text())["grid_dimensions"]
+    return nx * ny
+
+
+def test_a_run_interrupted_in_this_process_is_found_and_resumed(tmp_path):
+    """The GUI's case: an export stopped by a lost cluster or a full disk leaves its folder
+    under the still running application's pid; Export again must find it (the CLI's message
+    says so) instead of converting from the first layer beside it or removing it."""
+    from dataclasses import replace
+
+    out = tmp_path / "JOB"
+    settings = ConvertSettings(source="demo", output=out, height_mm=1.0, table_size=TABLE,
+                               seed=3, workers=1, slab_layers=2, scheduler="sync")
+    gen = run_conversion(settings, preflight=False)
+    with pytest.raises(KeyboardInterrupt):
+        for p in gen:
+            if p.stage == "converting" and p.layers_done >= 8:
+                gen.throw(KeyboardInterrupt())
+    [kept] = _partials(tmp_path)
+    assert f"-{os.getpid()}-" in kept.name  # this process's name, not renamed
+    left = find_interrupted(out)
+    assert left is not None and left[0] == kept and left[1] >= 8
+    with pytest.raises(DreamPrintError, match="add --resume"):
+        for _ in run_conversion(settings, preflight=False):
+            pass
+    for _ in run_conversion(replace(settings, resume=True), preflight=False):
+        pass
+    ref = tmp_path / "REF"
+    for _ in run_conversion(replace(settings, output=ref), preflight=False):
+        pass
+    assert _digests(out) == _digests(ref)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["JOB", "REF"]
+
+
+def test_a_folder_being_written_is_not_stale(tmp_path):
+    """Another export of this process (the GUI may run two) never takes a folder still written."""
+    from dreamprint_gui.job.write import stale_partials
+
+    with JobWriter(tmp_path / "JOB") as w:
+        assert w.tmp.is_dir() and stale_partials(tmp_path / "JOB") == []

@@ -41,8 +41,8 @@ from dreamprint_gui.io.spectra.model import (
     parse_float,
 )
 
-__all__ = ["read_plain_csv", "write_csv_columns", "write_csv_rows", "looks_like_cgats_csv",
-           "read_cgats_csv"]
+__all__ = ["csv_delimiter", "read_plain_csv", "write_csv_columns", "write_csv_rows",
+           "looks_like_cgats_csv", "read_cgats_csv"]
 
 _WL_WORD = re.compile(r"^\s*(wave\s*length|wl\b|lambda|λ|nm\b|um\b|µm\b|wavenumber|x\b)",
                       re.IGNORECASE)
@@ -68,8 +68,15 @@ def _quantity_words(text: str) -> tuple[str | None, bool]:
     return None, pct
 
 
-def _delimiter(lines: list[str]) -> str | None:
-    sample = lines[:20]
+_QUOTED = re.compile(r'"[^"]*"')
+
+
+def csv_delimiter(lines: list[str]) -> str | None:
+    """The delimiter of delimited text (tab, semicolon, then comma, the first found outside
+    quotes on each of the first 20 lines: a spreadsheet in a decimal-comma locale writes
+    ``;``), or ``None`` for blank-separated columns. Used by every CSV reader of the project
+    (spectra here, recipes and layer measurements through :func:`.recipes.read_csv_rows`)."""
+    sample = [_QUOTED.sub("", ln) for ln in lines[:20]]
     for d in ("\t", ";", ","):
         counts = [ln.count(d) for ln in sample]
         if counts and min(counts) > 0:
@@ -99,7 +106,7 @@ def read_plain_csv(text: str, path: str) -> RawSpectra:
     comments, content = _content(text)
     if not content:
         raise DreamPrintError("no data lines (only comments or blank lines)", path)
-    delim = _delimiter([ln for _, ln in content])
+    delim = csv_delimiter([ln for _, ln in content])
     rows: list[tuple[int, list[str]]] = []
     for lineno, line in content:
         cells = (next(csv.reader([line], delimiter=delim)) if delim else line.split())
@@ -293,7 +300,7 @@ def looks_like_cgats_csv(text_head: str) -> bool:
     _, content = _content(text_head)
     if not content:
         return False
-    delim = _delimiter([ln for _, ln in content[:20]])
+    delim = csv_delimiter([ln for _, ln in content[:20]])
     if delim is None:
         return False
     header = next(csv.reader([content[0][1]], delimiter=delim))
@@ -310,7 +317,7 @@ def read_cgats_csv(text: str, path: str) -> RawSpectra:
     """
 
     comments, content = _content(text)
-    delim = _delimiter([ln for _, ln in content[:20]]) or ","
+    delim = csv_delimiter([ln for _, ln in content[:20]]) or ","
     rows = [(ln, [c.strip() for c in next(csv.reader([line], delimiter=delim))])
             for ln, line in content]
     (header_line, fields), data = rows[0], rows[1:]
