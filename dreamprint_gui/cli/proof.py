@@ -117,8 +117,8 @@ def _common(f, halftones: bool = False):
         click.option("--viewing-distance-mm", type=float, default=500.0, show_default=True,
                      help="S-CIELAB: the print seen at its real size from this distance."),
         click.option("--noise-floor/--no-noise-floor", default=True, show_default=True,
-                     help="Render the print again at seed + 1 and report the difference "
-                          "(the figures' own noise; twice the print render time)."),
+                     help="Report the figures' own render noise, from the print's two "
+                          "halves of samples (seeds S and S + 1; no extra render)."),
         click.option("--surface", default=None,
                      help="The print's surface: none, glossy or matte (a dielectric boundary, "
                           "n 1.5 unless the profile says). Default: the profile's, else none "
@@ -216,7 +216,7 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
         click.echo(note)
     f = report["noise_floor"]
     if f is not None:
-        click.echo(f"noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 mean "
+        click.echo(f"noise floor (halves at seeds {f['seeds'][0]}, {f['seeds'][1]}): dE2000 mean "
                    f"{f['mean_de2000']:.2f}, S-CIELAB dE2000 mean "
                    f"{f['mean_scielab_de2000']:.2f}")
     for line in clear_lines(report["clear"]):

@@ -312,7 +312,7 @@ class ProofPage(QWidget):
 
     def compensate(self, settings=None) -> None:
         """Compensate the job of ``settings`` (default :meth:`proof_settings`) and show the
-        open-loop and the compensated print on this page's cameras (no noise-floor render:
+        open-loop and the compensated print on this page's cameras (no noise floor reported:
         two proofs already)."""
         from dataclasses import replace
 
@@ -391,7 +391,7 @@ class ProofPage(QWidget):
         self._show_view(self.view_pick.value())
         o = self.result["overall"]
         f = self.result.get("noise_floor")
-        floor = (f"; noise floor (seed {f['seeds'][0]} vs {f['seeds'][1]}): dE2000 "
+        floor = (f"; noise floor (halves at seeds {f['seeds'][0]}, {f['seeds'][1]}): dE2000 "
                  f"{f['mean_de2000']:.2f}, S-CIELAB {f['mean_scielab_de2000']:.2f}" if f else "")
         self.figures.setText(
             f"overall: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "

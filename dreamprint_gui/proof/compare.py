@@ -9,9 +9,16 @@ Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_
 - S-CIELAB dE2000 (:mod:`.scielab`): the same two images filtered as the eye sees them at the
   proof's viewing distance (the print at its real size), then dE2000 per pixel; mean and 95th
   percentile over the same object pixels.
-- Noise floor (:func:`noise_floor`): the print rendered again with another Mitsuba seed (same
-  labels, medium and cameras); both figures between the two renders over the print's object
-  pixels. A difference between two proofs smaller than a few times the floor is render noise.
+- Noise floor (:func:`noise_floor_from_halves`): the proof's print is the mean of two
+  independent halves of its samples (seeds s and s + 1, :func:`.print_render.render_print_halves`),
+  ``x = (x_a + x_b) / 2``. Two independent proofs at the same settings differ by a noise of
+  variance ``2 Var x = Var x_a``, while the halves differ by ``2 Var x_a``: so the floor is
+  :func:`noise_floor` (both figures over the print's object pixels) between the pair
+  ``x +- (x_a - x_b) / (2 sqrt 2)``, centred on the proof, whose difference
+  ``(x_a - x_b) / sqrt 2`` has the variance of the difference between two proofs. It estimates
+  what the floor was until 2026-12 (the print rendered again in full at seed + 1, both figures
+  between the two renders) without the second render (``bench_proof.py --floor-check``). A
+  difference between two proofs smaller than a few times the floor is render noise.
 - Object pixels: where either image's coverage exceeds :data:`COVERAGE_THRESHOLD`; mean and
   95th percentile of dE2000 are over those pixels.
 - Coverage: 1 - the direct (unscattered) transmittance of the pixel's rays through the volume:
@@ -37,7 +44,8 @@ from numpy.typing import NDArray
 from dreamprint_gui.physics.colorimetry import Observer, clip_unit, delta_E2000
 from dreamprint_gui.proof.scielab import scielab_de2000
 
-__all__ = ["compare_view", "noise_floor", "summarise", "summarise_floor", "FLOOR_KEYS",
+__all__ = ["compare_view", "noise_floor", "noise_floor_from_halves", "summarise",
+           "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "de_heatmap", "to_display",
            "empty_source_note", "EMPTY_SOURCE_KEYS", "EMPTY_NOTE_MIN", "inside_source",
            "COVERAGE_THRESHOLD", "DE_MAP_MAX"]
@@ -125,6 +133,20 @@ def noise_floor(prn_xyz: NDArray, prn_xyz2: NDArray, prn_alpha: NDArray, observe
     mask = prn_alpha > threshold
     return {"object_pixels": int(mask.sum()), **_stats(de, mask, "de2000"),
             **_stats(sde, mask, "scielab_de2000")}
+
+
+def noise_floor_from_halves(half_a_xyz: NDArray, half_b_xyz: NDArray, prn_alpha: NDArray,
+                            observer: Observer, samples_per_degree: float,
+                            threshold: float = COVERAGE_THRESHOLD) -> dict:
+    """The noise floor of a proof whose print is the mean of two independent halves of its
+    samples (XYZ ``half_a_xyz``, ``half_b_xyz``): :func:`noise_floor` between
+    ``x +- (x_a - x_b) / (2 sqrt 2)``, ``x = (x_a + x_b) / 2``, a pair centred on the proof that
+    differs as two independent proofs at its settings do (module docstring)."""
+    a = np.asarray(half_a_xyz, np.float64)
+    b = np.asarray(half_b_xyz, np.float64)
+    mean = (a + b) / 2.0
+    d = (a - b) / (2.0 * np.sqrt(2.0))
+    return noise_floor(mean + d, mean - d, prn_alpha, observer, samples_per_degree, threshold)
 
 
 FLOOR_KEYS = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000")

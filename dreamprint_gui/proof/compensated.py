@@ -180,7 +180,7 @@ def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = Non
         resolution=train_resolution, spp=train_spp, max_cells=ps.max_cells,
         field_cells=field_cells)
     train = (iterations + 1) * training_views * train_resolution ** 2 * train_spp
-    proof = ps.views * ps.resolution ** 2 * ps.spp * (2 if ps.noise_floor else 1)
+    proof = ps.views * ps.resolution ** 2 * ps.spp   # its noise floor is free (two halves)
     clock = PhaseClock({"compensating": float(train), "proof (open loop)": float(proof),
                         "proof (compensated)": float(proof)})
     state: dict = {"total": int(iterations) + 1}

@@ -1,6 +1,8 @@
 """The print rendered by Mitsuba 3: a heterogeneous scattering medium under a white environment.
 
-Defines :func:`render_print` and :data:`DEFAULT_MAX_DEPTH`.
+Defines :func:`render_print`, :func:`render_print_halves` (the proof's: two independent halves
+of the samples, their mean the image, their difference the noise floor) and
+:data:`DEFAULT_MAX_DEPTH`.
 
 Scene (units mm, the print centred on the origin, z up):
 
@@ -47,8 +49,9 @@ from dreamprint_gui.proof.cameras import View
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics
 
-__all__ = ["render_print", "render_print_seeds", "hides_direct", "thick_tiles", "pass_spp",
-           "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER", "SAMPLERS"]
+__all__ = ["render_print", "render_print_seeds", "render_print_halves", "half_spp",
+           "hides_direct", "thick_tiles", "pass_spp", "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER",
+           "SAMPLERS"]
 
 DEFAULT_MAX_DEPTH = 512
 # volpathmis, not volpath: the three channels of a pass are three bands whose sigma_t differ
@@ -282,6 +285,52 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
             "bricks": "adaptive" if brick is None else int(brick),
             **(optics or Optics()).describe()}
     return [out[..., :nb_] for out in outs], info
+
+
+def half_spp(spp: int | Sequence[int]) -> int | list[int]:
+    """Samples per pixel of each half (:func:`render_print_halves`): ``ceil(n / 2)`` of each
+    count ``n`` (an odd count renders one sample more in all; a count of 1, 1 per half)."""
+    if np.ndim(spp) == 0:
+        return -(-int(spp) // 2)
+    return [-(-int(n) // 2) for n in spp]
+
+
+def render_print_halves(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArray,
+                        views: list[View], resolution: int, spp: int | Sequence[int],
+                        seed: int, max_depth: int = DEFAULT_MAX_DEPTH,
+                        key_light: float = 0.0, floor: bool = False,
+                        progress: Callable[[int, int], None] | None = None,
+                        cancelled: Callable[[], bool] | None = None,
+                        sampler: str = DEFAULT_SAMPLER, optics: Optics | None = None,
+                        extra: list[tuple[int, tuple[int, int, int, int]]] = (),
+                        extra_spp: int = 0, brick: int | None = None,
+                        rr_depth: int | None = None
+                        ) -> tuple[NDArray, tuple[NDArray, NDArray], dict]:
+    """The proof's print render: two independent halves of the samples, Mitsuba seeds ``seed``
+    and ``seed + 1`` at :func:`half_spp` of ``spp`` (per pass) and of ``extra_spp`` each, and
+    their mean::
+
+        L = (L_a + L_b) / 2
+
+    an unbiased estimate with the variance of one render at ``spp`` (each half carries half the
+    samples; Var L = Var L_a / 2). The two halves also give the noise floor
+    (:func:`.compare.noise_floor_from_halves`) at no further render. Returns ``(mean, (a, b),
+    info)``, images ``(views, res, res, n_bands)``; ``info`` as :func:`render_print_seeds`' with
+    ``spp``, ``pass_spp`` and ``extra_spp`` the totals of both halves and ``halves`` the seeds
+    and counts of each."""
+    half = half_spp(spp)
+    half_extra = -(-int(extra_spp) // 2)
+    (a, b), info = render_print_seeds(sigma_t, albedo, lo, hi, views, resolution, half,
+                                      (int(seed), int(seed) + 1), max_depth, key_light, floor,
+                                      progress, cancelled, sampler, optics, rr_depth,
+                                      extra=extra,
+                                      extra_spp=half_extra, brick=brick)
+    info["halves"] = {"seeds": [int(seed), int(seed) + 1], "pass_spp": info["pass_spp"],
+                      "extra_spp": info["extra_spp"]}
+    info["pass_spp"] = [2 * n for n in info["pass_spp"]]
+    info["spp"] = max(info["pass_spp"])
+    info["extra_spp"] = 2 * info["extra_spp"]
+    return (a.astype(np.float64) + b) / 2.0, (a, b), info
 
 
 def pass_spp(xyz_weights: NDArray, spp: int, faint: float = FAINT_PASS) -> list[int]:

@@ -37,7 +37,7 @@ from dreamprint_gui.proof.compare import (
     COVERAGE_THRESHOLD,
     compare_view,
     de_heatmap,
-    noise_floor,
+    noise_floor_from_halves,
     summarise,
     summarise_floor,
     to_display,
@@ -52,6 +52,7 @@ from dreamprint_gui.proof.print_render import (
     SAMPLERS,
     hides_direct,
     pass_spp,
+    render_print_halves,
     render_print_seeds,
     thick_tiles,
 )
@@ -73,8 +74,9 @@ __all__ = ["ProofSettings", "ProofProgress", "run_proof", "validate", "render_pr
 MAX_RESOLUTION = 4096
 MAX_SPP = 65536
 MAX_VIEWS = 64
-# 64: the demo's noise floor 0.48 S-CIELAB at 47 s per view-render (bench_proof.py, quiet
-# 2-core host, adaptive bricks); 16 gave 0.98 (docs/physics.md "Noise floor")
+# 64 (in two halves of 32, render_print_halves): the demo's noise floor 0.48 S-CIELAB at 47 s
+# per view (bench_proof.py, quiet 2-core host, adaptive bricks); 16 gave 0.98 (docs/physics.md
+# "Noise floor")
 DEFAULT_SPP = 64
 DEFAULT_RESOLUTION = 256
 DEFAULT_MAX_CELLS = 128
@@ -108,7 +110,7 @@ class ProofSettings(HasSpec):
     key_light: float = 0.0
     floor: bool = False
     viewing_distance_mm: float = 500.0   # S-CIELAB: the print seen at its size from here
-    noise_floor: bool = True             # render the print again at seed + 1 (twice the time)
+    noise_floor: bool = True             # report the floor (from the print's two halves: free)
     sampler: str = "independent"         # Mitsuba's sampler of the print render
     thick_spp: int = DEFAULT_THICK_SPP   # extra spp on the tiles of the optically thick parts
     surface: str | None = None           # none | glossy | matte (None: the profile's, else none)
@@ -248,7 +250,6 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     timings["source_render"] = time.perf_counter() - t1
 
     t2 = time.perf_counter()
-    seeds = (s.seed, s.seed + 1) if s.noise_floor else (s.seed,)
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
     direct_T = [optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
                 for v in views]
@@ -258,9 +259,11 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
 
     def work_print() -> None:
         try:
-            box["m"] = render_print_seeds(
+            # two halves of the samples at seeds s, s + 1: their mean is the print, their
+            # difference the noise floor (with or without reporting it: the same image)
+            box["m"] = render_print_halves(
                 sigma_t, albedo, lo, hi, views, s.resolution,
-                pass_spp(bands.xyz_weights, s.spp), seeds, s.max_depth,
+                pass_spp(bands.xyz_weights, s.spp), s.seed, s.max_depth,
                 s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
                 cancelled=is_cancelled, sampler=s.sampler, optics=optics, extra=extra,
                 extra_spp=s.thick_spp)
@@ -268,11 +271,11 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
             box["e"] = exc
 
     yield from in_thread(work_print, "print", prog, el, box, cancel)
-    prn_seeds, info = box["m"]
-    prn_bands = prn_seeds[0]
+    prn_bands, halves, info = box["m"]
+    seeds = tuple(info["halves"]["seeds"])
     timings["print_render"] = time.perf_counter() - t2
-    # one render of one view (all bands); the noise floor renders each view once more
-    timings["print_render_per_view"] = timings["print_render"] / (len(views) * len(seeds))
+    # one view's print (both halves, all bands)
+    timings["print_render_per_view"] = timings["print_render"] / len(views)
 
     t3 = time.perf_counter()
     yield ProofProgress("compare", 0, len(views), el(), "comparing")
@@ -289,9 +292,9 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         prints.append((prn_xyz, prn_alpha))
         fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs, spd)
         if s.noise_floor:
-            fig["noise_floor"] = noise_floor(
-                prn_xyz, print_xyz(bands, prn_seeds[1][i], T, s.floor, optics), prn_alpha,
-                obs, spd)
+            fig["noise_floor"] = noise_floor_from_halves(
+                print_xyz(bands, halves[0][i], T, s.floor, optics),
+                print_xyz(bands, halves[1][i], T, s.floor, optics), prn_alpha, obs, spd)
         per_view.append({"view": i, **v.describe(), **fig})
         images.append({"source": src_lin[i], "print": obs.XYZ_to_linear_sRGB(prn_xyz),
                        "de2000": de})
@@ -338,9 +341,11 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         "compensation": _compensation(lab),
         "gamut_floor": floor_fig,
         "noise_floor": (
-            {"method": f"the print rendered again at Mitsuba seed {s.seed + 1} (same labels, "
-                       "medium, cameras); figures between the two renders over the print's "
-                       "object pixels",
+            {"method": f"the print is the mean of two independent halves of its samples "
+                       f"(Mitsuba seeds {seeds[0]} and {seeds[1]}); figures over the print's "
+                       "object pixels between the proof +- (half a - half b) / (2 sqrt 2), a "
+                       "pair that differs as two independent proofs at these settings do "
+                       "(proof/compare.py)",
              "seeds": list(seeds), **summarise_floor([v["noise_floor"] for v in per_view])}
             if s.noise_floor else None),
         "timings_s": timings,

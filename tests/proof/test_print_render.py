@@ -347,3 +347,19 @@ def test_deep_brick_without_shadow_rays_matches_the_semi_infinite_closed_form():
     d = pr.scene_dict(mi, st, al, lo, -lo, [view], RES, 256, 512, key_light=1.0)
     assert all("sample_emitters" not in v["interior"] for k, v in d.items()
                if k.startswith("brick_"))
+
+
+def test_the_print_is_the_mean_of_two_independent_halves():
+    """render_print_halves at 8 spp per pass ([8, 2] over two passes): the halves are the
+    renders at 4 spp ([4, 1]) with seeds s and s + 1, the image their mean; info gives the
+    totals and each half's counts; an odd count renders one sample more."""
+    st, al, lo, views = _white_fog(6)
+    mean, (a, b), info = pr.render_print_halves(st, al, lo, -lo, views, RES, [8, 2], 5)
+    (u, v), _ = pr.render_print_seeds(st, al, lo, -lo, views, RES, [4, 1], (5, 6))
+    np.testing.assert_array_equal(a, u)
+    np.testing.assert_array_equal(b, v)
+    np.testing.assert_allclose(mean, (u.astype(np.float64) + v) / 2, rtol=0, atol=1e-7)
+    assert not np.array_equal(a, b)
+    assert info["pass_spp"] == [8, 2] and info["spp"] == 8
+    assert info["halves"] == {"seeds": [5, 6], "pass_spp": [4, 1], "extra_spp": 0}
+    assert pr.half_spp(7) == 4 and pr.half_spp([64, 16, 1]) == [32, 8, 1]
