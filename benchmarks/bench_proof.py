@@ -2,12 +2,19 @@
 
 Default: the demo volume at 40 mm (the default object proof), one 256 x 256 view at the default
 spp and sampler: prints the seconds of each stage (labels, source render, print render per view
-after Mitsuba's JIT warm-up) and the proof's noise floor: the print rendered at two seeds, mean
-and p95 per-pixel dE2000 and S-CIELAB dE2000 (at the proof's viewing distance) between them
-over the object, and the wall and CPU seconds of one render of the view. Targets: floor <= 0.5
-mean S-CIELAB dE2000, <= 60 s per view on CPU. ``--spp 16,64 --thick-spp 0,48 --samplers
-independent,multijitter`` sweeps (the measurement behind the defaults); ``--thick-spp``: more
-samples on the tiles where the print is optically thick (``runner.THICK_T``);
+after Mitsuba's JIT warm-up) and the proof's noise floor: the print rendered as the proof does
+(two halves of the samples at seeds s, s + 1, ``print_render.render_print_halves``), mean and
+p95 per-pixel dE2000 and S-CIELAB dE2000 (at the proof's viewing distance) of the floor from
+the halves (``compare.noise_floor_from_halves``), and the wall and CPU seconds (all threads,
+Mitsuba's too) of the view's print. Targets: floor <= 0.5 mean S-CIELAB dE2000, <= 60 s per
+view on CPU. ``--floor-check``: also the floor as defined until 2026-12 (two full renders at
+other seeds, figures between them), beside it. ``--reference-spp N``: the view rendered once at
+N spp; each row prints its figures against the source (dE2000 and S-CIELAB overall, inside the
+source, in the block body; coverage error) minus the reference's: the bias of the proof's
+figures at its spp. ``--bands 12,6``: fewer spectral bands (the bias then includes theirs).
+``--spp 16,64 --thick-spp 0,48 --samplers independent,multijitter`` sweeps (the measurement
+behind the defaults); ``--thick-spp``: more samples on the tiles where the print is optically
+thick (``runner.THICK_T``);
 ``--faint-pass both``: the faint last pass at a quarter of the spp and at all of it;
 ``--bricks adaptive,16,32``: the medium cut by the cost model (``proof.bricks``, the proof's) or
 into cubes of so many cells; ``--source FILE --height-mm H``: another source than the demo.
@@ -18,6 +25,8 @@ voxels): prints dE2000 between the two print images (mean, 95th percentile over 
 
     python benchmarks/bench_proof.py [--height-mm 40] [--resolution 256] [--spp 16[,64]]
                                      [--thick-spp 0[,48]] [--samplers independent[,...]]
+    python benchmarks/bench_proof.py --height-mm 20 --resolution 128 --spp 64 --floor-check \
+        --reference-spp 1024 [--bands 12,6]
     python benchmarks/bench_proof.py --variant scalar   # Mitsuba's scalar_rgb (no libLLVM)
     python benchmarks/bench_proof.py --block-error
 """
@@ -38,13 +47,16 @@ def _medium(lab, block, layers_per_block):
 
 
 def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None,
-               thick_spp=0, faint=True, brick=None):
+               thick_spp=0, faint=True, brick=None, halves=False):
     """The print of one view rendered at each of ``seeds``: (XYZ per seed, coverage, wall s,
-    render info with ``cpu_s``), the thick tiles rendered ``thick_spp`` more."""
+    render info with ``cpu_s``), the thick tiles rendered ``thick_spp`` more. ``halves``: the
+    proof's render instead (``render_print_halves`` at ``seeds[0]``): XYZ of (the mean, half a,
+    half b)."""
     from dreamprint_gui.proof.medium import medium_coefficients
     from dreamprint_gui.proof.print_render import (
         DEFAULT_SAMPLER,
         pass_spp,
+        render_print_halves,
         render_print_seeds,
         thick_tiles,
     )
@@ -58,20 +70,41 @@ def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None
     extra = [(0, r) for r in thick_tiles(T @ y_w, THICK_T)]
     t0, c0 = time.perf_counter(), time.process_time()
     per_pass = pass_spp(bands.xyz_weights, spp) if faint else spp
-    imgs, info = render_print_seeds(st, al, lo, hi, [view], res, per_pass, tuple(seeds),
-                                    sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth,
-                                    extra=extra, extra_spp=thick_spp,
-                                    brick=brick)
+    if halves:
+        mean, (a, b), info = render_print_halves(
+            st, al, lo, hi, [view], res, per_pass, seeds[0], sampler=sampler or DEFAULT_SAMPLER,
+            extra=extra, extra_spp=thick_spp, brick=brick, rr_depth=rr_depth)
+        imgs = [mean, a, b]
+    else:
+        imgs, info = render_print_seeds(st, al, lo, hi, [view], res, per_pass, tuple(seeds),
+                                        sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth,
+                                        extra=extra, extra_spp=thick_spp,
+                                        brick=brick)
     t = time.perf_counter() - t0
-    # CPU seconds of all this process's threads: on a shared machine the wall time says more
-    # about the other processes than about the variant (llvm or scalar)
+    # CPU seconds of all this process's threads (Mitsuba's too): on a shared machine the wall
+    # time says more about the other processes than about the render
     info["cpu_s"] = time.process_time() - c0
     return [print_xyz(bands, im[0], T, False) for im in imgs], 1.0 - T @ y_w, t, info
 
 
+def _figures(src_xyz, src_alpha, prn_xyz, prn_alpha, obs, spd) -> dict:
+    """The proof's figures of one view against the source: overall, inside the source and in
+    the block body (where the source is empty)."""
+    from dreamprint_gui.proof.compare import compare_view, inside_source
+
+    f, _ = compare_view(src_xyz, prn_xyz, src_alpha, prn_alpha, obs, spd)
+    body = f["empty_source_fraction"]
+    return {"dE": f["mean_de2000"], "S": f["mean_scielab_de2000"],
+            "dE in": inside_source(f, "mean_de2000") or 0.0,
+            "S in": inside_source(f, "mean_scielab_de2000") or 0.0,
+            "dE body": f["empty_source_de2000"] / body if body > 0 else 0.0,
+            "S body": f["empty_source_scielab_de2000"] / body if body > 0 else 0.0,
+            "coverage": f["coverage_error"]}
+
+
 def speed(args) -> None:
     from dreamprint_gui.proof.cameras import orbit_views
-    from dreamprint_gui.proof.compare import noise_floor
+    from dreamprint_gui.proof.compare import noise_floor, noise_floor_from_halves
     from dreamprint_gui.proof.medium import block_for_cell
     from dreamprint_gui.proof.methods import method_labels
     from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
@@ -95,6 +128,7 @@ def speed(args) -> None:
     faints = [False, True] if args.faint_pass == "both" else [args.faint_pass == "quarter"]
     bricks = [None if x == "adaptive" else int(x)
               for x in (args.bricks or "adaptive").split(",")]
+    bands_n = [int(x) for x in (args.bands or "12").split(",")]
     s = ProofSettings(source=args.source, height_mm=args.height_mm, resolution=args.resolution)
     print(f"{args.source} at {args.height_mm} mm, {args.resolution} x {args.resolution}, "
           f"spp {spps}, samplers {samplers}, {os.cpu_count()} cores, load average "
@@ -114,30 +148,57 @@ def speed(args) -> None:
     t3 = time.perf_counter()
     field = sample_source(lab.source, lab.grid, med.block_xyz, lab.density_scale, med.cells_xyz,
                           med.box_mm[0])
-    render_source(field, view, args.resolution)
+    src_rgb, src_alpha = render_source(field, view, args.resolution)
+    src_xyz = src_rgb @ np.linalg.inv(bands.observer.xyz_to_linear_srgb).T
     print(f"source render (per view)      {time.perf_counter() - t3:7.1f} s")
     spd = samples_per_degree(2 * view.half_mm / args.resolution, s.viewing_distance_mm)
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
-    print(f"{'sampler':12s} {'bricks':>8s} {'rr':>4s} {'spp':>5s} {'thick':>5s} "
+    ref = None
+    if args.reference_spp:
+        (ref,), alpha, t, info = _print_xyz(med, bands, view, args.resolution,
+                                            args.reference_spp, (99,), faint=False)
+        ref_fig = _figures(src_xyz, src_alpha, ref, alpha, bands.observer, spd)
+        print(f"reference: {args.reference_spp} spp in every pass, seed 99: {t:.1f} s, "
+              f"{info['cpu_s']:.1f} CPU s; figures "
+              + ", ".join(f"{k} {v:.3f}" for k, v in ref_fig.items()), flush=True)
+    print("s/view, CPU s: one proof's print of the view (both halves); floor: from the halves "
+          "(proof.json's); old floor: two full renders at seeds 5, 6 (--floor-check), "
+          "s/render one of them; bias: the proof's figures minus the reference's")
+    print(f"{'sampler':12s} {'bricks':>8s} {'bands':>5s} {'spp':>5s} {'thick':>5s} "
           f"{'s/view':>7s} {'CPU s':>6s} "
           f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}  spp per pass")
     for sampler, rr, brick in [(a, b, c) for a in samplers for b in rrs for c in bricks]:
         # JIT warm-up
         _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr, brick=brick)
-        for spp, thick, faint in [(a, b, c) for a in spps for b in thicks for c in faints]:
-            (a, b), alpha, t, info = _print_xyz(med, bands, view, args.resolution, spp, (1, 2),
-                                                sampler, rr, thick, faint, brick)
-            f = noise_floor(a, b, alpha, bands.observer, spd)
-            print(f"{sampler:12s} {str(info['bricks']):>8s} {info['rr_depth']:4d} {spp:5d} "
-                  f"{thick:5d} {t / 2:7.1f} "
-                  f"{info['cpu_s'] / 2:6.1f} {f['mean_de2000']:16.2f} "
+        for spp, thick, faint, nb in [(a, b, c, d) for a in spps for b in thicks for c in faints
+                                      for d in bands_n]:
+            bnd = bands if nb == bands.n else spectral_bands(lab.profile, nb)
+            (m, a, b), alpha, t, info = _print_xyz(med, bnd, view, args.resolution, spp, (1,),
+                                                   sampler, rr, thick, faint, brick, halves=True)
+            f = noise_floor_from_halves(a, b, alpha, bnd.observer, spd)
+            print(f"{sampler:12s} {str(info['bricks']):>8s} {nb:5d} {spp:5d} "
+                  f"{thick:5d} {t:7.1f} "
+                  f"{info['cpu_s']:6.1f} {f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
                   f"{f['p95_scielab_de2000']:6.2f}  {info['pass_spp']}", flush=True)
+            if args.floor_check:
+                (x, y), _, t_old, info_old = _print_xyz(med, bnd, view, args.resolution, spp,
+                                                        (5, 6), sampler, rr, thick, faint,
+                                                        brick)
+                g = noise_floor(x, y, alpha, bnd.observer, spd)
+                print(f"{'':12s} old floor (two full renders): dE00 mean {g['mean_de2000']:.2f}"
+                      f" p95 {g['p95_de2000']:.2f}, S-CIELAB mean "
+                      f"{g['mean_scielab_de2000']:.2f} p95 {g['p95_scielab_de2000']:.2f}; "
+                      f"{t_old / 2:.1f} s/render, {info_old['cpu_s'] / 2:.1f} CPU s/render",
+                      flush=True)
+            if ref is not None:
+                fig = _figures(src_xyz, src_alpha, m, alpha, bnd.observer, spd)
+                print(f"{'':12s} bias against {args.reference_spp} spp: "
+                      + ", ".join(f"{k} {fig[k] - ref_fig[k]:+.3f}" for k in fig), flush=True)
     share = info["extra_pixels"] / args.resolution ** 2
-    print(f"({info['variant']}, {info['passes']} Mitsuba passes per render; thick tiles "
-          f"(direct transmittance < {THICK_T}) {share:.0%} of the frame; s/view and CPU s are "
-          f"one render of one view (the two seeds' mean); the proof with its noise floor "
-          f"renders each view twice; load average now {os.getloadavg()[0]:.1f})")
+    print(f"({info['variant']}, {info['passes']} Mitsuba passes per half; thick tiles "
+          f"(direct transmittance < {THICK_T}) {share:.0%} of the frame; "
+          f"load average now {os.getloadavg()[0]:.1f})")
 
 
 def block_error(args) -> None:
@@ -194,6 +255,12 @@ def main() -> None:
                     "print_render.pass_spp), at the full spp, or both rows")
     ap.add_argument("--samplers", default=None, help="Mitsuba samplers, comma-separated "
                     "(default: the proof's)")
+    ap.add_argument("--bands", default=None, help="spectral bands, comma-separated (default "
+                    "12, the proof's)")
+    ap.add_argument("--floor-check", action="store_true", help="also the floor as it was "
+                    "defined until 2026-12: two full renders at seeds 5, 6, figures between them")
+    ap.add_argument("--reference-spp", type=int, default=0, help="render the view once at "
+                    "this spp (every pass) and print each row's figures minus its (bias)")
     ap.add_argument("--block-error", action="store_true")
     ap.add_argument("--variant", choices=("llvm", "scalar"), default="llvm",
                     help="Mitsuba's LLVM variant (default, when a libLLVM is found) or the "
