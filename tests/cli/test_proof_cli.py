@@ -35,7 +35,7 @@ def test_proof_demo_writes_everything_and_is_deterministic(tmp_path, capsys):
     # the default Clear block: the object pixels where the source is empty are part of the
     # figures (their shares are at most the figures themselves)
     assert 0 <= o["empty_source_de2000"] <= o["mean_de2000"]
-    # the noise floor: the print again at seed + 1; S-CIELAB blurs what the eye does not see
+    # the noise floor: from the two halves (seeds 0, 1); S-CIELAB blurs what the eye does not see
     f = rep["noise_floor"]
     assert f["seeds"] == [0, 1] and f["object_pixels"] > 0
     assert 0 < f["mean_scielab_de2000"] < f["mean_de2000"] <= f["p95_de2000"] + 1e-9
