@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 
 import pytest
 
@@ -41,6 +42,15 @@ def uninterrupted(tmp_path_factory):
     assert main(["convert", "demo", "-o", str(out), *ARGS[:-3], "--slab-layers", "7",
                  "--workers", "2", "-q"]) == 0
     return out
+
+
+def _resume_then_compare(settings, out, ref):
+    """Resume ``settings``' job, convert it again uninterrupted into ``ref``: same slices."""
+    for _ in run_conversion(replace(settings, resume=True), preflight=False):
+        pass
+    for _ in run_conversion(replace(settings, output=ref), preflight=False):
+        pass
+    assert _digests(out) == _digests(ref)
 
 
 def _partials(folder):
@@ -129,8 +139,6 @@ def _interrupted_job(tmp_path, n_slabs=5, **kw):
     ({"background": "empty"}, "another background"), ({"intent": "perceptual"}, "colour tables"),
 ])
 def test_a_folder_of_another_job_is_refused(tmp_path, change, says):
-    from dataclasses import replace
-
     out, settings, kept = _interrupted_job(tmp_path)
     before = sorted(p.name for p in kept.rglob("*"))
     with pytest.raises(DreamPrintError, match=says) as e:
@@ -141,8 +149,6 @@ def test_a_folder_of_another_job_is_refused(tmp_path, change, says):
 
 
 def test_a_folder_of_another_version_or_source_file_is_refused(tmp_path):
-    from dataclasses import replace
-
     out, settings, kept = _interrupted_job(tmp_path)
     ident = json.loads((kept / IDENTITY).read_text())
     ident["software"]["version"] = "0.1"
@@ -161,8 +167,6 @@ def test_a_folder_of_another_version_or_source_file_is_refused(tmp_path):
 
 def test_a_short_slice_makes_its_slab_run_again(tmp_path):
     """A power cut may leave a recorded slice empty: its slab is not counted as done."""
-    from dataclasses import replace
-
     out, settings, kept = _interrupted_job(tmp_path, n_slabs=4)
     recs = read_slab_records(kept, 38)
     assert len(recs) >= 4
@@ -220,8 +224,6 @@ def test_plain_writer_interrupt_still_removes_its_folder(tmp_path):
 def test_an_error_while_resuming_keeps_the_finished_layers(tmp_path, monkeypatch):
     """A resumed run that fails (here every slab task raises) loses none of the layers it took
     over: the folder stays, under the failed process's name, and a later --resume finishes."""
-    from dataclasses import replace
-
     import dreamprint_gui.job.run as run
 
     out, settings, kept = _interrupted_job(tmp_path, n_slabs=4)
@@ -238,12 +240,7 @@ def test_an_error_while_resuming_keeps_the_finished_layers(tmp_path, monkeypatch
     [left] = _partials(tmp_path)
     assert len(read_slab_records(left, 38)) == before and not out.exists()
     left.rename(left.with_name(".JOB.partial-4194401-0"))  # its process gone
-    for _ in run_conversion(replace(settings, resume=True), preflight=False):
-        pass
-    ref = tmp_path / "REF"
-    for _ in run_conversion(replace(settings, output=ref), preflight=False):
-        pass
-    assert _digests(out) == _digests(ref)
+    _resume_then_compare(settings, out, tmp_path / "REF")
 
 
 def test_resume_and_overwrite_together_are_refused(tmp_path, capsys):
@@ -281,8 +278,6 @@ def test_a_damaged_slab_record_makes_its_slab_run_again(tmp_path, damage):
     """A record whose totals are not a slab's (edited, damaged) is not taken as done: the
     resumed job runs that slab again and its manifest's totals are those of an uninterrupted
     run, instead of a traceback or silently wrong totals."""
-    from dataclasses import replace
-
     out, settings, kept = _interrupted_job(tmp_path, n_slabs=4)
     recs = read_slab_records(kept, 38, _layer_voxels(kept))
     assert len(recs) >= 4  # sound records pass the check
@@ -317,8 +312,6 @@ def test_a_run_interrupted_in_this_process_is_found_and_resumed(tmp_path):
     """The GUI's case: an export stopped by a lost cluster or a full disk leaves its folder
     under the still running application's pid; Export again must find it (the CLI's message
     says so) instead of converting from the first layer beside it or removing it."""
-    from dataclasses import replace
-
     out = tmp_path / "JOB"
     settings = ConvertSettings(source="demo", output=out, height_mm=1.0, table_size=TABLE,
                                seed=3, workers=1, slab_layers=2, scheduler="sync")
@@ -334,12 +327,7 @@ def test_a_run_interrupted_in_this_process_is_found_and_resumed(tmp_path):
     with pytest.raises(DreamPrintError, match="add --resume"):
         for _ in run_conversion(settings, preflight=False):
             pass
-    for _ in run_conversion(replace(settings, resume=True), preflight=False):
-        pass
-    ref = tmp_path / "REF"
-    for _ in run_conversion(replace(settings, output=ref), preflight=False):
-        pass
-    assert _digests(out) == _digests(ref)
+    _resume_then_compare(settings, out, tmp_path / "REF")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["JOB", "REF"]
 
 
