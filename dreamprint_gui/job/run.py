@@ -27,9 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.core.threads import DaemonCall
 from dreamprint_gui.job.cluster import (
     absolute_paths,
@@ -38,6 +36,14 @@ from dreamprint_gui.job.cluster import (
     cluster_threads,
     connect,
     run_distributed,
+)
+from dreamprint_gui.job.manifest import (
+    count_entries,
+    grid_entries,
+    header,
+    labels_entry,
+    slices_entry,
+    software,
 )
 from dreamprint_gui.job.plan import (
     ConvertProgress,
@@ -62,11 +68,10 @@ from dreamprint_gui.job.resume import (
     write_identity,
 )
 from dreamprint_gui.job.slab import load_kernels, run_slab
-from dreamprint_gui.job.write import JobWriter, check_target, slice_name
+from dreamprint_gui.job.write import JobWriter, check_target
 
 __all__ = ["run_conversion", "job_description", "TimeLeft"]
 
-_LABELS = (*INKS, "empty")
 
 
 # ----------------------------------------------------------------------------- scheduling
@@ -169,10 +174,9 @@ def job_description(ctx: JobContext) -> dict[str, Any]:
     grid, seed, halftoning, background, compensation, slice files and labels (the manifest's
     fields of the same names; a resumable job's identity, :func:`.resume.job_identity`)."""
     s = ctx.settings
-    nx, ny, nz = ctx.shape_xyz
     src_path = s.source if Path(s.source).is_file() else None
     return {
-        "software": {"name": "dreamprint", "version": __version__},
+        "software": software(),
         "source": {"path": str(Path(src_path).absolute()) if src_path else s.source,
                    "options": s.source_options,
                    "density_scale": s.density_scale, "sampling": s.sampling,
@@ -185,10 +189,7 @@ def job_description(ctx: JobContext) -> dict[str, Any]:
                     "table_size": s.table_size},
         "placement": ctx.placement_json(),
         "printer": ctx.printer.to_json_dict(),
-        "physical_size_mm": [nx * ctx.printer.voxel_mm[0], ny * ctx.printer.voxel_mm[1],
-                             nz * ctx.printer.voxel_mm[2]],
-        "voxel_mm": list(ctx.printer.voxel_mm),
-        "grid_dimensions": [nx, ny, nz],
+        **grid_entries(ctx.printer, ctx.shape_xyz),
         "requested_size": {"height_mm": s.height_mm,
                            "size_mm": None if s.size_mm is None else list(s.size_mm),
                            "up": s.up, "rotate_deg": s.rotate, "fit": s.fit},
@@ -201,31 +202,19 @@ def job_description(ctx: JobContext) -> dict[str, Any]:
                           **ctx.correction.describe(),
                           "proof_figures": ctx.correction.report.get("figures"),
                           "optimise_seconds": ctx.correction.report.get("seconds")}),
-        "slices": {"folder": "slices", "count": nz, "width": nx if ctx.printer.image_columns
-                   == "x" else ny, "height": ny if ctx.printer.image_columns == "x" else nx,
-                   "first": "slices/" + slice_name(0, nz),
-                   "last": "slices/" + slice_name(nz - 1, nz),
-                   "png_mode": ctx.printer.png_mode},
-        "labels": {lab: {"material": (ctx.printer.material_names[i] if i < 6 else "none"),
-                         "rgb": ctx.palette[i].tolist()} for i, lab in enumerate(_LABELS)},
+        "slices": slices_entry(ctx.printer, ctx.shape_xyz),
+        "labels": labels_entry(ctx.printer, ctx.palette),
     }
 
 
 def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> dict[str, Any]:
     d = job_description(ctx)
-    n = math.prod(ctx.shape_xyz)
-    counts = totals["counts"]
     src = d["source"]
     d["source"] = {"path": src.pop("path"), "sha256": totals["source_sha256"], **src}
     return {
-        "format": "dreamprint-job",
-        "format_version": 1,
-        "software": d.pop("software"),
-        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        **header(),
         **d,
-        "voxel_counts": {lab: int(counts[i]) for i, lab in enumerate(_LABELS)},
-        "mean_concentration": {lab: totals["conc_sums"][i] / n for i, lab in enumerate(_LABELS)},
-        "total_voxels": n,
+        **count_entries(totals["counts"], totals["conc_sums"], math.prod(ctx.shape_xyz)),
         "clamped_density": totals["clamped"],
         "timings_s": {"total": time.perf_counter() - started, **timings},
         "execution": {"scheduler": ctx.settings.scheduler or "threads",

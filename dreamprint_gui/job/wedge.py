@@ -29,11 +29,17 @@ from typing import Any
 
 import numpy as np
 
-from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.printer import EMPTY_LABEL, PrinterProfile, check_tray
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.job.encode.png_slices import encode_labels_pngs
+from dreamprint_gui.job.manifest import (
+    count_entries,
+    grid_entries,
+    header,
+    labels_entry,
+    slices_entry,
+)
 from dreamprint_gui.job.write import JobWriter, slice_name
 
 __all__ = ["WedgeSlab", "plan_wedge", "write_wedge", "WEDGE_INKS", "WEDGE_THICKNESSES_MM",
@@ -215,32 +221,19 @@ def write_wedge(output: str | Path, inks: list[str], thicknesses_mm: list[float]
             cw.writerows(rows)
         (w.tmp / SHEET_PNG).write_bytes(_sheet_png(slabs, printer, (nx, ny, nz)))
         (w.tmp / SET_TEMPLATE).write_text(_set_template(slabs), encoding="utf-8")
-        n = nx * ny * nz
-        names = (*INKS, "empty")
         manifest = {
-            "format": "dreamprint-job", "format_version": 1,
-            "software": {"name": "dreamprint", "version": __version__},
-            "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            **header(),
             "source": {"path": None, "kind": "translucency wedge", "inks": list(inks),
                        "thickness_mm": list(map(float, thicknesses_mm)), "slab_mm": slab_mm},
             "wedge": {"sheet": SHEET_CSV, "sheet_image": SHEET_PNG,
                       "calibration_set_template": SET_TEMPLATE, "slabs": rows},
             "printer": printer.to_json_dict(),
-            "physical_size_mm": [nx * printer.voxel_mm[0], ny * printer.voxel_mm[1],
-                                 nz * printer.voxel_mm[2]],
-            "voxel_mm": list(printer.voxel_mm), "grid_dimensions": [nx, ny, nz],
+            **grid_entries(printer, (nx, ny, nz)),
             "seed": 0, "halftoning": {"method": "none: solid slabs, one material each"},
-            "slices": {"folder": "slices", "count": nz,
-                       "width": nx if printer.image_columns == "x" else ny,
-                       "height": ny if printer.image_columns == "x" else nx,
-                       "first": "slices/" + slice_name(0, nz),
-                       "last": "slices/" + slice_name(nz - 1, nz),
-                       "png_mode": printer.png_mode},
-            "labels": {lab: {"material": printer.material_names[i] if i < len(INKS) else "none",
-                             "rgb": palette[i].tolist()} for i, lab in enumerate(names)},
-            "voxel_counts": {lab: int(counts[i]) for i, lab in enumerate(names)},
-            "mean_concentration": {lab: float(counts[i]) / n for i, lab in enumerate(names)},
-            "total_voxels": n,
+            "slices": slices_entry(printer, (nx, ny, nz)),
+            "labels": labels_entry(printer, palette),
+            # one material a voxel: a label's concentration sum is its voxel count
+            **count_entries(counts, counts, nx * ny * nz),
             "timings_s": {"total": time.perf_counter() - started},
         }
         w.commit(manifest)
