@@ -558,7 +558,7 @@ class PreviewPage(QWidget):
             pl.add_mesh(box, color="#888888", style="wireframe", name=f"box{i}",
                         reset_camera=False, line_width=1, render=False)
             pl.add_text(title, position="upper_left", font_size=10, name=f"title{i}",
-                        render=False)
+                        color="#e6e6e6", render=False)  # readable on the dark background
         framing = (self.source_path, tuple(round(v, 3) for v in data.size_mm))
         if first or framing != self._framing:  # a new source or size: frame it whole
             pl.subplot(0, 0)
