@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import json
 import math
 from pathlib import Path
 
@@ -11,6 +10,7 @@ import click
 
 from dreamprint_gui.cli.group import cli
 from dreamprint_gui.cli.options import INTENT_HELP, INTENTS, OBJECTIVE_HELP, OBJECTIVES
+from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.cli.progress import progress_bar
 from dreamprint_gui.core.errors import DreamPrintError
 
@@ -121,7 +121,7 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, printer
             if al.clamped[i] else 0.0,
         })
     if as_json:
-        click.echo(json.dumps(records, indent=1))
+        emit_json(records)
         return
     for r in records:
         conc = " ".join(f"{k}={v:.3f}" for k, v in r["aligned"].items())
@@ -177,7 +177,7 @@ def gamut(profile_path, objective, intent, compare, size, samples, chart, plot, 
             except OSError as exc:
                 raise DreamPrintError(f"cannot write: {exc.strerror or exc}", target) from None
     if as_json:
-        click.echo(json.dumps(report, indent=1))
+        emit_json(report)
         return
     lv = report["lut_vs_direct_dE2000"]
     og = report["out_of_gamut_dE2000"]

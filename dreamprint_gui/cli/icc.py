@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 
 from dreamprint_gui.cli.group import cli
 from dreamprint_gui.cli.options import INTENT_HELP, INTENTS, OBJECTIVE_HELP, OBJECTIVES
+from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.cli.progress import progress_bar
 
 
@@ -58,7 +57,7 @@ def icc(output, profile_path, printer, intent, objective, size, icc_version, gri
                         version=int(icc_version), a2b_grid=grid, b2a_grid=grid, cgats=cgats,
                         patches=patches, progress=lambda msg: click.echo(msg, err=True))
     if as_json:
-        click.echo(json.dumps(report, indent=1))
+        emit_json(report)
         return
     a, r = report["check"]["a2b_dE2000"], report["check"]["round_trip_dE2000"]
     click.echo(f"wrote {report['path']}: ICC {report['icc_version']} output profile, "

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import signal
 import sys
 import time
@@ -18,6 +17,7 @@ from dreamprint_gui.cli.options import (
     rendering_options,
     size_options,
 )
+from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.cli.progress import fmt_time
 from dreamprint_gui.core.errors import DreamPrintError
 
@@ -150,7 +150,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     if clamp_line and not quiet:
         click.echo(clamp_line, err=True)
     if as_json:
-        click.echo(json.dumps(manifest, indent=2))
+        emit_json(manifest)
     else:
         size = manifest["physical_size_mm"]
         kept = manifest["execution"].get("resumed_layers", 0)
@@ -256,7 +256,7 @@ def evaluate_job(job, printer, as_json) -> None:
 
     report = check_job(Path(job), printer)
     if as_json:
-        click.echo(json.dumps(report, indent=2))
+        emit_json(report)
     else:
         click.echo(_job_report_text(job, report, Z_LIMIT))
     if not report["consistent"]:

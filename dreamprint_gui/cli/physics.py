@@ -2,18 +2,14 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import click
 
 from dreamprint_gui.cli.group import cli, evaluate
+from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.core.errors import DreamPrintError
-
-
-def emit_json(obj: object) -> None:
-    click.echo(json.dumps(obj, allow_nan=False))
 
 
 def parse_thickness(text: str | None) -> float | None:

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import json
 import signal
 import sys
 import time
@@ -18,6 +17,7 @@ from dreamprint_gui.cli.options import (
     rendering_options,
     size_options,
 )
+from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.cli.progress import fmt_time
 from dreamprint_gui.core.errors import DreamPrintError
 
@@ -202,7 +202,7 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
     if report["renderer"]["variant"].startswith("scalar"):
         click.echo(f"dreamprint: note: {report['renderer']['note']}", err=True)
     if kw["as_json"]:
-        click.echo(json.dumps(report, indent=2))
+        emit_json(report)
         return
     o = report["overall"]
     click.echo(f"wrote {output}: {len(report['views'])} views; dE2000 mean "
@@ -245,7 +245,7 @@ def _chart_proof(source, output, overwrite, chart, reflectance, geometry, thickn
 
     rep = run_chart_proof(s, step_progress("chart proof: render passes (3 bands each)"))
     if kw["as_json"]:
-        click.echo(json.dumps(rep, indent=2))
+        emit_json(rep)
         return
     msg = (f"wrote {output}: {rep['patches_count']} patches, {rep['geometry']}, surface "
            f"{rep['optics']['surface']}, phase {rep['optics']['phase']}")
@@ -315,7 +315,7 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
                              f"exceeds {SIGNIFICANCE_FACTOR:g} x the larger noise floor of the "
                              "two (vs_best)", "methods": rows, "gamut_floor": gfloor}
     if kw["as_json"]:
-        click.echo(json.dumps(table, indent=2))
+        emit_json(table)
         return
     click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'dE p95':>8s} "
                f"{'S-CIELAB':>9s} {'floor':>11s} {'PSNR':>6s} {'SSIM':>6s} {'coverage':>9s}")
@@ -439,7 +439,7 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
         field_cells=field_cells, overwrite=overwrite)
     report = _drive(run_compensate(cs))
     if as_json:
-        click.echo(json.dumps(report, indent=2))
+        emit_json(report)
         return
     b, a = report["figures"]["before"], report["figures"]["after"]
     click.echo(f"wrote {output}: training dE2000 mean {b['mean_de2000']:.2f} -> "

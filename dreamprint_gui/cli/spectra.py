@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 
 from dreamprint_gui.cli.group import cli
+from dreamprint_gui.cli.output import emit_json
 
 _QUANTITIES = ["reflectance", "transmittance", "absorbance", "spd"]
 SUMMARY_SAMPLES = 12  # more samples than this: the text lists the first SUMMARY_HEAD only
@@ -37,7 +36,7 @@ def spectra(file: str, as_json: bool, quantity: str | None, file_quantity: str |
     sf = read_spectra(file, quantity=quantity, file_quantity=file_quantity, value_scale=scale)
     summary = sf.summary()
     if as_json:
-        click.echo(json.dumps(summary, indent=2))
+        emit_json(summary)
         return
     click.echo(f"file: {sf.path}")
     click.echo(f"format: {sf.format}")

@@ -3,8 +3,6 @@ holds, per grid or element, and what ``--content auto`` would print it as."""
 
 from __future__ import annotations
 
-import json
-
 import click
 
 from dreamprint_gui.cli.group import cli
@@ -14,6 +12,7 @@ from dreamprint_gui.cli.options import (
     placement_values,
     size_options,
 )
+from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.core.errors import DreamPrintError
 
 
@@ -244,6 +243,6 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     up_axis, turn = placement_values(up, rotate)
     info = describe(file, up_axis, turn, fit)
     if as_json:
-        click.echo(json.dumps(info, indent=2))
+        emit_json(info)
     else:
         click.echo(format_info(file, info, height_mm, parse_size(size_mm)))
