@@ -51,7 +51,7 @@ from job_hashes import VOXEL, height_for  # noqa: E402
 
 from dreamprint_gui.io.volumes import grid_for_source, open_source  # noqa: E402
 from dreamprint_gui.io.volumes.base import SlabBuffers, voxel_centres  # noqa: E402
-from dreamprint_gui.io.volumes.splats import GaussianCloud  # noqa: E402
+from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud  # noqa: E402
 
 
 def job_slabs(shape_xyz: tuple[int, int, int], workers: int = 2,
@@ -86,7 +86,7 @@ def _packed(raster) -> bool:
 def rasteriser(raster):
     """The splat module's ``rasterise_splats`` (packed signature) is ``raster`` inside: one
     thread at a time (a job's workers must not each swap and restore it)."""
-    from dreamprint_gui.io.volumes import splats
+    from dreamprint_gui.io.volumes.splats import cloud as splats
 
     plain = splats.rasterise_splats
     splats.rasterise_splats = raster

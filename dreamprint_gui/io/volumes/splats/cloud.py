@@ -35,10 +35,10 @@ import numpy as np
 from numba import njit
 
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.io.volumes import splat_formats
 from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
 from dreamprint_gui.io.volumes.dense import bounds_list
-from dreamprint_gui.io.volumes.splat_raster import TILE_Z, pack_gaussians, rasterise_splats
+from dreamprint_gui.io.volumes.splats import formats as splat_formats
+from dreamprint_gui.io.volumes.splats.raster import TILE_Z, pack_gaussians, rasterise_splats
 
 __all__ = ["GaussianCloud", "peak_density", "open_path", "SH_C0"]
 

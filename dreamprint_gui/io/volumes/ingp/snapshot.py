@@ -62,7 +62,7 @@ from dreamprint_gui.io.volumes.base import (
     voxel_centres,
 )
 from dreamprint_gui.io.volumes.dense import MAX_EXPANSION, bounds_list
-from dreamprint_gui.io.volumes.ingp_kernels import ACT, sample_rows
+from dreamprint_gui.io.volumes.ingp.kernels import ACT, sample_rows
 
 __all__ = ["read_snapshot", "parse_snapshot", "IngpModel", "IngpSource", "open_path",
            "sh_encode", "snapshot_info", "VIEW_DIRECTIONS"]

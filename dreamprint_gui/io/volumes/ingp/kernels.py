@@ -42,8 +42,8 @@ import math
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.io.volumes.ingp_encode import encode_batch, row_form_levels
-from dreamprint_gui.io.volumes.ingp_occupancy import occupied, row_span, row_voxels
+from dreamprint_gui.io.volumes.ingp.encode import encode_batch, row_form_levels
+from dreamprint_gui.io.volumes.ingp.occupancy import occupied, row_span, row_voxels
 
 _occupied = occupied            # the per-point test, as tests and older callers name it
 
