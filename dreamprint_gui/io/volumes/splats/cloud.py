@@ -1,6 +1,6 @@
 """3D Gaussian splats as a density field: INRIA PLY (and nerfstudio's ``ns-export gaussian-splat``
 PLY), SuperSplat compressed PLY, Niantic SPZ, antimatter15 ``.splat``, ``.ksplat``, PlayCanvas SOG
-(the last four read in :mod:`.splat_formats`).
+(the last four read in :mod:`.formats`).
 
 Defines :class:`GaussianCloud` (the source), :func:`peak_density` and :func:`open_path`.
 
@@ -288,14 +288,14 @@ def _read_inria(path: Path) -> GaussianCloud:
 
 
 def _cloud(path: Path, g: splat_formats.Gaussians) -> GaussianCloud:
-    """The source of Gaussians decoded by :mod:`.splat_formats`."""
+    """The source of Gaussians decoded by :mod:`.formats`."""
     return GaussianCloud(str(path), g.format, g.means, g.sigmas, g.quats, g.opacity, g.rgb,
                          g.sh_degree)
 
 
 def open_path(path: Path, fmt: str = "splats") -> GaussianCloud:
     """Open a splat file: PLY (INRIA, nerfstudio's export, SuperSplat compressed), SPZ,
-    antimatter15 ``.splat``, ``.ksplat`` or PlayCanvas SOG (see :mod:`.splat_formats`)."""
+    antimatter15 ``.splat``, ``.ksplat`` or PlayCanvas SOG (see :mod:`.formats`)."""
     import gsply
 
     if splat_formats.is_sog(path):
