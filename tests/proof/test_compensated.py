@@ -97,6 +97,44 @@ def test_convert_compensate_writes_job_and_correction(tmp_path, capsys):
     assert corr.is_file() and manifest["compensation"]["path"] == str(corr.absolute())
 
 
+def test_an_interrupted_compensated_job_keeps_its_correction_and_resumes_with_it(
+        tmp_path, monkeypatch):
+    """Ctrl-C while converting keeps the finished layers for --resume and the correction they
+    were made with; the resumed run converts with that file instead of optimising another.
+    A cancel (the export dialog's) removes both (tests/gui/test_gamut_and_export.py)."""
+    from dataclasses import replace
+
+    import dreamprint_gui.proof.compensated as compensated
+    from dreamprint_gui.job.resume import find_interrupted
+
+    real = compensated.run_conversion
+
+    def interrupted(settings, cancel=None, preflight=True):  # Ctrl-C inside the conversion
+        gen = real(settings, cancel, preflight=preflight)
+        for p in gen:
+            yield p
+            if p.stage == "converting" and p.layers_done >= 4:
+                gen.throw(KeyboardInterrupt())
+
+    out = tmp_path / "job"
+    s = ConvertSettings(source="demo", output=str(out), height_mm=1.0, table_size=17, seed=3,
+                        workers=1, slab_layers=2, scheduler="sync")
+    monkeypatch.setattr(compensated, "run_conversion", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        drive(run_compensated_conversion(s, preflight=False, **TINY))
+    corr = correction_path_for(out)
+    assert corr.is_file() and find_interrupted(out) is not None and not out.exists()
+    made = corr.read_bytes()
+
+    monkeypatch.setattr(compensated, "run_conversion", real)
+    items, manifest = drive(run_compensated_conversion(replace(s, resume=True),
+                                                       preflight=False, **TINY))
+    assert {p.stage for p in items} == {"converting"}   # no second optimisation
+    assert corr.read_bytes() == made
+    assert manifest["compensation"]["path"] == str(corr.absolute())
+    assert manifest["execution"]["resumed_layers"] >= 4
+
+
 def test_compare_compensation_trains_apart_and_leaves_no_file(tmp_path, monkeypatch):
     import tempfile
 
