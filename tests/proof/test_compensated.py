@@ -86,15 +86,28 @@ def test_compensated_export_refuses_an_existing_job_before_optimising(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["job"]
 
 
-def test_convert_compensate_writes_job_and_correction(tmp_path, capsys):
+def test_convert_compensate_writes_job_and_correction(tmp_path, capsys, monkeypatch):
+    """The command line's route, end to end, with a tiny optimiser (its defaults take about
+    two minutes here; the settings it trains under are test_print_spec's)."""
+    import functools
+
+    import dreamprint_gui.proof.compensated as compensated
+
+    monkeypatch.setattr(compensated, "run_compensated_conversion",
+                        functools.partial(compensated.run_compensated_conversion, **TINY))
     out = tmp_path / "job"
     code = main(["convert", "demo", "-o", str(out), "--height-mm", "2", "--table-size", "17",
-                 "--compensate", "--json", "-q"])
+                 "--compensate", "--json"])
     cap = capsys.readouterr()
     assert code == 0, cap.err
     manifest = json.loads(cap.out)
     corr = tmp_path / "job.correction.npz"
     assert corr.is_file() and manifest["compensation"]["path"] == str(corr.absolute())
+    figures = manifest["compensation"]["proof_figures"]
+    assert "[compensate] iteration 1/1" in cap.err and f"[compensate] wrote {corr}" in cap.err
+    assert (f"compensation: {corr.absolute()}; training dE2000 mean "
+            f"{figures['before']['mean_de2000']:.2f} -> {figures['after']['mean_de2000']:.2f}"
+            in cap.err)
 
 
 def test_an_interrupted_compensated_job_keeps_its_correction_and_resumes_with_it(
