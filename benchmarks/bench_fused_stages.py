@@ -47,11 +47,11 @@ from dreamprint_gui.io.volumes.dense_sampler import (  # noqa: E402
     dense_layer,
     dense_window_layer,
 )
-from dreamprint_gui.io.volumes.leaf_grid import (  # noqa: E402
+from dreamprint_gui.io.volumes.srgb_encode import AS_IS, CLIP, ENCODE  # noqa: E402
+from dreamprint_gui.io.volumes.vdb.leaf_grid import (  # noqa: E402
     leaf_grid_layer,
     leaf_grid_values_where,
 )
-from dreamprint_gui.io.volumes.srgb_encode import AS_IS, CLIP, ENCODE  # noqa: E402
 from dreamprint_gui.job.sample_label.layer_kernel import UNIFORM, layer_labels  # noqa: E402
 
 

@@ -37,8 +37,8 @@ def source_colours():
     parts = [check_colours()]
     data = ROOT.parent / "shared" / "data"
     if data.is_dir():
-        from dreamprint_gui.io.volumes.magicavoxel import read_vox
-        from dreamprint_gui.io.volumes.splats import open_path
+        from dreamprint_gui.io.volumes.grids.magicavoxel import read_vox
+        from dreamprint_gui.io.volumes.splats.cloud import open_path
 
         models, palette = read_vox(data / "voxels" / "magicavoxel_chr_knight.vox")
         used = np.unique(np.concatenate([m[1][:, 3] for m in models]))

@@ -10,12 +10,13 @@ whole job's rasterising CPU seconds extrapolated from the sampled share, and tha
 (ns), and the rate two busy cores would rasterise at.
 
 ``--reference REV`` also rasterises the same slabs with ``dreamprint_gui/io/volumes/
-splat_raster.py`` as it is at git revision REV (e.g. the commit before a rasteriser change),
-timed the same way, and compares the fields: density relative difference ``|d - d_ref| /
-d_ref`` (max and p99 over voxels where both are non-zero), the voxels non-zero in one field
-only (the cut-off's rounding at the support's edge) with their largest density relative to the
-job's largest, and colour's largest absolute difference (0..1 per channel) where the density is
-above 1e-3 of the field's maximum (where the printer's threshold can see it).
+splats/raster.py`` (``splat_raster.py`` before) as it is at git revision REV (e.g. the commit
+before a rasteriser change), timed the same way, and compares the fields: density relative
+difference ``|d - d_ref| / d_ref`` (max and p99 over voxels where both are non-zero), the
+voxels non-zero in one field only (the cut-off's rounding at the support's edge) with their
+largest density relative to the job's largest, and colour's largest absolute difference (0..1
+per channel) where the density is above 1e-3 of the field's maximum (where the printer's
+threshold can see it).
 
     PYTHONPATH=. python benchmarks/bench_splat_raster.py                        # 1e9 voxels
 With ``--job-voxels N`` it then converts a job of N voxels per kind (2 workers, the file's
@@ -51,7 +52,7 @@ from job_hashes import VOXEL, height_for  # noqa: E402
 
 from dreamprint_gui.io.volumes import grid_for_source, open_source  # noqa: E402
 from dreamprint_gui.io.volumes.base import SlabBuffers, voxel_centres  # noqa: E402
-from dreamprint_gui.io.volumes.splats import GaussianCloud  # noqa: E402
+from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud  # noqa: E402
 
 
 def job_slabs(shape_xyz: tuple[int, int, int], workers: int = 2,
@@ -65,9 +66,15 @@ def job_slabs(shape_xyz: tuple[int, int, int], workers: int = 2,
 
 
 def reference_raster(rev: str):
-    """``rasterise_splats`` of splat_raster.py at git revision ``rev``, as its own module."""
-    text = subprocess.run(["git", "show", f"{rev}:dreamprint_gui/io/volumes/splat_raster.py"],
-                          capture_output=True, text=True, check=True, cwd=HERE.parent).stdout
+    """``rasterise_splats`` of the splat rasteriser at git revision ``rev``, as its own module."""
+    for path in ("splats/raster.py", "splat_raster.py"):  # the file before io/volumes/splats/
+        got = subprocess.run(["git", "show", f"{rev}:dreamprint_gui/io/volumes/{path}"],
+                             capture_output=True, text=True, cwd=HERE.parent)
+        if got.returncode == 0:
+            break
+    else:
+        raise SystemExit(f"no splat rasteriser at git revision {rev}")
+    text = got.stdout
     d = Path(tempfile.mkdtemp(prefix="dp-raster-ref-"))
     path = d / f"splat_raster_ref_{rev[:10]}.py"
     path.write_text(text)
@@ -86,7 +93,7 @@ def _packed(raster) -> bool:
 def rasteriser(raster):
     """The splat module's ``rasterise_splats`` (packed signature) is ``raster`` inside: one
     thread at a time (a job's workers must not each swap and restore it)."""
-    from dreamprint_gui.io.volumes import splats
+    from dreamprint_gui.io.volumes.splats import cloud as splats
 
     plain = splats.rasterise_splats
     splats.rasterise_splats = raster

@@ -1,4 +1,4 @@
-"""Reading and densifying a .vdb: the in-process reader (io/volumes/vdb_file.py) against the
+"""Reading and densifying a .vdb: the in-process reader (io/volumes/vdb/vdb_file.py) against the
 former Debian helper process (python3-openvdb under /usr/bin/python3), whole process and in
 process.
 

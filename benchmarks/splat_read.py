@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dreamprint_gui.io.volumes import splat_formats as sf
+from dreamprint_gui.io.volumes.splats import formats as sf
 
 
 def _gaussians(n: int, seed: int = 1):

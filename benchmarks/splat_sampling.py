@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from dreamprint_gui.io.volumes import grid_for_source, open_source
-from dreamprint_gui.io.volumes.splats import GaussianCloud
+from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 VOXEL = (0.042, 0.084, 0.014)      # J850 voxel, mm

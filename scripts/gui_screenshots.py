@@ -158,7 +158,7 @@ def main() -> int:
     import numpy as np
 
     from dreamprint_gui.core.profile import INKS, default_profile
-    from dreamprint_gui.gui.wizard import CalibrationWizard
+    from dreamprint_gui.gui.wizard.calibration import CalibrationWizard
     from dreamprint_gui.io.spectra import Sample, write_spectra
     from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 

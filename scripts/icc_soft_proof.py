@@ -37,7 +37,7 @@ def demo_image(n: int = 128):
     and the mask of the pixels it covers."""
     import numpy as np
 
-    from dreamprint_gui.io.volumes.demo import DemoCloud
+    from dreamprint_gui.io.volumes.grids.demo import DemoCloud
 
     grid = np.asarray(DemoCloud(seed=7, resolution=n).volume.data, dtype=np.float64)
     dens = grid[..., 0]

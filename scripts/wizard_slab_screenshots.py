@@ -38,7 +38,7 @@ def main() -> int:
     app.setApplicationName("DreamPrint")
     from dreamprint_gui.core.profile import default_profile
     from dreamprint_gui.gui.app import grab_window
-    from dreamprint_gui.gui.wizard import CalibrationWizard
+    from dreamprint_gui.gui.wizard.calibration import CalibrationWizard
 
     def settle(ms=1200) -> None:
         loop = QEventLoop()

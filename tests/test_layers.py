@@ -42,9 +42,29 @@ def test_nothing_below_gui_imports_qt():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+def test_view_data_modules_import_no_qt():
+    """A view's non-Qt half beside it (``gui/*_data.py``: the preview's, the gamut views', the
+    export dialog's) loads without Qt, so that it is tested and reused headless."""
+    names = sorted(m.name for m in pkgutil.iter_modules([str(PACKAGE / "gui")])
+                   if m.name.endswith("_data"))
+    assert {"preview_data", "gamut_data", "export_data"} <= set(names)
+    code = ("import sys, importlib\n"
+            f"for n in {names!r}:\n"
+            "    importlib.import_module('dreamprint_gui.gui.' + n)\n"
+            "bad = [m for m in sys.modules if m.startswith(('PySide6', 'shiboken6', 'PyQt',"
+            " 'pyvistaqt'))]\n"
+            "assert not bad, bad\n")
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
 @pytest.mark.parametrize("old", ["dreamprint_gui.engine", "dreamprint_gui.errors",
                                  "dreamprint_gui.resources", "dreamprint_gui.io.job_export",
-                                 "dreamprint_gui.job.sample_label.vec16"])
+                                 "dreamprint_gui.job.sample_label.vec16",
+                                 "dreamprint_gui.gui.wizard_common", "dreamprint_gui.gui.slab_page",
+                                 "dreamprint_gui.io.volumes.openvdb",
+                                 "dreamprint_gui.io.volumes.splat_raster",
+                                 "dreamprint_gui.io.volumes.ingp_kernels",
+                                 "dreamprint_gui.io.volumes.vtkimage"])
 def test_old_paths_are_gone(old):
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module(old)

@@ -70,11 +70,11 @@ def test_every_volume_reader_module_imports():
 
     for _key, (module, _exts) in FORMATS.items():
         importlib.import_module(f"dreamprint_gui.io.volumes.{module}")
-    importlib.import_module("dreamprint_gui.io.volumes.splat_formats")
+    importlib.import_module("dreamprint_gui.io.volumes.splats.formats")
 
 
 def test_openvdb_needs_no_system_package():
-    # OpenVDB files are read in process (io/volumes/vdb_file.py): no code of the package names
+    # OpenVDB files are read in process (io/volumes/vdb/vdb_file.py): no code of the package names
     # Debian's interpreter or OpenVDB's own Python module; the tests' cross-check still gets
     # python3-openvdb from the quickstart's apt packages.
     for f in (ROOT / "dreamprint_gui").rglob("*.py"):

@@ -5,7 +5,6 @@ from __future__ import annotations
 import signal
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -93,12 +92,8 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
         spec, output=output, workers=workers, scheduler=scheduler,
         density_threshold=density_threshold, overwrite=overwrite, slab_layers=slab_layers,
         resume=resume)
-    made = None
-    if compensate:
-        if compensation is not None:
-            raise DreamPrintError("give --compensate or --compensation, not both")
-        made = _compensate_for(settings, quiet)
-        settings = replace(settings, compensation=str(made))
+    if compensate and compensation is not None:
+        raise DreamPrintError("give --compensate or --compensation, not both")
 
     def on_term(signum, frame):  # a polite kill cleans up like Ctrl-C
         raise KeyboardInterrupt()
@@ -107,7 +102,12 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     root = click.get_current_context().find_root()
     if scheduler_kind(settings) == "distributed" and not root.params.get("debug"):
         quiet_client_logs()
-    gen = run_conversion(settings)
+    if compensate:  # the export dialog's route: optimise, then convert with the correction
+        from dreamprint_gui.proof.compensated import run_compensated_conversion
+
+        gen = run_compensated_conversion(settings)
+    else:
+        gen = run_conversion(settings)
     progress = _Progress(sys.stderr.isatty(), quiet)
     pf = None
     last = None
@@ -118,6 +118,11 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
             except StopIteration as stop:
                 manifest = stop.value
                 break
+            if p.stage == "compensating":
+                if not quiet:
+                    _compensating_line(p)
+                continue
+            p = getattr(p, "inner", p)  # a compensated job's conversion: its own progress
             if p.stage == "preflight":
                 pf = p.preflight
                 if not quiet:
@@ -129,8 +134,6 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
             elif p.message and p.stage not in ("done", "finishing") and not quiet:
                 click.echo(p.message, err=True)
     except BaseException as exc:
-        if made is not None:
-            made.unlink(missing_ok=True)
         if isinstance(exc, JobCancelled):
             raise DreamPrintError("cancelled; the partial job was removed", output) from None
         if isinstance(exc, KeyboardInterrupt) and last is not None and last.layers_done:
@@ -149,6 +152,8 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
     clamp_line = clamp_summary(manifest)
     if clamp_line and not quiet:
         click.echo(clamp_line, err=True)
+    if manifest.get("compensation") and not quiet:
+        click.echo(_compensation_line(manifest["compensation"]), err=True)
     if as_json:
         emit_json(manifest)
     else:
@@ -161,37 +166,26 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
                    + (f"; {kept} layers kept from the interrupted run" if kept else ""))
 
 
-def _compensate_for(settings, quiet: bool) -> Path:
-    """``--compensate``: optimise a correction for ``settings`` (written as
-    ``OUTPUT.correction.npz`` beside the job); returns its path."""
-    from dreamprint_gui.job.plan import JobCancelled
-    from dreamprint_gui.proof.compensate import run_compensate
-    from dreamprint_gui.proof.compensated import compensate_settings_for, correction_path_for
+def _compensating_line(p) -> None:
+    """``--compensate``: the optimiser's iterations (``p.inner``) on stderr."""
+    if p.inner.stage == "iteration":
+        click.echo(f"[compensate] {p.inner.message}  elapsed {fmt_time(p.elapsed_s)}", err=True)
+    elif p.inner.stage == "done":
+        click.echo(f"[compensate] wrote {p.inner.message}", err=True)
 
-    out = correction_path_for(settings.output)
-    cs = compensate_settings_for(settings, str(out))
-    gen = run_compensate(cs)
-    try:
-        while True:
-            try:
-                p = next(gen)
-            except StopIteration as stop:
-                report = stop.value
-                break
-            if p.stage == "iteration" and not quiet:
-                click.echo(f"[compensate] {p.message}  elapsed {fmt_time(p.elapsed_s)}",
-                           err=True)
-    except JobCancelled:
-        raise DreamPrintError("cancelled; nothing was written", out) from None
-    finally:
-        gen.close()
-    if not quiet:
-        f = report["figures"]
-        click.echo(f"compensation: training dE2000 mean {f['before']['mean_de2000']:.2f} -> "
-                   f"{f['after']['mean_de2000']:.2f}, coverage error "
-                   f"{f['before']['coverage_error']:+.3f} -> {f['after']['coverage_error']:+.3f}"
-                   f" ({report['seconds']:.0f} s); wrote {out}", err=True)
-    return out
+
+def _compensation_line(comp: dict) -> str:
+    """The correction a job used and the optimiser's figures on its training cameras (the
+    manifest's ``compensation``)."""
+    f = comp.get("proof_figures") or {}
+    b, a = f.get("before") or {}, f.get("after") or {}
+    line = f"compensation: {comp['path']}"
+    if "mean_de2000" in b and "mean_de2000" in a:
+        line += (f"; training dE2000 mean {b['mean_de2000']:.2f} -> {a['mean_de2000']:.2f}, "
+                 f"coverage error {b['coverage_error']:+.3f} -> {a['coverage_error']:+.3f}")
+    if isinstance(comp.get("optimise_seconds"), int | float):
+        line += f" (optimised in {fmt_time(comp['optimise_seconds'])})"
+    return line
 
 
 class _Progress:

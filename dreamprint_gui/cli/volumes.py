@@ -49,19 +49,20 @@ def _range(g: dict) -> str:
 
 
 def _mpu(bounds, height_mm, size_mm) -> tuple[float, str] | None:
-    """(mm per source unit, the option that set it) for ``bounds`` at a size (the rule of
-    ``grid_for_source``), or None."""
+    """(mm per source unit, the option that set it) for ``bounds`` at a size
+    (``io.volumes.base.mm_per_unit``, the scale of ``grid_for_source``), or None."""
+    from dreamprint_gui.io.volumes.base import mm_per_unit
+
     if not bounds or (height_mm is None and size_mm is None):
         return None
     ext = [hi - lo for lo, hi in zip(bounds[0], bounds[1], strict=True)]
+    try:
+        mpu = mm_per_unit(ext, height_mm=height_mm, size_mm=size_mm)
+    except DreamPrintError:
+        return None  # a flat source's height, bounds with no extent: no scale to state
     if height_mm is not None:
-        if ext[2] <= 0:
-            return None
-        return height_mm / ext[2], f"--height-mm {height_mm:g}"
-    ok = [(b / e) for b, e in zip(size_mm, ext, strict=True) if e > 0]
-    if not ok:
-        return None
-    return min(ok), "--size-mm " + ",".join(f"{v:g}" for v in size_mm)
+        return mpu, f"--height-mm {height_mm:g}"
+    return mpu, "--size-mm " + ",".join(f"{v:g}" for v in size_mm)
 
 
 def _span(bounds, mpu: float) -> str:
@@ -176,8 +177,9 @@ def describe(file: str, up: str | None = None, rotate: int = 0, fit: str = "occu
 
 
 def _placement(file: str, src, up: str | None, rotate: int, fit: str) -> dict | None:
-    from dreamprint_gui.io.volumes.orient import choose_orientation, occupied_bounds, orient_source
+    from dreamprint_gui.io.volumes.orient import choose_orientation, orient_source
     from dreamprint_gui.io.volumes.registry import open_source
+    from dreamprint_gui.job.plan import fitted_bounds
 
     if src is None:
         from dreamprint_gui.job.plan import source_options_for
@@ -188,12 +190,13 @@ def _placement(file: str, src, up: str | None, rotate: int, fit: str) -> dict | 
             return None  # described, not printable as opened by default (inspect says why)
     o = choose_orientation(src, up, rotate)
     turned = orient_source(src, o)
-    occ = occupied_bounds(turned)
-    box = [list(turned.bounds[0]), list(turned.bounds[1])]
-    occ_l = None if occ is None else [list(occ[0]), list(occ[1])]
+    # the job's rule (job.plan.fitted_bounds); the occupied box is shown whatever --fit is
+    occ, occupied = fitted_bounds(turned, "occupied")
+    placed = occupied if fit == "occupied" else fitted_bounds(turned, fit)[1]
     return {"orientation": o.to_json(), "orientation_text": o.describe(),
-            "declared_bounds": box, "occupied_bounds": occ_l, "fit": fit,
-            "fit_bounds": occ_l if fit == "occupied" and occ_l is not None else box}
+            "declared_bounds": placed["declared_bounds"],
+            "occupied_bounds": None if occ is None else occupied["bounds"], "fit": fit,
+            "fit_bounds": placed["bounds"]}
 
 
 def _ingp_lines(info: dict) -> list[str]:

@@ -33,7 +33,7 @@ from dreamprint_gui.gamut.icc import (
 )
 from dreamprint_gui.gamut.print_pcs import PrintPCS
 from dreamprint_gui.gamut.tables import ColourTables
-from dreamprint_gui.io.volumes.demo import demo_colours
+from dreamprint_gui.io.volumes.grids.demo import demo_colours
 
 __all__ = ["export_icc", "check_colours", "check_outputs"]
 

@@ -490,7 +490,7 @@ class MainWindow(QMainWindow):
 
     # actions ----------------------------------------------------------------------------------
     def calibration_wizard(self, calibration_set: str | None = None) -> None:
-        from dreamprint_gui.gui.wizard import CalibrationWizard
+        from dreamprint_gui.gui.wizard.calibration import CalibrationWizard
 
         wiz = CalibrationWizard(self, settings=self.settings, calibration_set=calibration_set)
         wiz.profileSaved.connect(lambda prof, path: self.set_profile(prof, path))

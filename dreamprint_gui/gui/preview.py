@@ -443,7 +443,7 @@ class PreviewPage(QWidget):
     # computation ------------------------------------------------------------------------------
     def job_settings(self, output=None):
         """The job settings the export would use with the current controls."""
-        from dreamprint_gui.gui.export import convert_settings
+        from dreamprint_gui.gui.export_data import convert_settings
 
         p = self.params()
         return convert_settings(self.source_path, self.profile_path, self.printer,

@@ -77,32 +77,15 @@ def opacity_per_voxel(sigma_per_mm: NDArray, voxel_mm: float) -> NDArray[np.floa
 def job_context(settings, previous=None):
     """The engine's ``JobContext`` for ``settings`` (``job.plan.prepare_job``).
 
-    When only the size, density scale or background changed since ``previous`` (same source,
-    content intent, sampling, profile, printer, halftoning and seed), the open source, the
-    tables and the background threshold are reused and only the printer grid and the
-    background label are redone, so dragging a control does not reopen a large file.
+    When only the size, density scale or background changed since ``previous``
+    (``job.plan.resized_job``: everything else the same), the open source, the tables and the
+    background threshold are reused and only the printer grid and the background label are
+    redone, so dragging a control does not reopen a large file.
     """
-    from dataclasses import replace
+    from dreamprint_gui.job.plan import prepare_job, resized_job
 
-    from dreamprint_gui.core.printer import EMPTY_LABEL
-    from dreamprint_gui.core.profile import INKS
-    from dreamprint_gui.io.volumes import grid_for_source
-    from dreamprint_gui.job.halftone import Halftoner
-    from dreamprint_gui.job.plan import prepare_job
-
-    same = ("source", "profile", "printer", "halftone", "seed", "table_size", "objective",
-            "source_options", "density_threshold", "content", "sampling", "up", "rotate", "fit")
-    if previous is None or any(getattr(previous.settings, k) != getattr(settings, k)
-                               for k in same):
-        return prepare_job(settings)
-    p = previous.printer
-    grid = grid_for_source(previous.source, p.voxel_mm, height_mm=settings.height_mm,
-                           size_mm=None if settings.size_mm is None else tuple(settings.size_mm),
-                           bounds=previous.fit_bounds)
-    bg = INKS.index("Cl") if settings.background == "clear" else EMPTY_LABEL
-    ht = Halftoner.create(settings.halftone, settings.seed, p.voxel_mm,
-                          threshold=previous.halftoner.threshold, bg_label=bg)
-    return replace(previous, settings=settings, grid=grid, halftoner=ht)
+    ctx = None if previous is None else resized_job(previous, settings)
+    return ctx if ctx is not None else prepare_job(settings)
 
 
 def compute_preview(ctx, profile, *, n: int = PREVIEW_VOXELS,

@@ -348,7 +348,7 @@ class ProofPage(QWidget):
             self.task.cancel()
 
     def _on_progress(self, p) -> None:
-        from dreamprint_gui.gui.export import format_duration
+        from dreamprint_gui.gui.export_data import format_duration
 
         if hasattr(p, "fraction"):  # a compensation: one bar over all its phases
             self.progress.setRange(0, 1000)

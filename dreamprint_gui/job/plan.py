@@ -8,7 +8,8 @@ Defines
   ``--up`` / ``--rotate`` or its known convention, :mod:`..io.volumes.orient`), the printer
   grid (over the occupied or the declared bounds, ``--fit``; :func:`fitted_bounds`), the colour
   tables (paper section 4.1-4.2), the halftoner and the printer; refuse a job larger than the
-  tray before any work.
+  tray before any work. :func:`resized_job`: a prepared job at another size, density scale or
+  background, its source and tables kept (the Preview, as a control is dragged).
 - :func:`slab_plan`: the slabs of layers ``[z0, z1)`` the job is cut into (the slab plan) for
   :func:`job_workers` workers, and
   :func:`scheduler_kind`: which Dask scheduler runs them (:mod:`.run`).
@@ -33,7 +34,7 @@ from dreamprint_gui.gamut.alignment import kernel_table
 from dreamprint_gui.gamut.mapping import canonical_intent
 from dreamprint_gui.gamut.optimise import canonical_objective
 from dreamprint_gui.gamut.tables import build_estimate, resolve_choice
-from dreamprint_gui.io.volumes import grid_for_source, open_source
+from dreamprint_gui.io.volumes import PrintGrid, grid_for_source, open_source
 from dreamprint_gui.io.volumes.orient import (
     FIT_MODES,
     choose_orientation,
@@ -56,7 +57,7 @@ from dreamprint_gui.physics.density import scalar_sigma
 __all__ = ["ConvertSettings", "ConvertProgress", "JobContext", "prepare_job", "check_settings",
            "JobCancelled", "DEFAULT_SLAB_VOXELS", "source_options_for", "replace_settings",
            "fitted_bounds", "slab_plan", "job_workers", "MAX_SLAB_VOXELS", "profile_for_printer",
-           "scheduler_kind"]
+           "scheduler_kind", "resized_job", "RESIZABLE"]
 
 DEFAULT_SLAB_VOXELS = 4_000_000  # ~70 MB of working arrays per worker
 MAX_SLAB_VOXELS = 32_000_000     # all workers' slabs when a source asks for layers: ~520 MB
@@ -402,28 +403,21 @@ def prepare_job(settings: ConvertSettings,
     orientation = choose_orientation(source, s.up, s.rotate)
     source = orient_source(source, orientation)
     bounds, fit = fitted_bounds(source, s.fit)
-    grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
-                           size_mm=tuple(s.size_mm) if s.size_mm is not None else None,
-                           bounds=bounds)
+    grid = _job_grid(source, printer, s, bounds)  # the tray checked before any expensive work
     shape = tuple(int(v) for v in grid.shape_xyz)
-    if min(shape) < 1:
-        raise DreamPrintError(f"the job would have no voxels (grid {shape[0]} x {shape[1]} x "
-                              f"{shape[2]}); choose a larger size")
-    check_tray(shape, printer)  # before any expensive work
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
                                   s.table_size, s.intent, notify)
     sigma_clear = getattr(tables, "sigma_clear", None)
     if sigma_clear is None:
         sigma_clear = _clear_sigma(profile)
     thr = s.density_threshold if s.density_threshold is not None else 0.5 * float(sigma_clear)
-    bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
     if notify is not None and s.halftone == "blue-noise":
         est = mask_build_estimate(printer.voxel_mm)
         if est is not None:
             vx, vy, vz = (1000 * v for v in printer.voxel_mm)
             notify(f"building the blue-noise mask for {vx:g} x {vy:g} x {vz:g} um voxels: "
                    f"first use, about {_seconds(est)}; cached after")
-    ht = Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=thr, bg_label=bg)
+    ht = _job_halftoner(s, printer, thr)
     oriented = source
     source, content = apply_content(source, s.content, thr)
     ctx = JobContext(settings=s, printer=printer, grid=grid, halftoner=ht,
@@ -445,6 +439,49 @@ def prepare_job(settings: ConvertSettings,
                                                     strict=True), content=auto))
         ctx.correction = corr
     return ctx
+
+
+#: What a prepared job can change without opening its source or building its tables again: the
+#: printer grid's size and the background label (:func:`resized_job`).
+RESIZABLE = ("height_mm", "size_mm", "density_scale", "background")
+
+
+def resized_job(previous: JobContext, settings: ConvertSettings) -> JobContext | None:
+    """``previous`` (a :func:`prepare_job` context) for ``settings`` when they differ from its
+    own only in :data:`RESIZABLE`: the open source, its orientation and fitted bounds, the
+    tables and the background threshold are kept; the grid (and the tray check) and the
+    halftoner's background label are redone as :func:`prepare_job` does them. None when any
+    other setting differs, or when a correction is applied (it is checked against the size):
+    then the job must be prepared again. The Preview calls it as a control is dragged."""
+    same = replace(previous.settings, **{k: getattr(settings, k) for k in RESIZABLE})
+    if same != settings or settings.compensation is not None:
+        return None
+    grid = _job_grid(previous.source, previous.printer, settings, previous.fit_bounds)
+    return replace(previous, settings=settings, grid=grid,
+                   halftoner=_job_halftoner(settings, previous.printer,
+                                            previous.halftoner.threshold))
+
+
+def _job_grid(source, printer, s: ConvertSettings, bounds) -> PrintGrid:
+    """The printer grid of the job ``s`` over ``bounds`` (:func:`fitted_bounds`), refused when
+    empty or larger than the printer's tray."""
+    grid = grid_for_source(source, printer.voxel_mm, height_mm=s.height_mm,
+                           size_mm=tuple(s.size_mm) if s.size_mm is not None else None,
+                           bounds=bounds)
+    shape = tuple(int(v) for v in grid.shape_xyz)
+    if min(shape) < 1:
+        raise DreamPrintError(f"the job would have no voxels (grid {shape[0]} x {shape[1]} x "
+                              f"{shape[2]}); choose a larger size")
+    check_tray(shape, printer)
+    return grid
+
+
+def _job_halftoner(s: ConvertSettings, printer, threshold: float) -> Halftoner:
+    """The job's halftoner: its method and seed, the background below ``threshold`` (1/mm)
+    printed as Clear or left empty (``s.background``)."""
+    bg = INKS.index("Cl") if s.background == "clear" else EMPTY_LABEL
+    return Halftoner.create(s.halftone, s.seed, printer.voxel_mm, threshold=threshold,
+                            bg_label=bg)
 
 
 # ----------------------------------------------------------------------------- scheduling

@@ -27,6 +27,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.generators import relay
 from dreamprint_gui.job.correction import save_correction
 from dreamprint_gui.job.plan import ConvertProgress, ConvertSettings, JobCancelled
+from dreamprint_gui.job.resume import find_interrupted
 from dreamprint_gui.job.run import run_conversion
 from dreamprint_gui.job.write import check_target
 from dreamprint_gui.proof.compensate import CompensateSettings, optimise, run_compensate
@@ -117,10 +118,15 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
                                preflight: Any = True, **optimiser: Any
                                ) -> Generator[CompensationProgress, None, dict[str, Any]]:
     """Optimise a correction for the job ``settings`` (written to
-    :func:`correction_path_for` its output), then convert with it. Yields
+    :func:`correction_path_for` its output), then convert with it: ``convert --compensate``
+    and the export dialog's "Compensate appearance" alike. Yields
     :class:`CompensationProgress` (``inner``: the optimiser's ProofProgress, then the
-    conversion's ConvertProgress); returns the job's manifest. A cancel or an error removes the
-    correction too (the conversion removes its partial job)."""
+    conversion's ConvertProgress); returns the job's manifest.
+
+    The correction goes with the job it was made for: a cancel or an error that removes the
+    partial job removes the correction too, while an interrupted run that keeps its finished
+    layers for ``--resume`` (Ctrl-C, a kill, a full disk) keeps it, and ``settings.resume``
+    finishes that run with the correction beside it instead of optimising another."""
     if settings.output is None:
         raise DreamPrintError("no output folder given (-o JOB)")
     check_target(settings.output, settings.overwrite)  # before minutes of optimising
@@ -129,21 +135,10 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
     # the optimiser's renders against one conversion: about 5 parts to 1 (bench_compensate)
     clock = PhaseClock({"compensating": 5.0, "converting": 1.0})
     state: dict = {"total": int(cs.iterations) + 1}
-    written = False
+    reuse = settings.resume and out.is_file() and find_interrupted(settings.output) is not None
     try:
-        gen = run_compensate(cs, cancel)
-        try:
-            while True:
-                p = next(gen)
-                if p.stage == "done":
-                    written = True
-                yield clock.progress("compensating", _optimise_within(p, state),
-                                     state.get("msg", p.message), p)
-        except StopIteration as stop:
-            report = stop.value
-            written = True
-        finally:
-            gen.close()
+        if not reuse:
+            yield from _optimise_into(cs, cancel, clock, state)
         if cancel is not None and cancel.is_set():
             raise JobCancelled("the export was cancelled")
         conv = run_conversion(replace(settings, compensation=str(out)), cancel,
@@ -153,13 +148,31 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
             within = c.layers_done / c.layers_total if c.layers_total else 0.0
             return clock.progress("converting", within, c.message, c)
 
-        manifest = yield from relay(conv, converting)
+        return (yield from relay(conv, converting))
     except BaseException:
-        if written:  # this run's correction goes with the job it was made for
+        # this run's correction goes with the job it was made for, unless the job is kept
+        if (state.get("written") or reuse) and find_interrupted(settings.output) is None:
             out.unlink(missing_ok=True)
         raise
-    del report  # the manifest records the correction and its figures (job.run)
-    return manifest
+
+
+def _optimise_into(cs: CompensateSettings, cancel: threading.Event | None, clock: PhaseClock,
+                   state: dict) -> Generator[CompensationProgress, None, None]:
+    """:func:`.compensate.run_compensate` (the correction written to ``cs.output``) as the
+    first phase of ``clock``; ``state["written"]`` once the file is there. The manifest
+    records the optimiser's report (``job.run``)."""
+    gen = run_compensate(cs, cancel)
+    try:
+        while True:
+            p = next(gen)
+            if p.stage == "done":  # run_compensate has saved the correction
+                state["written"] = True
+            yield clock.progress("compensating", _optimise_within(p, state),
+                                 state.get("msg", p.message), p)
+    except StopIteration:
+        state["written"] = True
+    finally:
+        gen.close()
 
 
 def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = None,

@@ -27,8 +27,8 @@ from dreamprint_gui.gamut.icc_export import check_colours
 from dreamprint_gui.gamut.mapping import RelativeMap
 from dreamprint_gui.gamut.print_pcs import PrintPCS, decode_lab, encode_lab
 from dreamprint_gui.io.spectra import read_spectra
-from dreamprint_gui.io.volumes.magicavoxel import read_vox
-from dreamprint_gui.io.volumes.splats import open_path
+from dreamprint_gui.io.volumes.grids.magicavoxel import read_vox
+from dreamprint_gui.io.volumes.splats.cloud import open_path
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
 from dreamprint_gui.physics.mixture import predict
 

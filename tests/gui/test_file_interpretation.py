@@ -10,7 +10,7 @@ import pytest
 
 from dreamprint_gui.gui.main_window import MainWindow
 from dreamprint_gui.gui.names import gui_wording
-from dreamprint_gui.io.volumes.level_set import LEVEL_SET_ADVICE
+from dreamprint_gui.io.volumes.vdb.level_set import LEVEL_SET_ADVICE
 
 WRITE = textwrap.dedent('''
     import sys

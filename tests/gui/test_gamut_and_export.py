@@ -137,7 +137,7 @@ def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):
     import time
 
-    from dreamprint_gui.gui.export import time_text
+    from dreamprint_gui.gui.export_data import time_text
     from dreamprint_gui.gui.names import gui_wording
 
     dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
@@ -205,7 +205,7 @@ def test_export_cancel_leaves_nothing(qtbot, tmp_path, table_size):
 def test_export_workers_and_scheduler(qtbot, tmp_path, table_size):
     """Worker count and scheduler reach the engine's settings, persist, and a bad cluster
     address is reported inline."""
-    from dreamprint_gui.gui.export import check_scheduler_address
+    from dreamprint_gui.gui.export_data import check_scheduler_address
     from dreamprint_gui.gui.settings import AppSettings
 
     settings = AppSettings()

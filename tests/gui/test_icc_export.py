@@ -6,7 +6,7 @@ from dreamprint_gui.core.profile import default_profile
 from dreamprint_gui.gamut import get_tables, lcms
 from dreamprint_gui.gui.gamut_view import GamutPage
 from dreamprint_gui.gui.icc_export import IccExportBox, IccRequest
-from dreamprint_gui.gui.wizard import CalibrationWizard
+from dreamprint_gui.gui.wizard.calibration import CalibrationWizard
 
 
 def test_export_box_writes_the_profile_and_says_its_figures(qtbot, tmp_path, table_size):

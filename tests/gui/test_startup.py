@@ -16,7 +16,7 @@ from dreamprint_gui.core.printer import DEFAULT_PRINTER, load_printer
 from dreamprint_gui.core.profile import default_profile
 from dreamprint_gui.gamut import get_tables, predicted_appearance
 from dreamprint_gui.gui import preview_data
-from dreamprint_gui.gui.export import convert_settings
+from dreamprint_gui.gui.export_data import convert_settings
 from dreamprint_gui.gui.preview_data import PreviewCancelled, compute_preview, job_context
 
 

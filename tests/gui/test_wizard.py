@@ -12,7 +12,7 @@ import pytest
 from PySide6.QtWidgets import QWizard
 
 from dreamprint_gui.core.profile import INKS, default_profile, load_profile
-from dreamprint_gui.gui.wizard import CalibrationWizard
+from dreamprint_gui.gui.wizard.calibration import CalibrationWizard
 from dreamprint_gui.io.spectra import Sample, write_spectra
 from dreamprint_gui.physics.kubelka_munk import reflectance_transmittance
 
@@ -520,7 +520,7 @@ def test_fit_page_one_layer_says_exact_by_construction(qtbot, measurement_files)
     page.tabs.setCurrentIndex(1)
     page.ks_canvas.resize(800, 400)
     page.ks_canvas.draw()
-    from dreamprint_gui.gui.wizard import INK_COLOURS
+    from dreamprint_gui.gui.wizard.common import INK_COLOURS
 
     assert _has_colour(page.ks_canvas, INK_COLOURS["C"]) > 200
     assert _has_colour(page.ks_canvas, INK_COLOURS["Y"]) > 200

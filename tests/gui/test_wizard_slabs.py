@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from dreamprint_gui.core.profile import default_profile, ink_origins
-from dreamprint_gui.gui.wizard import CalibrationWizard
+from dreamprint_gui.gui.wizard.calibration import CalibrationWizard
 
 XRITE = "X-Rite_Digital_Colour_Checker.txt"
 RESIN = "resin_PR48_absorbance_2015-07-27.csv"

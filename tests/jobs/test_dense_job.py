@@ -107,7 +107,7 @@ def test_scalar_image_fused_path_equals_sample_then_label(tmp_path, window, colo
     (``window_slab_labels``) writes what sample_slab + slab_labels write, for any partition,
     including the zeroed density outside the image when the window starts below 0."""
     from dreamprint_gui.io.volumes.dense import colormap_lut
-    from dreamprint_gui.io.volumes.vtkimage import ImageSource
+    from dreamprint_gui.io.volumes.grids.vtkimage import ImageSource
     from dreamprint_gui.job.sample_label.dense_job import window_slab_labels
 
     ctx = prepare_job(ConvertSettings(source="demo", output=tmp_path / "J", height_mm=0.5,

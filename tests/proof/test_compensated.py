@@ -86,15 +86,66 @@ def test_compensated_export_refuses_an_existing_job_before_optimising(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["job"]
 
 
-def test_convert_compensate_writes_job_and_correction(tmp_path, capsys):
+def test_convert_compensate_writes_job_and_correction(tmp_path, capsys, monkeypatch):
+    """The command line's route, end to end, with a tiny optimiser (its defaults take about
+    two minutes here; the settings it trains under are test_print_spec's)."""
+    import functools
+
+    import dreamprint_gui.proof.compensated as compensated
+
+    monkeypatch.setattr(compensated, "run_compensated_conversion",
+                        functools.partial(compensated.run_compensated_conversion, **TINY))
     out = tmp_path / "job"
     code = main(["convert", "demo", "-o", str(out), "--height-mm", "2", "--table-size", "17",
-                 "--compensate", "--json", "-q"])
+                 "--compensate", "--json"])
     cap = capsys.readouterr()
     assert code == 0, cap.err
     manifest = json.loads(cap.out)
     corr = tmp_path / "job.correction.npz"
     assert corr.is_file() and manifest["compensation"]["path"] == str(corr.absolute())
+    figures = manifest["compensation"]["proof_figures"]
+    assert "[compensate] iteration 1/1" in cap.err and f"[compensate] wrote {corr}" in cap.err
+    assert (f"compensation: {corr.absolute()}; training dE2000 mean "
+            f"{figures['before']['mean_de2000']:.2f} -> {figures['after']['mean_de2000']:.2f}"
+            in cap.err)
+
+
+def test_an_interrupted_compensated_job_keeps_its_correction_and_resumes_with_it(
+        tmp_path, monkeypatch):
+    """Ctrl-C while converting keeps the finished layers for --resume and the correction they
+    were made with; the resumed run converts with that file instead of optimising another.
+    A cancel (the export dialog's) removes both (tests/gui/test_gamut_and_export.py)."""
+    from dataclasses import replace
+
+    import dreamprint_gui.proof.compensated as compensated
+    from dreamprint_gui.job.resume import find_interrupted
+
+    real = compensated.run_conversion
+
+    def interrupted(settings, cancel=None, preflight=True):  # Ctrl-C inside the conversion
+        gen = real(settings, cancel, preflight=preflight)
+        for p in gen:
+            yield p
+            if p.stage == "converting" and p.layers_done >= 4:
+                gen.throw(KeyboardInterrupt())
+
+    out = tmp_path / "job"
+    s = ConvertSettings(source="demo", output=str(out), height_mm=1.0, table_size=17, seed=3,
+                        workers=1, slab_layers=2, scheduler="sync")
+    monkeypatch.setattr(compensated, "run_conversion", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        drive(run_compensated_conversion(s, preflight=False, **TINY))
+    corr = correction_path_for(out)
+    assert corr.is_file() and find_interrupted(out) is not None and not out.exists()
+    made = corr.read_bytes()
+
+    monkeypatch.setattr(compensated, "run_conversion", real)
+    items, manifest = drive(run_compensated_conversion(replace(s, resume=True),
+                                                       preflight=False, **TINY))
+    assert {p.stage for p in items} == {"converting"}   # no second optimisation
+    assert corr.read_bytes() == made
+    assert manifest["compensation"]["path"] == str(corr.absolute())
+    assert manifest["execution"]["resumed_layers"] >= 4
 
 
 def test_compare_compensation_trains_apart_and_leaves_no_file(tmp_path, monkeypatch):

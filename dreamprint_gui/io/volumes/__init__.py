@@ -4,22 +4,26 @@ Public API: :class:`PrintGrid`, :func:`grid_for_source`, :class:`VolumeSource` (
 :mod:`.base`, the protocol every reader implements) and :func:`open_source` (from
 :mod:`.registry`, the source kinds; it imports the readers, which import only the base).
 
-Readers, by family:
+Readers, one folder per family:
 
-- OpenVDB and NanoVDB: :mod:`.openvdb` (over :mod:`.vdb_file`, the file format in numpy),
-  :mod:`.nanovdb`; level sets as density in :mod:`.level_set`; sparse sampling in
-  :mod:`.sampling` and :mod:`.leaf_grid`.
-- Gaussian splats: :mod:`.splats` (PLY, compressed PLY), :mod:`.splat_formats` (``.splat``,
-  ``.ksplat``, SPZ, SOG), rasterised by :mod:`.splat_raster`.
-- InstantNGP: :mod:`.ingp` (snapshots: :mod:`.ingp_kernels`, :mod:`.ingp_encode`,
-  :mod:`.ingp_occupancy`) and :mod:`.ingp_volume` (its RGBA PNG slice and raw volume exports).
-- Dense grids: :mod:`.vtkimage` (VTK XML and legacy, MetaImage; NRRD in :mod:`.nrrd`),
-  :mod:`.radiance` (NeRF/radiance grids as ``.npz`` or EXR stacks), :mod:`.magicavoxel`
-  (``.vox``), :mod:`.demo` (the built-in planet); held by :mod:`.dense`, sampled by
-  :mod:`.dense_sampler`.
+- :mod:`.vdb`, OpenVDB and NanoVDB: :mod:`.vdb.openvdb` (over :mod:`.vdb.vdb_file`, the file
+  format in numpy), :mod:`.vdb.nanovdb`; level sets as density in :mod:`.vdb.level_set`; the
+  leaves densified and sampled a layer at a time in :mod:`.vdb.leaf_grid`.
+- :mod:`.splats`, Gaussian splats: :mod:`.splats.cloud` (the cloud; PLY, compressed PLY),
+  :mod:`.splats.formats` (``.splat``, ``.ksplat``, SPZ, SOG), rasterised by
+  :mod:`.splats.raster`.
+- :mod:`.ingp`, InstantNGP: :mod:`.ingp.snapshot` (snapshots: :mod:`.ingp.kernels`,
+  :mod:`.ingp.encode`, :mod:`.ingp.occupancy`) and :mod:`.ingp.exports` (its RGBA PNG slice
+  and raw volume exports).
+- :mod:`.grids`, dense grids: :mod:`.grids.vtkimage` (VTK XML and legacy, MetaImage; NRRD in
+  :mod:`.grids.nrrd`), :mod:`.grids.radiance` (NeRF/radiance grids as ``.npz`` or EXR
+  stacks), :mod:`.grids.magicavoxel` (``.vox``), :mod:`.grids.demo` (the built-in planet).
 
-Shared: :mod:`.orient` (``--up``, ``--rotate``, ``--fit``), :mod:`.srgb_encode` (linear ->
-sRGB samples).
+Shared, at the top: :mod:`.base` (the protocol, the printer grid), :mod:`.registry` (which
+reader opens which file), :mod:`.orient` (``--up``, ``--rotate``, ``--fit``), :mod:`.dense`
+(a source held as a regular grid: the grids, InstantNGP's exports) and :mod:`.dense_sampler`
+(its trilinear sampler), :mod:`.sampling` (sparse leaf blocks, Gaussian kernels),
+:mod:`.srgb_encode` (linear -> sRGB samples).
 """
 
 from dreamprint_gui.io.volumes.base import PrintGrid, VolumeSource, grid_for_source

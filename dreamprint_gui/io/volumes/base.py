@@ -35,9 +35,8 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.print_size import check_print_size
 from dreamprint_gui.io.volumes.srgb_encode import encode_inplace
 
-__all__ = ["PrintGrid", "grid_for_source", "VolumeSource", "voxel_centres", "linear_to_srgb",
-           "linear_to_srgb_inplace",
-           "uniform_rgb", "SlabBuffers"]
+__all__ = ["PrintGrid", "grid_for_source", "mm_per_unit", "VolumeSource", "voxel_centres",
+           "linear_to_srgb", "linear_to_srgb_inplace", "uniform_rgb", "SlabBuffers"]
 
 
 @dataclass(frozen=True)
@@ -80,19 +79,8 @@ def grid_for_source(source, voxel_mm, *, height_mm: float | None = None,
     if not (np.all(np.isfinite(ext)) and np.all(ext >= 0) and ext.max() > 0):
         raise DreamPrintError(f"the source has empty or invalid bounds {source.bounds}",
                               getattr(source, "name", None))
-    if height_mm is not None:
-        if not (math.isfinite(height_mm) and height_mm > 0):
-            raise DreamPrintError(f"height must be a positive number of mm, got {height_mm}")
-        if ext[2] <= 0:
-            raise DreamPrintError("the source is flat in z: give a box size instead of a height",
-                                  getattr(source, "name", None))
-        mpu = float(height_mm) / float(ext[2])
-    else:
-        box = np.asarray(size_mm, float)
-        if box.shape != (3,) or not np.all(np.isfinite(box)) or np.any(box <= 0):
-            raise DreamPrintError(f"box size must be three positive numbers of mm, got {size_mm}")
-        ok = ext > 0
-        mpu = float(np.min(box[ok] / ext[ok]))
+    mpu = mm_per_unit(ext, height_mm=height_mm, size_mm=size_mm,
+                      name=getattr(source, "name", None))
     shape = []
     origin = []
     for a in range(3):
@@ -101,6 +89,31 @@ def grid_for_source(source, voxel_mm, *, height_mm: float | None = None,
         surplus = (n * vox[a] / mpu - ext[a]) / 2.0
         origin.append(float(lo[a] - surplus))
     return PrintGrid(tuple(shape), vox, tuple(origin), mpu)
+
+
+def mm_per_unit(extent, *, height_mm: float | None = None,
+                size_mm: tuple[float, float, float] | None = None, name=None) -> float:
+    """The uniform scale (mm per source unit) of :func:`grid_for_source` for bounds of
+    ``extent`` (their size along x, y, z in source units): ``height_mm / extent_z``, or for
+    ``size_mm = (X, Y, Z)`` the largest scale that fits the bounds in that box,
+    ``min(size_i / extent_i)`` over the axes of non-zero extent. A height of a source flat in
+    z, a box without a positive finite size or bounds with no extent are refused (``name``:
+    the source the message names)."""
+    ext = np.asarray(extent, float)
+    if height_mm is not None:
+        if not (math.isfinite(height_mm) and height_mm > 0):
+            raise DreamPrintError(f"height must be a positive number of mm, got {height_mm}")
+        if not ext[2] > 0:
+            raise DreamPrintError("the source is flat in z: give a box size instead of a height",
+                                  name)
+        return float(height_mm) / float(ext[2])
+    box = np.asarray(size_mm, float)
+    if box.shape != (3,) or not np.all(np.isfinite(box)) or np.any(box <= 0):
+        raise DreamPrintError(f"box size must be three positive numbers of mm, got {size_mm}")
+    ok = ext > 0
+    if not ok.any():
+        raise DreamPrintError("the source's bounds have no extent", name)
+    return float(np.min(box[ok] / ext[ok]))
 
 
 def voxel_centres(grid: PrintGrid, axis: int, lo: int = 0, hi: int | None = None) -> np.ndarray:

@@ -13,26 +13,26 @@ from pathlib import Path
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes.base import VolumeSource
-from dreamprint_gui.io.volumes.demo import DemoCloud
-from dreamprint_gui.io.volumes.ingp_volume import is_ingp_volume_dir, is_ingp_volume_name
-from dreamprint_gui.io.volumes.splat_formats import is_sog
+from dreamprint_gui.io.volumes.grids.demo import DemoCloud
+from dreamprint_gui.io.volumes.ingp.exports import is_ingp_volume_dir, is_ingp_volume_name
+from dreamprint_gui.io.volumes.splats.formats import is_sog
 
 __all__ = ["FORMATS", "sniff_format", "inspect_file", "inspect_source", "open_source",
            "reader_options", "OPTION_ALIASES", "parse_reader_options", "format_reader_options",
            "interpretation_choices"]
 
 
-# format key -> (module, extensions)
+# format key -> (module, under io.volumes, extensions)
 FORMATS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "openvdb": ("openvdb", (".vdb",)),
-    "nanovdb": ("nanovdb", (".nvdb",)),
-    "vtk": ("vtkimage", (".vti", ".vtk", ".mhd", ".mha", ".nrrd", ".nhdr")),
-    "radiance-npz": ("radiance", (".npz",)),
-    "radiance-exr": ("radiance", (".exr",)),
-    "splats": ("splats", (".ply", ".spz", ".splat", ".ksplat", ".sog")),
-    "magicavoxel": ("magicavoxel", (".vox",)),
-    "instant-ngp": ("ingp", (".ingp", ".msgpack")),
-    "ingp-volume": ("ingp_volume", ()),     # told by name: NNNN_WxH.png, WxHxD_C.bin
+    "openvdb": ("vdb.openvdb", (".vdb",)),
+    "nanovdb": ("vdb.nanovdb", (".nvdb",)),
+    "vtk": ("grids.vtkimage", (".vti", ".vtk", ".mhd", ".mha", ".nrrd", ".nhdr")),
+    "radiance-npz": ("grids.radiance", (".npz",)),
+    "radiance-exr": ("grids.radiance", (".exr",)),
+    "splats": ("splats.cloud", (".ply", ".spz", ".splat", ".ksplat", ".sog")),
+    "magicavoxel": ("grids.magicavoxel", (".vox",)),
+    "instant-ngp": ("ingp.snapshot", (".ingp", ".msgpack")),
+    "ingp-volume": ("ingp.exports", ()),     # told by name: NNNN_WxH.png, WxHxD_C.bin
 }
 
 

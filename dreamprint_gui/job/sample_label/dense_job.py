@@ -97,7 +97,7 @@ def window_slab_labels(vol, rows_nz, iz0, iz1, wz, vz, iy0, iy1, wy, vy, ix0, ix
     paper's sec. 4.1 maps a scalar field to extinction and albedo), density 0 at voxels outside
     the image (``outside_z[k] | outside_y[j] | outside_x[i]``, if ``use_outside``: a window
     below 0, where the sampler's 0 would be lifted), then :func:`.layer_kernel.strip_labels`.
-    The plan is :meth:`..io.volumes.vtkimage.ImageSource.layer_plan`'s. A table of one colour
+    The plan is :meth:`..io.volumes.grids.vtkimage.ImageSource.layer_plan`'s. A table of one colour
     (every entry the same bits: no colour map) gives only the density, windowed in the
     sampler's row pass (:func:`..io.volumes.dense_sampler.dense_window_layer`), and is looked
     up once per layer (:data:`.layer_kernel.UNIFORM`). A strip of rows at a time, as

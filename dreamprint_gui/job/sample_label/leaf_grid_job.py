@@ -1,7 +1,7 @@
 """The print job's fused path for sparse VDB grids: sample a strip of a layer, label it, next.
 
 Defines :func:`leaf_grid_slab_labels`: for each layer of a slab, the densities of an OpenVDB or
-NanoVDB fog volume densified over its leaves (:func:`..io.volumes.leaf_grid.leaf_grid_layer`,
+NanoVDB fog volume densified over its leaves (:func:`..io.volumes.vdb.leaf_grid.leaf_grid_layer`,
 the reconstruction step of the paper's sec. 4.1, bit-identical to the sparse sampler) go into
 a density array a strip of rows at a time (:data:`.layer_kernel.STRIP_VOXELS`), which
 :func:`.layer_kernel.strip_labels` turns into labels straight away (background test -> lookup
@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from numba import njit
 
-from dreamprint_gui.io.volumes.leaf_grid import leaf_grid_layer, leaf_grid_values_where
 from dreamprint_gui.io.volumes.srgb_encode import CLIP, ENCODE
+from dreamprint_gui.io.volumes.vdb.leaf_grid import leaf_grid_layer, leaf_grid_values_where
 from dreamprint_gui.job.sample_label.layer_kernel import (
     STRIP_VOXELS,
     UNIFORM,
@@ -64,9 +64,9 @@ def leaf_grid_colour_slab_labels(dense, rows_nz, k0, wk, j0, wj, i0, wi, plane, 
     """As :func:`leaf_grid_slab_labels`, the colour sampled per layer from a densified vec3
     grid ``cdense`` (nk, nj, ni, 3) with its own corners and weights (``ck0``, ``cwk`` per
     layer, ``cj0``/``cwj``, ``ci0``/``cwi``; ``cplane`` (3, ni) scratch), at the voxels the
-    labelling reads only (:func:`..io.volumes.leaf_grid.leaf_grid_values_where`), then
+    labelling reads only (:func:`..io.volumes.vdb.leaf_grid.leaf_grid_values_where`), then
     sRGB-encoded if ``linear`` (else clipped to [0, 1]) in the labelling's staged blocks
-    (``colour_op``): the values of :meth:`..io.volumes.openvdb.VdbSource.sample_slab` where
+    (``colour_op``): the values of :meth:`..io.volumes.vdb.openvdb.VdbSource.sample_slab` where
     the labels read them, a layer at a time."""
     rgb_flat = rgb.reshape(-1)
     cplane_flat = cplane.reshape(-1)

@@ -1,6 +1,7 @@
-"""The built-in demo (io/volumes/demo.py) prints well at its default size: every colour it holds
-is printable (checked by the gamut's direct solve, not the tables the demo's palette came from),
-it holds solid, translucent and faint parts, and its pre-flight at 40 mm has no warning."""
+"""The built-in demo (io/volumes/grids/demo.py) prints well at its default size: every colour
+it holds is printable (checked by the gamut's direct solve, not the tables the demo's palette
+came from), it holds solid, translucent and faint parts, and its pre-flight at 40 mm has no
+warning."""
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ from dreamprint_gui.core.profile import default_profile
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 from dreamprint_gui.gamut.forward import N_COLOUR_INKS, forward_model, mixtures_lab
 from dreamprint_gui.gamut.optimise import solve, targets_for
-from dreamprint_gui.io.volumes import demo
+from dreamprint_gui.io.volumes.grids import demo
 from dreamprint_gui.io.volumes.registry import open_source
 from dreamprint_gui.job.plan import ConvertSettings
 from dreamprint_gui.job.preflight import preflight

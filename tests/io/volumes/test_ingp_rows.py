@@ -7,8 +7,8 @@ import pytest
 from test_volumes_ingp import f16, make_config, param_shapes, ref_field, write_snapshot
 
 from dreamprint_gui.io.volumes import open_source
-from dreamprint_gui.io.volumes.ingp_kernels import _row_axis, sample_rows
-from dreamprint_gui.io.volumes.ingp_occupancy import occupied, row_span, row_voxels
+from dreamprint_gui.io.volumes.ingp.kernels import _row_axis, sample_rows
+from dreamprint_gui.io.volumes.ingp.occupancy import occupied, row_span, row_voxels
 
 
 def _brute(xs, qrow, a, brow, bx, lo, hi, blo, bhi, occ, max_cascade):
@@ -196,7 +196,7 @@ def test_job_labels_unchanged_by_the_colour_cut(tmp_path, monkeypatch):
     """A print job's slices are the same bytes whether or not the snapshot's colour network is
     skipped below the job's background threshold (also through --content solid)."""
     from dreamprint_gui.cli import main
-    from dreamprint_gui.io.volumes.ingp import IngpSource
+    from dreamprint_gui.io.volumes.ingp.snapshot import IngpSource
 
     p, *_ = _snapshot(tmp_path, 14)
     # the density straddles the job's threshold: a scale that puts its median there

@@ -1,4 +1,4 @@
-"""Sparse VDB grids densified over their leaves (``io.volumes.leaf_grid``) give the sparse
+"""Sparse VDB grids densified over their leaves (``io.volumes.vdb.leaf_grid``) give the sparse
 sampler's densities bit for bit, and the fused print-job path (``job.sample_label.leaf_grid_job``)
 writes what the general path writes (sample the slab, then ``slab_labels``)."""
 
@@ -7,8 +7,8 @@ import pytest
 
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.base import SlabBuffers
-from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, leaf_grid_layer
 from dreamprint_gui.io.volumes.sampling import SparseBlocks
+from dreamprint_gui.io.volumes.vdb.leaf_grid import LeafGridPlan, densify, leaf_grid_layer
 from dreamprint_gui.job.plan import ConvertSettings, prepare_job
 from dreamprint_gui.job.sample_label.leaf_grid_job import leaf_grid_slab_labels
 from dreamprint_gui.job.slab import _labels_of_slab
@@ -33,7 +33,7 @@ class _Blocks:
     layer_kind = "leaf_grid"
 
     def __init__(self, blocks):
-        from dreamprint_gui.io.volumes.openvdb import VdbSource
+        from dreamprint_gui.io.volumes.vdb.openvdb import VdbSource
 
         self.blocks = blocks
         self.density = type("G", (), {})()
@@ -158,8 +158,8 @@ def test_densified_values_equal_the_sparse_sampler(channels):
     """leaf_grid_values (OpenVDB sample_slab's grids, colour ones included) gives
     sample_sparse's values bit for bit, every channel."""
     from dreamprint_gui.io.volumes.base import voxel_centres
-    from dreamprint_gui.io.volumes.leaf_grid import index_axis, leaf_grid_values
     from dreamprint_gui.io.volumes.sampling import sample_sparse
+    from dreamprint_gui.io.volumes.vdb.leaf_grid import index_axis, leaf_grid_values
 
     b1 = _random_blocks(seed=11)
     values = np.concatenate([b1.values * (c + 1) for c in range(channels)], axis=-1)
@@ -186,7 +186,7 @@ def test_colour_where_labelled_equals_every_value(threshold):
     density reaches the threshold (rows with and without source data, columns outside the
     grid, NaN and -0.0 among the values) and leaves every other voxel as it was."""
     from dreamprint_gui.io.volumes.base import voxel_centres
-    from dreamprint_gui.io.volumes.leaf_grid import (
+    from dreamprint_gui.io.volumes.vdb.leaf_grid import (
         index_axis,
         leaf_grid_values,
         leaf_grid_values_where,
@@ -231,7 +231,7 @@ def test_colour_where_labelled_equals_every_value(threshold):
 
 def test_coloured_vdb_samples_the_same_through_dense_copies(vdbs, monkeypatch):
     """A VDB with a colour grid samples the same with its grids densified as from the leaves."""
-    from dreamprint_gui.io.volumes import openvdb
+    from dreamprint_gui.io.volumes.vdb import openvdb
 
     for name in ("box_half_cd", "box_rgb3"):
         s = open_source(vdbs / f"{name}.vdb")

@@ -14,13 +14,13 @@ import pytest
 from dreamprint_gui.cli import main
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import open_source
-from dreamprint_gui.io.volumes.splat_formats import (
+from dreamprint_gui.io.volumes.splats.cloud import SH_C0, GaussianCloud
+from dreamprint_gui.io.volumes.splats.formats import (
     decode_ksplat,
     decode_sog,
     decode_splat,
     decode_spz,
 )
-from dreamprint_gui.io.volumes.splats import SH_C0, GaussianCloud
 
 N = 37
 

@@ -57,7 +57,7 @@ def test_overflowing_scale_is_skipped_not_spread():
     import numpy as np
 
     from dreamprint_gui.io.volumes import grid_for_source
-    from dreamprint_gui.io.volumes.splats import GaussianCloud
+    from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud
 
     means = np.zeros((2, 3))
     sig = np.array([[0.3, 0.3, 0.3], [1e-174, 0.3, 0.3]])

@@ -10,7 +10,8 @@ import pytest
 
 from dreamprint_gui.io.volumes import grid_for_source
 from dreamprint_gui.io.volumes.base import voxel_centres
-from dreamprint_gui.io.volumes.splat_raster import (
+from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud, peak_density
+from dreamprint_gui.io.volumes.splats.raster import (
     SCAN_X,
     TILE_X,
     TILE_Y,
@@ -18,7 +19,6 @@ from dreamprint_gui.io.volumes.splat_raster import (
     rasterise_splats,
     tile_layers,
 )
-from dreamprint_gui.io.volumes.splats import GaussianCloud, peak_density
 
 
 def _rot(q):
@@ -164,7 +164,7 @@ def _needles(n=24, seed=11):
 def test_thin_tilted_gaussians_match_direct_evaluation(walk):
     """Needles tilted across the grid, walked where the walk stays in float64's range and
     rasterised row by row where it would not, against the direct sum Gaussian by Gaussian."""
-    from dreamprint_gui.io.volumes.splat_raster import _setup
+    from dreamprint_gui.io.volumes.splats.raster import _setup
 
     cloud = _needles()
     s = GaussianCloud("c", "t", *cloud, bounds=((-1, -1, -1), (1, 1, 1)))
@@ -218,7 +218,7 @@ def test_accumulator_left_clean_and_channel_gaps_untouched(walk):
     starting and ending inside tiles: each tile clears exactly the cells it touched (the
     accumulator is all zero after the slab), and no write lands in the 64 cells between two
     channels or outside the accumulator."""
-    from dreamprint_gui.io.volumes import splat_raster as sr
+    from dreamprint_gui.io.volumes.splats import raster as sr
 
     s = GaussianCloud("c", "t", *_needles(30, 4), bounds=((-1, -1, -1), (1, 1, 1)))
     g = grid_for_source(s, (0.01, 0.03, 0.02), size_mm=(2, 2, 2))    # 200 x 67 x 100

@@ -9,7 +9,7 @@ import pytest
 from dreamprint_gui.cli import main
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import open_source
-from dreamprint_gui.io.volumes.openvdb import check_header
+from dreamprint_gui.io.volumes.vdb.openvdb import check_header
 
 
 def _header(version=224, grids=(("density", "Tree_float_5_4_3", 100, 200, 300),), meta=0):

@@ -1,4 +1,4 @@
-"""The in-process OpenVDB reader (io/volumes/vdb_file.py) against OpenVDB's own library
+"""The in-process OpenVDB reader (io/volumes/vdb/vdb_file.py) against OpenVDB's own library
 (Debian's python3-openvdb in a subprocess; skipped where absent): the sample file and files
 written here with pyopenvdb (float fog, the 7 mask-compression codes, tiles of every level,
 inactive tiles with values, vec3 colour, a level set, each also saved as half floats) and
@@ -19,8 +19,9 @@ import pytest
 
 from dreamprint_gui.cli import main
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.io.volumes import open_source, openvdb
-from dreamprint_gui.io.volumes import vdb_file as V
+from dreamprint_gui.io.volumes import open_source
+from dreamprint_gui.io.volumes.vdb import openvdb
+from dreamprint_gui.io.volumes.vdb import vdb_file as V
 
 WRITE = textwrap.dedent('''
     import sys

@@ -7,7 +7,7 @@ import pytest
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import grid_for_source, open_source
-from dreamprint_gui.io.volumes.base import linear_to_srgb, voxel_centres
+from dreamprint_gui.io.volumes.base import linear_to_srgb, mm_per_unit, voxel_centres
 
 
 class _Box:
@@ -33,6 +33,18 @@ def test_size_takes_largest_fitting_uniform_scale():
     g = grid_for_source(_Box(), (0.5, 0.5, 0.5), size_mm=(8, 40, 40))
     assert g.mm_per_unit == pytest.approx(2.0)          # x limits: 4 units -> 8 mm
     assert g.shape_xyz == (16, 8, 8)
+
+
+def test_mm_per_unit_closed_form():
+    """The one scale rule (grid_for_source's, and what ``inspect`` states): height / z extent,
+    or the smallest size / extent over the axes that have an extent."""
+    assert mm_per_unit((2.0, 4.0, 8.0), height_mm=16.0) == 2.0
+    assert mm_per_unit((2.0, 4.0, 8.0), size_mm=(10.0, 10.0, 10.0)) == 1.25
+    assert mm_per_unit((0.0, 4.0, 8.0), size_mm=(1.0, 10.0, 40.0)) == 2.5  # flat x: ignored
+    with pytest.raises(DreamPrintError, match="flat in z"):
+        mm_per_unit((2.0, 4.0, 0.0), height_mm=1.0)
+    with pytest.raises(DreamPrintError, match="no extent"):
+        mm_per_unit((0.0, 0.0, 0.0), size_mm=(1.0, 1.0, 1.0))
 
 
 def test_exactly_one_size_and_positive_values():

@@ -369,7 +369,7 @@ def test_inspect_names_kind_network_and_occupancy(tmp_path, capsys):
 
 def test_occupancy_cascades_follow_mip_from_pos():
     """The cascade picked for a point is instant-ngp's mip_from_pos: frexp of max|q - 0.5|."""
-    from dreamprint_gui.io.volumes.ingp_kernels import _occupied
+    from dreamprint_gui.io.volumes.ingp.kernels import _occupied
 
     rng = np.random.default_rng(5)
     occ = (rng.random((3, 8, 8, 8)) < 0.5).astype(np.uint8)

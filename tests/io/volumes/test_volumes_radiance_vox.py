@@ -9,7 +9,7 @@ from dreamprint_gui.cli import main
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.base import linear_to_srgb, voxel_centres
-from dreamprint_gui.io.volumes.magicavoxel import DEFAULT_PALETTE
+from dreamprint_gui.io.volumes.grids.magicavoxel import DEFAULT_PALETTE
 
 
 def test_npz_constant_box_anisotropic(tmp_path, box_expectation):

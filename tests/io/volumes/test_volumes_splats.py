@@ -9,7 +9,7 @@ from dreamprint_gui.cli import main
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes import grid_for_source, open_source
 from dreamprint_gui.io.volumes.base import voxel_centres
-from dreamprint_gui.io.volumes.splats import SH_C0, GaussianCloud
+from dreamprint_gui.io.volumes.splats.cloud import SH_C0, GaussianCloud
 
 
 def _rot(q):
@@ -184,7 +184,7 @@ def test_frames_kernel_equals_the_numpy_formulas():
     """The compiled per-Gaussian frames (inverse covariance, 3-sigma half-extents) give the bits
     of R from the normalised quaternion and ``einsum("nij,nj,nkj->nik")`` in numpy, including
     zero and huge quaternions."""
-    from dreamprint_gui.io.volumes.splats import _frames, _quat_to_rot
+    from dreamprint_gui.io.volumes.splats.cloud import _frames, _quat_to_rot
 
     rng = np.random.default_rng(4)
     n = 20_000

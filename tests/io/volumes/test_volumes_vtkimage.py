@@ -225,7 +225,7 @@ def test_garbled_metaimage_header_is_called_damaged(tmp_path):
 def test_reader_complaint_made_one_line():
     """A reader's complaint reaches the operator as its last line, without indentation or the
     quotes VTK wraps MetaIO's message in; a quoted name inside the message keeps its quotes."""
-    from dreamprint_gui.io.volumes.vtkimage import _one_line
+    from dreamprint_gui.io.volumes.grids.vtkimage import _one_line
 
     assert _one_line('ERROR: In vtkMetaImageReader\n\t"MetaImage cannot read data from file."'
                      ) == "MetaImage cannot read data from file."

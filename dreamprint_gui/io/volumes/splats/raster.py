@@ -2,7 +2,7 @@
 
 Defines :func:`rasterise_splats` (density and density-weighted colour, the colour divide fused),
 the tile sizes ``TILE_X``, ``TILE_Y``, ``TILE_Z`` and the walk's safety bounds ``Q_WALK``,
-``K_WALK``.  The density model is the one derived in :mod:`.splats`: kernel ``s exp(-q/2)``,
+``K_WALK``.  The density model is the one derived in :mod:`.cloud`: kernel ``s exp(-q/2)``,
 q the squared Mahalanobis distance, cut at ``q <= 9`` (``CUT_Q``).
 
 The walk (most Gaussians).  On the voxel lattice ``p = (i, j, k)`` (centres ``o + (p + 1/2)

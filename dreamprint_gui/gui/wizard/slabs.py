@@ -28,7 +28,7 @@ from PySide6.QtWidgets import (
 )
 
 from dreamprint_gui.core.profile import INKS
-from dreamprint_gui.gui.wizard_common import ERROR_STYLE, INK_COLOURS, canvas
+from dreamprint_gui.gui.wizard.common import ERROR_STYLE, INK_COLOURS, canvas
 from dreamprint_gui.physics import saunderson
 from dreamprint_gui.physics.slab_fit import REFRACTIVE_INDEX, SlabOptions, series_warnings
 

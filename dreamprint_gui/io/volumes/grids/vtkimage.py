@@ -32,7 +32,7 @@ from dreamprint_gui.io.volumes.dense import (
     check_claimed_size,
     colormap_lut,
 )
-from dreamprint_gui.io.volumes.nrrd import read_nrrd
+from dreamprint_gui.io.volumes.grids.nrrd import read_nrrd
 
 __all__ = ["open_path", "ImageSource"]
 

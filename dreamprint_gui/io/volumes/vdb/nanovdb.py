@@ -34,15 +34,15 @@ from dreamprint_gui.io.volumes.base import (
     voxel_centres,
 )
 from dreamprint_gui.io.volumes.dense import MAX_EXPANSION
-from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan
-from dreamprint_gui.io.volumes.level_set import (
+from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
+from dreamprint_gui.io.volumes.vdb.leaf_grid import LeafGridPlan
+from dreamprint_gui.io.volumes.vdb.level_set import (
     GRID_ADVICE,
     LEVEL_SET_ADVICE,
     check_level_set_options,
     check_shell,
     level_set_density,
 )
-from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
 
 __all__ = ["read_nvdb", "inspect_path", "open_path", "NanoVdbSource"]
 

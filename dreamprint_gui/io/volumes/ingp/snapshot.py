@@ -21,7 +21,7 @@ Where the configuration leaves them out, values are derived as instant-ngp does
 (``Testbed::reset_network``): ``per_level_scale = exp(ln(2048 aabb_scale / N_min) / (L - 1))``,
 ``N_min = 2^floor(log2_hashmap_size / 3)`` (with instant-ngp's default 15 for that
 derivation, tiny-cuda-nn's 19 for the table), 16 levels of 2 features.  The evaluation itself is
-:mod:`.ingp_kernels` (its docstring has the equations).
+:mod:`.kernels` (its docstring has the equations).
 
 Placement.  Source units are the dataset's own (``transforms.json``) coordinates: instant-ngp's
 position is ``q = C (p * scale + offset)`` with ``C`` its axis cycle (x, y, z) <- (y, z, x)
@@ -62,7 +62,7 @@ from dreamprint_gui.io.volumes.base import (
     voxel_centres,
 )
 from dreamprint_gui.io.volumes.dense import MAX_EXPANSION, bounds_list
-from dreamprint_gui.io.volumes.ingp_kernels import ACT, sample_rows
+from dreamprint_gui.io.volumes.ingp.kernels import ACT, sample_rows
 
 __all__ = ["read_snapshot", "parse_snapshot", "IngpModel", "IngpSource", "open_path",
            "sh_encode", "snapshot_info", "VIEW_DIRECTIONS"]

@@ -3,7 +3,7 @@
 Defines :func:`occupied` (instant-ngp's test for one point), :func:`row_span` (the row's voxels
 inside the training ``aabb`` and the render box) and :func:`row_voxels` (the voxels of that
 span whose occupancy-grid cell is marked, empty space skipped a block of voxels at a time).
-Step 1 of :mod:`.ingp_kernels`' docstring, for rows along which one instant-ngp axis varies
+Step 1 of :mod:`.kernels`' docstring, for rows along which one instant-ngp axis varies
 (``q = q_row + a x`` with ``a`` having a single non-zero component, as every placement of
 :meth:`.ingp.IngpModel.to_ngp` gives) and whose voxel centres ``x`` increase.
 

@@ -1,4 +1,4 @@
-"""The multiresolution hash encoding of InstantNGP (step 2 of :mod:`.ingp_kernels`' docstring)
+"""The multiresolution hash encoding of InstantNGP (step 2 of :mod:`.kernels`' docstring)
 for a batch of voxels, per level either voxel by voxel or a printer row at a time.
 
 Defines :func:`level_direct` (one level for columns ``c0 .. c1 - 1`` of a batch: 8 corners
@@ -48,7 +48,7 @@ def _level_table(lvl, table, n_feat, offsets, hashed):
 @njit(cache=True, nogil=True, inline="always")
 def corner_index(tx, ty, tz, hsh, pow2, mask, size):
     """A corner's table entry from its per-axis index terms (module docstring of
-    :mod:`.ingp_kernels`, step 2): hashed ``x ^ y P1 ^ z P2``, dense ``x + y r + z r^2``,
+    :mod:`.kernels`, step 2): hashed ``x ^ y P1 ^ z P2``, dense ``x + y r + z r^2``,
     modulo the level's table size."""
     if hsh and pow2:
         return (tx ^ ty ^ tz) & mask

@@ -36,7 +36,7 @@ import numpy as np
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume
 from dreamprint_gui.io.volumes.sampling import rasterise_gaussians
-from dreamprint_gui.io.volumes.splats import GaussianCloud
+from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud
 
 __all__ = ["DemoCloud", "demo_fields", "demo_colours", "occupied_height", "PALETTE",
            "PRINTABLE_WHITE", "DESIGN_HEIGHT_MM"]

@@ -39,16 +39,21 @@ from dreamprint_gui.io.volumes.base import (
     uniform_rgb,
     voxel_centres,
 )
-from dreamprint_gui.io.volumes.leaf_grid import LeafGridPlan, densify, index_axis, leaf_grid_values
-from dreamprint_gui.io.volumes.level_set import (
+from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
+from dreamprint_gui.io.volumes.vdb.leaf_grid import (
+    LeafGridPlan,
+    densify,
+    index_axis,
+    leaf_grid_values,
+)
+from dreamprint_gui.io.volumes.vdb.level_set import (
     GRID_ADVICE,
     LEVEL_SET_ADVICE,
     check_level_set_options,
     check_shell,
     level_set_density,
 )
-from dreamprint_gui.io.volumes.sampling import SparseBlocks, sample_sparse
-from dreamprint_gui.io.volumes.vdb_file import VdbError, VdbGrid, read_file, read_grid
+from dreamprint_gui.io.volumes.vdb.vdb_file import VdbError, VdbGrid, read_file, read_grid
 
 __all__ = ["VdbSource", "open_path", "inspect_path", "check_header"]
 

@@ -2,7 +2,7 @@
 
 Defines :func:`sample_rows` (one call per group of printer rows; releases the GIL) and the
 activation codes :data:`ACT`.  The layout it evaluates is the one
-:mod:`.ingp` reads from a snapshot; the equations, step by step (tiny-cuda-nn
+:mod:`.snapshot` reads from a snapshot; the equations, step by step (tiny-cuda-nn
 ``encodings/grid.h`` and ``common_device.h``, instant-ngp ``nerf_network.h`` and
 ``nerf_device.cuh``):
 
@@ -28,9 +28,9 @@ All in float32 (instant-ngp runs the networks in float16: expect ~1e-3 relative 
 
 Where the time goes (issue 25).  Along a printer row only one instant-ngp coordinate varies
 (every placement the reader makes), so step 1 takes the row's voxels inside the boxes as one
-interval and the occupancy grid a block of voxels at a time (:mod:`.ingp_occupancy`; the
+interval and the occupancy grid a block of voxels at a time (:mod:`.occupancy`; the
 same voxels as the per-voxel test), and step 2 blends the coarse levels a row at a time
-(:mod:`.ingp_encode`).  The networks (steps 3-4, ~8400 multiply-adds per voxel) run near the
+(:mod:`.encode`).  The networks (steps 3-4, ~8400 multiply-adds per voxel) run near the
 float32 FMA peak of an AVX2 core (~37 of ~42 per ns); the colour network runs only where a
 print job reads colour (``colour_cut``).
 """
@@ -42,8 +42,8 @@ import math
 import numpy as np
 from numba import njit
 
-from dreamprint_gui.io.volumes.ingp_encode import encode_batch, row_form_levels
-from dreamprint_gui.io.volumes.ingp_occupancy import occupied, row_span, row_voxels
+from dreamprint_gui.io.volumes.ingp.encode import encode_batch, row_form_levels
+from dreamprint_gui.io.volumes.ingp.occupancy import occupied, row_span, row_voxels
 
 _occupied = occupied            # the per-point test, as tests and older callers name it
 
@@ -303,8 +303,8 @@ def sample_rows(r0, r1, la, xs, ys, zs, A, t, aabb_lo, aabb_hi, box_R, box_lo, b
 
     Rows along which one instant-ngp axis varies (every placement the reader makes) take the
     row path: the voxels inside the boxes as one interval and the occupancy grid tested a block
-    of voxels at a time (:mod:`.ingp_occupancy`), the coarse levels of the encoding a row at a
-    time (:mod:`.ingp_encode`); other rows are tested and encoded voxel by voxel.  Either way
+    of voxels at a time (:mod:`.occupancy`), the coarse levels of the encoding a row at a
+    time (:mod:`.encode`); other rows are tested and encoded voxel by voxel.  Either way
     a row's voxels fill the columns of batches of :data:`BATCH` for the networks."""
     ny = ys.shape[0]
     nx = xs.shape[0]

@@ -1,6 +1,6 @@
 """3D Gaussian splats as a density field: INRIA PLY (and nerfstudio's ``ns-export gaussian-splat``
 PLY), SuperSplat compressed PLY, Niantic SPZ, antimatter15 ``.splat``, ``.ksplat``, PlayCanvas SOG
-(the last four read in :mod:`.splat_formats`).
+(the last four read in :mod:`.formats`).
 
 Defines :class:`GaussianCloud` (the source), :func:`peak_density` and :func:`open_path`.
 
@@ -35,10 +35,10 @@ import numpy as np
 from numba import njit
 
 from dreamprint_gui.core.errors import DreamPrintError
-from dreamprint_gui.io.volumes import splat_formats
 from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, check_slab, voxel_centres
 from dreamprint_gui.io.volumes.dense import bounds_list
-from dreamprint_gui.io.volumes.splat_raster import TILE_Z, pack_gaussians, rasterise_splats
+from dreamprint_gui.io.volumes.splats import formats as splat_formats
+from dreamprint_gui.io.volumes.splats.raster import TILE_Z, pack_gaussians, rasterise_splats
 
 __all__ = ["GaussianCloud", "peak_density", "open_path", "SH_C0"]
 
@@ -288,14 +288,14 @@ def _read_inria(path: Path) -> GaussianCloud:
 
 
 def _cloud(path: Path, g: splat_formats.Gaussians) -> GaussianCloud:
-    """The source of Gaussians decoded by :mod:`.splat_formats`."""
+    """The source of Gaussians decoded by :mod:`.formats`."""
     return GaussianCloud(str(path), g.format, g.means, g.sigmas, g.quats, g.opacity, g.rgb,
                          g.sh_degree)
 
 
 def open_path(path: Path, fmt: str = "splats") -> GaussianCloud:
     """Open a splat file: PLY (INRIA, nerfstudio's export, SuperSplat compressed), SPZ,
-    antimatter15 ``.splat``, ``.ksplat`` or PlayCanvas SOG (see :mod:`.splat_formats`)."""
+    antimatter15 ``.splat``, ``.ksplat`` or PlayCanvas SOG (see :mod:`.formats`)."""
     import gsply
 
     if splat_formats.is_sog(path):

@@ -1,0 +1,1 @@
+"""Dense grids: VTK image, MetaImage, NRRD, radiance grids, MagicaVoxel, the built-in demo."""

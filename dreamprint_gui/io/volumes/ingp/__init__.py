@@ -1,0 +1,1 @@
+"""InstantNGP: NeRF snapshots (hash encoding, MLPs, occupancy) and its volume exports."""

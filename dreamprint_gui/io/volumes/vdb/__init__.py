@@ -1,0 +1,1 @@
+"""OpenVDB and NanoVDB readers: the file formats, level sets, sparse leaf grids."""
