@@ -1,7 +1,7 @@
 """Decode speed of the splat exchange formats (issue 18): Gaussians/s of
-``splat_formats.decode_*`` for antimatter15 ``.splat``, ``.ksplat`` level 0 and SPZ v3 (gzip)
-/ v4 (zstd), on ``--n`` synthetic Gaussians (default 1e6), best of ``--repeat``. The SPZ files
-are written by gsply's writer, the others by the layouts' definitions (numpy). Files go to a
+``io.volumes.splats.formats.decode_*`` for antimatter15 ``.splat``, ``.ksplat`` level 0 and SPZ
+v3 (gzip) / v4 (zstd), on ``--n`` synthetic Gaussians (default 1e6), best of ``--repeat``. The SPZ
+files are written by gsply's writer, the others by the layouts' definitions (numpy). Files go to a
 temporary folder (``--dir``, default the system's). Run from the checkout root:
 
     PYTHONPATH=. python benchmarks/splat_read.py [--n 1000000] [--repeat 3]

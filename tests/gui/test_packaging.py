@@ -79,3 +79,21 @@ def test_metainfo_screenshots_are_real_files_at_the_declared_address():
     readme = (PKG / "README.md").read_text()
     for name in re.findall(r"BASE/docs/screenshots/([\w.-]+)", readme):
         assert (ROOT / "docs" / "screenshots" / name).is_file(), name
+
+
+def test_every_package_folder_is_installed():
+    """A non-editable install (wheel, sdist) carries every folder of .py files: setuptools'
+    discovery as pyproject.toml configures it (``packages.find``, regular packages only) finds
+    each one, so a new sub-package (io/volumes/vdb/, gui/wizard/, ...) without an __init__.py
+    would be left out of the wheel while the editable checkout still imports it."""
+    from setuptools import find_packages
+
+    find = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
+        "packages"]["find"]
+    found = set(find_packages(str(ROOT), include=find["include"]))
+    folders = {".".join(p.parent.relative_to(ROOT).parts)
+               for p in (ROOT / "dreamprint_gui").rglob("*.py") if "__pycache__" not in p.parts}
+    assert folders - found == set()
+    assert {"dreamprint_gui.io.volumes.vdb", "dreamprint_gui.io.volumes.splats",
+            "dreamprint_gui.io.volumes.ingp", "dreamprint_gui.io.volumes.grids",
+            "dreamprint_gui.gui.wizard"} <= found

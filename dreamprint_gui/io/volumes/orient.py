@@ -344,7 +344,7 @@ def _swap_xz_copy_rgb(view, out):
 
 
 def _turned_gaussians(cloud, m: np.ndarray):
-    """A copy of a :class:`.splats.GaussianCloud` in print coordinates: means ``M mu``,
+    """A copy of a :class:`.splats.cloud.GaussianCloud` in print coordinates: means ``M mu``,
     inverse covariances ``M Sigma^-1 M^T``, 3-sigma extents permuted."""
     c = copy.copy(cloud)
     axes = _axes(m)

@@ -5,7 +5,7 @@ inside the training ``aabb`` and the render box) and :func:`row_voxels` (the vox
 span whose occupancy-grid cell is marked, empty space skipped a block of voxels at a time).
 Step 1 of :mod:`.kernels`' docstring, for rows along which one instant-ngp axis varies
 (``q = q_row + a x`` with ``a`` having a single non-zero component, as every placement of
-:meth:`.ingp.IngpModel.to_ngp` gives) and whose voxel centres ``x`` increase.
+:meth:`.snapshot.IngpModel.to_ngp` gives) and whose voxel centres ``x`` increase.
 
 Exactness.  Each per-voxel test is the per-voxel formula in float64, and every one of them is
 monotone in ``x`` along such a row: ``q_d = q_row,d + a_d x`` and the box test's ``R q`` are

@@ -310,7 +310,7 @@ def sh_encode(d: np.ndarray, degree: int) -> np.ndarray:
 
 @dataclass
 class IngpModel:
-    """Everything :func:`.ingp_kernels.sample_rows` needs, plus what ``inspect`` reports."""
+    """Everything :func:`.kernels.sample_rows` needs, plus what ``inspect`` reports."""
 
     grid: GridLayout
     density: Mlp

@@ -157,7 +157,7 @@ class GaussianCloud:
         self.bounds = bounds
 
     def index_by_height(self) -> None:
-        """The rasteriser's copy of the Gaussians (:func:`.splat_raster.pack_gaussians`) in
+        """The rasteriser's copy of the Gaussians (:func:`.raster.pack_gaussians`) in
         order of their lowest z, with their lowest and highest z and the running maximum of the
         highest: a slab's Gaussians are then one stretch of rows, found by two binary
         searches, read one after another (in file order they were gathered from all over the
