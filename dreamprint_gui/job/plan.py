@@ -450,12 +450,14 @@ def resized_job(previous: JobContext, settings: ConvertSettings) -> JobContext |
     """``previous`` (a :func:`prepare_job` context) for ``settings`` when they differ from its
     own only in :data:`RESIZABLE`: the open source, its orientation and fitted bounds, the
     tables and the background threshold are kept; the grid (and the tray check) and the
-    halftoner's background label are redone as :func:`prepare_job` does them. None when any
-    other setting differs, or when a correction is applied (it is checked against the size):
-    then the job must be prepared again. The Preview calls it as a control is dragged."""
+    halftoner's background label are redone, and the settings checked, as :func:`prepare_job`
+    does them. None when any other setting differs, or when a correction is applied (it is
+    checked against the size): then the job must be prepared again. The Preview calls it as a
+    control is dragged."""
     same = replace(previous.settings, **{k: getattr(settings, k) for k in RESIZABLE})
     if same != settings or settings.compensation is not None:
         return None
+    check_settings(settings)  # what prepare_job refuses (a negative density, no size, ...)
     grid = _job_grid(previous.source, previous.printer, settings, previous.fit_bounds)
     return replace(previous, settings=settings, grid=grid,
                    halftoner=_job_halftoner(settings, previous.printer,

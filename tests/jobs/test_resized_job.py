@@ -51,3 +51,17 @@ def test_a_setting_added_later_is_compared(prepared):
 def test_a_resized_job_larger_than_the_tray_is_refused(prepared):
     with pytest.raises(DreamPrintError, match="larger than the printer's tray"):
         resized_job(prepared, replace(BASE, height_mm=5000.0))
+
+
+@pytest.mark.parametrize("change", [
+    {"density_scale": -1.0}, {"density_scale": float("nan")}, {"background": "grey"},
+    {"height_mm": None}, {"height_mm": -2.0}, {"size_mm": (4.0, 4.0, 2.0)},
+])
+def test_a_resize_the_job_refuses_is_refused_alike(prepared, change):
+    """The Preview shows no job the export would refuse: the same one-line error."""
+    s = replace(BASE, **change)
+    with pytest.raises(DreamPrintError) as want:
+        prepare_job(s)
+    with pytest.raises(DreamPrintError) as got:
+        resized_job(prepared, s)
+    assert str(got.value) == str(want.value)
