@@ -141,6 +141,13 @@ class CompensateSettings(HasSpec):
     intent: str | None = None
     sampling: str | None = None
     compensation: str | None = None  # always None: a correction is made from the open loop
+    # the job's background threshold in 1/mm (ConvertSettings.density_threshold; None: half
+    # the density of pure Clear): the labels trained on are the job's own
+    density_threshold: float | None = None
+
+    def convert_settings(self) -> ConvertSettings:
+        """The job whose labels the optimiser proofs (the spec and its background threshold)."""
+        return ConvertSettings.from_spec(self.spec, density_threshold=self.density_threshold)
 
     def proof_settings(self, method: str = "paper") -> ProofSettings:
         return ProofSettings.from_spec(self.spec, views=self.views,
@@ -294,7 +301,7 @@ class _Loop:
                  cancelled: Callable[[], bool]) -> None:
         self.s = s
         self.cancelled = cancelled
-        self.lab = EngineLabels(ConvertSettings.from_spec(s.spec))
+        self.lab = EngineLabels(s.convert_settings())
         lab = self.lab
         self.bands = spectral_bands(lab.profile, s.bands)
         self.print_size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))

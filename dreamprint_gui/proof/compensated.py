@@ -44,11 +44,13 @@ def correction_path_for(job_output: str | os.PathLike) -> Path:
 
 def compensate_settings_for(s: ConvertSettings, output: str | None = None,
                             **overrides: Any) -> CompensateSettings:
-    """The compensation of the job ``s`` (its source, size, placement, printer, profile, seed,
-    halftoning, density, background, table), written to ``output``; ``overrides`` set the
-    optimiser's own settings (views, iterations, resolution, spp)."""
+    """The compensation of the job ``s`` (its print spec: source, size, placement, printer,
+    profile, content, intent and objective, seed, halftoning, density, background; and its
+    background threshold), written to ``output``; ``overrides`` set the optimiser's own
+    settings (views, iterations, resolution, spp)."""
     return CompensateSettings.from_spec(replace(s.spec, compensation=None), output=output,
-                                        overwrite=s.overwrite, **overrides)
+                                        overwrite=s.overwrite,
+                                        density_threshold=s.density_threshold, **overrides)
 
 
 @dataclass(frozen=True)

@@ -74,6 +74,31 @@ def test_compensation_trains_under_the_jobs_intent_objective_and_content():
     assert labels.ctx.content.mode == "solid"
 
 
+def test_compensation_trains_under_the_jobs_density_threshold(monkeypatch):
+    """``convert --compensate --density-threshold T``: the optimiser's labels are made with
+    the job's threshold T (what becomes background), not the default half of pure Clear's."""
+    import dreamprint_gui.proof.compensate as compensate
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def labels(settings):
+        seen.append(settings)
+        raise Stop
+
+    monkeypatch.setattr(compensate, "EngineLabels", labels)
+    for thr in (7.5, None):
+        s = ConvertSettings(source="demo", output="/tmp/x/job", height_mm=2.0, table_size=17,
+                            density_threshold=thr, intent="relative", rotate=90)
+        with pytest.raises(Stop):
+            compensate._Loop(compensate_settings_for(s, "/tmp/x/c.npz"), [], lambda: False)
+        job = seen[-1]
+        assert job.density_threshold == thr
+        assert job.spec == s.spec   # and the rest of the print as the job states it
+
+
 def test_compensated_export_refuses_an_existing_job_before_optimising(tmp_path):
     (tmp_path / "job").mkdir()
     s = ConvertSettings(source="demo", output=str(tmp_path / "job"), height_mm=2.0,
