@@ -55,8 +55,8 @@ from dreamprint_gui.core.errors import DreamPrintError
               help="Colour table nodes per axis (tests use small tables).")
 @click.option("--compensation", type=click.Path(), default=None,
               help="Apply a correction file made by 'dreamprint compensate' (made for this "
-                   "source, size, placement, printer, profile, background, objective, intent "
-                   "and content).")
+                   "source, size, placement, printer, profile, background and its threshold, "
+                   "objective, intent and content).")
 @click.option("--compensate", is_flag=True,
               help="Optimise a correction first (dreamprint compensate's defaults; written "
                    "beside the job as JOB.correction.npz), then convert with it.")

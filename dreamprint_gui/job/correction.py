@@ -28,16 +28,19 @@ is :mod:`dreamprint_gui.proof.compensate` (the proof layer; this module only rea
 File (``.npz``, numpy's zip of arrays, no pickles): ``gain`` float32, and ``meta`` a JSON
 string: format, version, the source (path and fingerprint: file size and modification time, or
 those of a folder's entries), the print size in mm, the printer, the ink profile's fingerprint,
-the background, the placement, the rendering (colour table objective, rendering intent and
-content mode, as resolved for the job: :func:`rendering_key`) and the optimiser's report
-(figures before and after). A job refuses, in one line, a file that is not a correction, or one
-made for another source, size, printer, profile, placement, background, objective, intent or
-content.
+the background and its threshold (1/mm, as resolved for the job: below it a voxel is
+background), the placement, the rendering (colour table objective, rendering intent and content
+mode, as resolved for the job: :func:`rendering_key`) and the optimiser's report (figures before
+and after). A job refuses, in one line, a file that is not a correction, or one made for another
+source, size, printer, profile, placement, background, background threshold, objective, intent
+or content.
 
 A file written before the rendering was recorded (no ``rendering`` in its meta) is read as made
 under the defaults (content auto, the profile's objective and intent): every such file was
 trained through the proof, whose settings then carried none of the three, so the defaults are
-what it was made under, not a guess; a job with other choices refuses it.
+what it was made under, not a guess; a job with other choices refuses it. Likewise a file
+that records no background threshold was made under the default one (half the density of pure
+Clear): the optimiser labelled the source with it whatever the job's ``--density-threshold``.
 """
 
 from __future__ import annotations
@@ -83,6 +86,9 @@ class Correction:
     # the job's objective, intent and content (rendering_key); None: a file from before they
     # were recorded, made under the defaults
     rendering: dict[str, str] | None = None
+    # the job's background threshold in 1/mm; None: a file from before it was recorded, made
+    # under the default one
+    density_threshold: float | None = None
 
     @property
     def is_identity(self) -> bool:
@@ -95,6 +101,7 @@ class Correction:
                 "printer": self.printer, "profile_fingerprint": self.profile_fingerprint,
                 "background": self.background, "placement": self.placement,
                 "rendering": self.rendering,
+                "density_threshold_per_mm": self.density_threshold,
                 "cells_xyz": list(self.gain.shape[2::-1]),
                 "report": self.report}
 
@@ -176,13 +183,22 @@ def load_correction(path: str | os.PathLike) -> Correction:
         corr = Correction(gain, str(meta["source"]), str(meta["source_fingerprint"]),
                           size, str(meta["printer"]), str(meta["profile_fingerprint"]),
                           str(meta.get("background", "clear")), dict(meta.get("report") or {}),
-                          str(meta.get("placement", "")), _rendering(meta.get("rendering")))
+                          str(meta.get("placement", "")), _rendering(meta.get("rendering")),
+                          _threshold(meta.get("density_threshold_per_mm")))
     except (KeyError, TypeError, ValueError) as exc:
         raise DreamPrintError(f"correction file lacks or has a malformed field: {exc}",
                               p) from None
     if len(size) != 3:
         raise DreamPrintError("correction file's print size is not X,Y,Z", p)
     return corr
+
+
+def _threshold(value: Any) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ValueError(f"density_threshold_per_mm is {value!r}, not a number")
+    return float(value)
 
 
 def _rendering(value: Any) -> dict[str, str] | None:
@@ -197,12 +213,15 @@ def check_correction(corr: Correction, path: str | os.PathLike, *, source: str,
                      print_size_mm: tuple[float, float, float], printer: str,
                      profile_fingerprint: str, background: str, placement: str = "",
                      rendering: dict[str, str] | None = None,
-                     default_rendering: dict[str, str] | None = None) -> None:
+                     default_rendering: dict[str, str] | None = None,
+                     density_threshold: float | None = None,
+                     default_density_threshold: float | None = None) -> None:
     """Refuse (one line) a correction made for another source, size, printer, profile,
-    placement, background or rendering (:func:`rendering_key`) than the job's.
+    placement, background, background threshold (1/mm) or rendering (:func:`rendering_key`)
+    than the job's.
 
-    ``default_rendering``: what the defaults resolve to for this job, the rendering of a file
-    that records none (see the module docstring)."""
+    ``default_rendering``, ``default_density_threshold``: what the defaults resolve to for this
+    job, the rendering and threshold of a file that records none (see the module docstring)."""
     fp = source_fingerprint(source)
     if corr.source_fingerprint != fp:
         raise DreamPrintError(f"the correction was made for another source "
@@ -225,6 +244,15 @@ def check_correction(corr: Correction, path: str | os.PathLike, *, source: str,
     if corr.background != background:
         raise DreamPrintError(f"the correction was made with --background {corr.background}, "
                               f"this job has {background}", path)
+    made_thr = corr.density_threshold if corr.density_threshold is not None \
+        else default_density_threshold
+    if density_threshold is not None and made_thr is not None \
+            and not math.isclose(made_thr, density_threshold, rel_tol=1e-9):
+        old = "" if corr.density_threshold is not None else " (the default: the file predates " \
+            "recorded thresholds)"
+        raise DreamPrintError(f"the correction was made with a background threshold of "
+                              f"{made_thr:.4g}/mm{old}, this job has {density_threshold:.4g}/mm "
+                              f"(--density-threshold)", path)
     made = corr.rendering if corr.rendering is not None else default_rendering
     if rendering is not None and made is not None:
         for k in RENDERING_FIELDS:

@@ -436,7 +436,8 @@ def prepare_job(settings: ConvertSettings,
                          rendering=rendering_key(ctx),
                          default_rendering=dict(zip(("objective", "intent"),
                                                     resolve_choice(profile, None, None),
-                                                    strict=True), content=auto))
+                                                    strict=True), content=auto),
+                         density_threshold=thr, default_density_threshold=0.5 * float(sigma_clear))
         ctx.correction = corr
     return ctx
 

@@ -320,7 +320,8 @@ class _Loop:
         return Correction(np.asarray(gain, np.float32), self.s.source,
                           source_fingerprint(self.s.source), self.print_size,
                           ctx.printer.name, ctx.profile_fingerprint, self.s.background,
-                          report or {}, placement_key(ctx), rendering_key(ctx))
+                          report or {}, placement_key(ctx), rendering_key(ctx),
+                          float(ctx.halftoner.threshold))
 
     def medium(self, gain: NDArray, progress=None):
         self.lab.ctx.correction = self.correction(gain)

@@ -247,3 +247,29 @@ def test_a_solid_voxel_stays_solid_under_a_density_gain():
     d2 = dens.copy()
     apply_correction(g, (2, 2, 1), 0, rgb.copy(), d2)
     np.testing.assert_array_equal(d2, [[[SOLID_SIGMA, 2.0], [SOLID_SIGMA, 0.0]]])
+
+
+def test_a_correction_made_under_another_background_threshold_is_refused(tmp_path, capsys):
+    """The threshold decides which voxels are background (and what a solid's surface is): a
+    correction trained under another is refused in one line; a file that records none was
+    made under the default (half of pure Clear's density), as every correction was before."""
+    ctx = prepare_job(_settings())
+    default = float(ctx.halftoner.threshold)
+    p = tmp_path / "c.npz"
+    save_correction(_matching(np.ones((2, 2, 2, 4)), density_threshold=default * 2), p)
+    assert load_correction(p).density_threshold == default * 2
+    with pytest.raises(DreamPrintError, match=r"background threshold of .*/mm, this job has"):
+        prepare_job(_settings(compensation=str(p)))
+    code = main(["convert", "demo", "-o", str(tmp_path / "job"), "--height-mm", str(H),
+                 "--table-size", "17", "--compensation", str(p), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--density-threshold" in err and err.count("\n") == 1
+    assert not (tmp_path / "job").exists()
+    assert prepare_job(_settings(compensation=str(p), density_threshold=default * 2)
+                       ).correction is not None
+    # a file from before the threshold was recorded: the default's
+    save_correction(_matching(np.ones((2, 2, 2, 4))), p)
+    assert load_correction(p).density_threshold is None
+    assert prepare_job(_settings(compensation=str(p))).correction is not None
+    with pytest.raises(DreamPrintError, match=r"\(the default: the file predates"):
+        prepare_job(_settings(compensation=str(p), density_threshold=default / 2))

@@ -128,6 +128,10 @@ def test_convert_compensate_writes_job_and_correction(tmp_path, capsys, monkeypa
     manifest = json.loads(cap.out)
     corr = tmp_path / "job.correction.npz"
     assert corr.is_file() and manifest["compensation"]["path"] == str(corr.absolute())
+    from dreamprint_gui.job.correction import load_correction
+
+    assert load_correction(corr).density_threshold == pytest.approx(
+        manifest["background"]["density_threshold_per_mm"], rel=1e-12)
     figures = manifest["compensation"]["proof_figures"]
     assert "[compensate] iteration 1/1" in cap.err and f"[compensate] wrote {corr}" in cap.err
     assert (f"compensation: {corr.absolute()}; training dE2000 mean "
