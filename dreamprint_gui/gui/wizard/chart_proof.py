@@ -87,11 +87,6 @@ class ChartProofPage(TaskPage):
         self._clock.timeout.connect(self._tick)
         self._set_running(False)
 
-    @property
-    def running(self) -> bool:
-        return self._task is not None and self._task.outcome is None \
-            and not self._task.cancel_event.is_set()
-
     def _set_running(self, running: bool) -> None:
         self.run_button.setEnabled(not running)
         self.stop_button.setVisible(running)
@@ -151,13 +146,7 @@ class ChartProofPage(TaskPage):
     def stop(self) -> None:
         """Stop the running proof: the page is ready at once; the render ends after its
         current pass and its result is dropped."""
-        if not self.running:
-            return
-        self._task.cancel()
-        self._set_running(False)
-        self.elapsed.setText(f"stopped after {time.monotonic() - self._t0:.0f} s")
-        self.status.setText("The chart proof was stopped.")
-        self.status.setStyleSheet("")
+        self._stop_task("The chart proof was stopped.")
 
     def _finished(self) -> None:
         if self._task.outcome != "cancelled":

@@ -35,9 +35,27 @@ def canvas(figsize: tuple[float, float] = (6, 4)) -> tuple[Figure, FigureCanvasQ
 
 class TaskPage(QWizardPage):
     """A page that runs one engine task at a time in the worker: its signals reach the page's
-    ``_progress`` / ``_done`` / ``_failed`` / ``_finished`` only while it is the current task."""
+    ``_progress`` / ``_done`` / ``_failed`` / ``_finished`` only while it is the current task.
+    A page has ``_set_running``, an ``elapsed`` and a ``status`` label and a ``_clock``."""
 
     _task: Task | None
+
+    @property
+    def running(self) -> bool:
+        return self._task is not None and self._task.outcome is None \
+            and not self._task.cancel_event.is_set()
+
+    def _stop_task(self, message: str) -> bool:
+        """Cancel the running task (its result is dropped): the page is ready at once, says
+        how long the task ran and ``message``. False when no task was running."""
+        if not self.running:
+            return False
+        self._task.cancel()
+        self._set_running(False)
+        self.elapsed.setText(f"stopped after {time.monotonic() - self._t0:.0f} s")
+        self.status.setText(message)
+        self.status.setStyleSheet("")
+        return True
 
     def _start_task(self, job, name: str) -> None:
         task = Task(job, name)

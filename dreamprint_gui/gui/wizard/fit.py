@@ -156,11 +156,6 @@ class FitPage(TaskPage):
     def initializePage(self) -> None:  # noqa: N802 - Qt override
         self.start()
 
-    @property
-    def running(self) -> bool:
-        return self._task is not None and self._task.outcome is None \
-            and not self._task.cancel_event.is_set()
-
     def _set_running(self, running: bool) -> None:
         self.busy.setVisible(running)
         self.stop_button.setVisible(running)
@@ -176,14 +171,8 @@ class FitPage(TaskPage):
 
     def stop(self) -> None:
         """Abandon the running fit: the page is ready again at once, its result is dropped."""
-        if not self.running:
-            return
-        self._task.cancel()
-        self._set_running(False)
-        self.elapsed.setText(f"stopped after {time.monotonic() - self._t0:.0f} s")
-        self.status.setText("The fit was stopped. Change the inputs (Back) or fit again.")
-        self.status.setStyleSheet("")
-        self.completeChanged.emit()
+        if self._stop_task("The fit was stopped. Change the inputs (Back) or fit again."):
+            self.completeChanged.emit()
 
     def start(self) -> None:
         """Fit the current inputs on a worker thread (a running fit is abandoned first)."""
