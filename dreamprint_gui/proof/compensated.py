@@ -128,7 +128,9 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
     The correction goes with the job it was made for: a cancel or an error that removes the
     partial job removes the correction too, while an interrupted run that keeps its finished
     layers for ``--resume`` (Ctrl-C, a kill, a full disk) keeps it, and ``settings.resume``
-    finishes that run with the correction beside it instead of optimising another."""
+    finishes that run with the correction beside it instead of optimising another. With
+    ``settings.overwrite`` the job being replaced keeps its own correction until the new job is
+    in place: a run that fails or is cancelled leaves both as they were."""
     if settings.output is None:
         raise DreamPrintError("no output folder given (-o JOB)")
     check_target(settings.output, settings.overwrite)  # before minutes of optimising
@@ -138,6 +140,11 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
     clock = PhaseClock({"compensating": 5.0, "converting": 1.0})
     state: dict = {"total": int(cs.iterations) + 1}
     reuse = settings.resume and out.is_file() and find_interrupted(settings.output) is not None
+    aside = None
+    if not reuse and settings.overwrite and out.exists():
+        # the correction of the job --overwrite replaces: put back if this run does not finish
+        aside = out.with_name(f".{out.name}.old-{os.getpid()}")
+        os.replace(out, aside)
     try:
         if not reuse:
             yield from _optimise_into(cs, cancel, clock, state)
@@ -150,12 +157,19 @@ def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Even
             within = c.layers_done / c.layers_total if c.layers_total else 0.0
             return clock.progress("converting", within, c.message, c)
 
-        return (yield from relay(conv, converting))
+        manifest = yield from relay(conv, converting)
     except BaseException:
         # this run's correction goes with the job it was made for, unless the job is kept
         if (state.get("written") or reuse) and find_interrupted(settings.output) is None:
             out.unlink(missing_ok=True)
+        if aside is not None and not out.exists():
+            os.replace(aside, out)   # the job left in place keeps its own correction
+        elif aside is not None:      # kept for --resume, which replaces the old job
+            aside.unlink(missing_ok=True)
         raise
+    if aside is not None:
+        aside.unlink(missing_ok=True)
+    return manifest
 
 
 def _optimise_into(cs: CompensateSettings, cancel: threading.Event | None, clock: PhaseClock,

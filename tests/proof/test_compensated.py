@@ -111,6 +111,42 @@ def test_compensated_export_refuses_an_existing_job_before_optimising(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["job"]
 
 
+@pytest.mark.parametrize("fail_in", ["optimising", "converting"])
+def test_a_failed_overwrite_leaves_the_old_job_with_its_own_correction(tmp_path, monkeypatch,
+                                                                       fail_in):
+    """``--compensate --overwrite`` over a finished job: cancelled (or failing) before the new
+    job is in place, the old job and the correction it was made with are as they were; done,
+    the new correction replaces it and nothing else is left beside the job."""
+    import dreamprint_gui.proof.compensated as compensated
+    from dreamprint_gui.job.plan import JobCancelled
+
+    out = tmp_path / "job"
+    out.mkdir()
+    (out / "manifest.json").write_text("{}")
+    corr = correction_path_for(out)
+    corr.write_bytes(b"the old job's correction")
+    s = ConvertSettings(source="demo", output=str(out), height_mm=1.0, table_size=17,
+                        overwrite=True)
+
+    def cancelled(*a, **k):
+        raise JobCancelled("the export was cancelled")
+        yield  # a generator, as run_conversion / run_compensate
+
+    monkeypatch.setattr(compensated, "run_conversion" if fail_in == "converting"
+                        else "run_compensate", cancelled)
+    with pytest.raises(JobCancelled):
+        drive(run_compensated_conversion(s, preflight=False, **TINY))
+    assert corr.read_bytes() == b"the old job's correction"
+    assert (out / "manifest.json").read_text() == "{}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job", "job.correction.npz"]
+    if fail_in == "optimising":
+        return
+    monkeypatch.undo()
+    drive(run_compensated_conversion(s, preflight=False, **TINY))
+    assert corr.read_bytes() != b"the old job's correction"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job", "job.correction.npz"]
+
+
 def test_convert_compensate_writes_job_and_correction(tmp_path, capsys, monkeypatch):
     """The command line's route, end to end, with a tiny optimiser (its defaults take about
     two minutes here; the settings it trains under are test_print_spec's)."""
