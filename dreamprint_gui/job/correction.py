@@ -252,7 +252,7 @@ def check_correction(corr: Correction, path: str | os.PathLike, *, source: str,
             "recorded thresholds)"
         raise DreamPrintError(f"the correction was made with a background threshold of "
                               f"{made_thr:.4g}/mm{old}, this job has {density_threshold:.4g}/mm "
-                              f"(--density-threshold)", path)
+                              f"(convert --density-threshold)", path)
     made = corr.rendering if corr.rendering is not None else default_rendering
     if rendering is not None and made is not None:
         for k in RENDERING_FIELDS:
