@@ -176,7 +176,7 @@ class PrepareEstimate:
 def _reader_module(spec: str) -> ModuleType | None:
     """The reader module that will open ``spec`` (imported: opening it would import it)."""
     if spec == "demo":
-        return sys.modules.get("dreamprint_gui.io.volumes.demo")
+        return sys.modules.get("dreamprint_gui.io.volumes.grids.demo")
     try:
         return importlib.import_module(
             f"dreamprint_gui.io.volumes.{FORMATS[sniff_format(Path(spec))][0]}")

@@ -306,15 +306,15 @@ def test_the_first_preview_shows_progress(qtbot, gl_display, table_size, monkeyp
     percentage; the bar goes once the preview is shown."""
     import time
 
-    from dreamprint_gui.gui import preview_data
+    from dreamprint_gui.job import plan
 
-    real = preview_data.job_context
+    real = plan.prepare_job
 
-    def slow_context(settings, previous=None):  # stands in for a first start's builds
+    def slow_prepare(settings, notify=None):  # stands in for a first start's builds
         time.sleep(2.5)
-        return real(settings, previous)
+        return real(settings, notify)
 
-    monkeypatch.setattr(preview_data, "job_context", slow_context)
+    monkeypatch.setattr(plan, "prepare_job", slow_prepare)
     w = MainWindow(table_size=table_size)
     w.interactive = False
     qtbot.addWidget(w)
