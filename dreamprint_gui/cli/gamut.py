@@ -11,7 +11,7 @@ import click
 from dreamprint_gui.cli.group import cli
 from dreamprint_gui.cli.options import INTENT_HELP, INTENTS, OBJECTIVE_HELP, OBJECTIVES
 from dreamprint_gui.cli.output import emit_json
-from dreamprint_gui.cli.progress import progress_bar
+from dreamprint_gui.cli.progress import progress_bar, step_progress
 from dreamprint_gui.core.errors import DreamPrintError
 
 _PRINTER = click.option(
@@ -166,9 +166,10 @@ def gamut(profile_path, objective, intent, compare, size, samples, chart, plot, 
             if other != objective:
                 others.append(get_tables(profile, other, size, intent=intent,
                                          progress=progress_bar(f"{other}, {intent}")))
-    click.echo(f"evaluating: {samples} colours solved directly vs the table"
-               + (f", for {1 + len(others)} objectives" if others else ""), err=True)
-    report = evaluate(tables, profile, samples, others)
+    label = (f"evaluating: {samples} colours solved directly vs the table"
+             + (f", for {1 + len(others)} objectives" if others else "")
+             + " (the lattice's best, then each objective)")
+    report = evaluate(tables, profile, samples, others, progress=step_progress(label))
     for target, draw in ((chart, lambda p: hexagon_chart(tables, profile, p)),
                          (plot, lambda p: gamut_plot(profile, p))):
         if target:

@@ -53,8 +53,10 @@ def placement_options(f):
                      default="auto", show_default=True,
                      help="The source axis that becomes the print's up (+z). auto: what "
                           "the file says (OpenVDB: Houdini/Maya y, Blender z, or an up axis in "
-                          "its metadata; a 3DGS splat: its cameras.json), else a guess said as "
-                          "one (splats PLY/.splat/SOG -y, SPZ y, InstantNGP z, else z)."),
+                          "its metadata; a 3DGS splat: its cameras.json; MagicaVoxel z), else "
+                          "a guess said as one: on its largest flat side, else its longest "
+                          "axis up, else the kind's convention (splats PLY/.splat/SOG -y, SPZ "
+                          "y, InstantNGP z, else z)."),
         click.option("--rotate", default="0", show_default=True,
                      help="Turn the print about its z: 0, 90, 180 or 270 degrees "
                           "(counter-clockwise seen from above)."),

@@ -241,9 +241,13 @@ def inspect(file: str, as_json: bool, height_mm: float | None, size_mm: str | No
     """
 
     from dreamprint_gui.core.print_size import check_print_size
+    from dreamprint_gui.job.prepare_time import opening_notice
 
     check_print_size(height_mm, parse_size(size_mm), required=False)
     up_axis, turn = placement_values(up, rotate)
+    notice = opening_notice(file)
+    if notice is not None:   # a wait of seconds is said before it (stderr: --json stays JSON)
+        click.echo(notice, err=True)
     info = describe(file, up_axis, turn, fit)
     if as_json:
         emit_json(info)

@@ -22,6 +22,7 @@ Defines
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numba as nb
 import numpy as np
@@ -196,19 +197,31 @@ def objective_figures(tables: ColourTables, profile: InkProfile, samples: int = 
 
 
 def evaluate(tables: ColourTables, profile: InkProfile, samples: int = 2000,
-             others: list[ColourTables] | None = None) -> dict:
+             others: list[ColourTables] | None = None,
+             progress: Callable[[int, int], None] | None = None) -> dict:
     """The report printed by ``dreamprint gamut --json``.
 
     Top level: the figures of ``tables`` (the chosen objective and intent) and the gamut;
     ``objectives``: :func:`objective_figures` of ``tables`` and of each of ``others``.
+    ``progress(done, total)``: after each step (the lattice's best, then each objective's
+    direct solves; seconds each), ``(0, total)`` first.
     """
+    total = 2 + len(others or [])
+    if progress is not None:
+        progress(0, total)
     de_nodes = np.asarray(tables.dE2000, dtype=np.float64).ravel()
     rgb = np.random.default_rng(0).random((LATTICE_TARGETS, 3))
     best = lattice_best(profile, rgb)
+    if progress is not None:
+        progress(1, total)
     mine = objective_figures(tables, profile, samples, best)
+    if progress is not None:
+        progress(2, total)
     per = {tables.objective: mine}
-    for t in others or []:
+    for k, t in enumerate(others or []):
         per[t.objective] = objective_figures(t, profile, samples, best)
+        if progress is not None:
+            progress(3 + k, total)
     out = de_nodes[de_nodes > IN_GAMUT_DE2000]
     ct = tables.colour_thickness_mm
     intent = tables.intent

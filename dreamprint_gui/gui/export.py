@@ -338,13 +338,19 @@ class ExportDialog(QDialog):
         previous = self.context
 
         def job(report, cancel):
-            from dreamprint_gui.gui.preview_data import job_context
+            from dreamprint_gui.gui.preview_data import estimated_context
             from dreamprint_gui.job.preflight import preflight
 
-            return settings, preflight(job_context(settings, previous), seed=settings.seed)
+            ctx, est, took = estimated_context(settings, previous, report)
+            pf = preflight(ctx, seed=settings.seed)
+            if est is not None:   # preparing as estimated before it started, and as it took
+                pf.prepare_estimate, pf.prepared_seconds = est.to_json(), took
+            return settings, pf
 
         self.preflight_view.setPlainText("estimating the job ...")
         task = Task(job, "export-preflight")
+        task.progress.connect(lambda line: self.preflight_view.setPlainText(
+            f"estimating the job ... {line}"))
         task.succeeded.connect(self._show_preflight)
         task.failed.connect(lambda msg, _tb: self.preflight_view.setPlainText(
             f"no estimate: {msg}"))

@@ -54,9 +54,10 @@ SAMPLINGS = (
 # ``--up`` ids: the source axis that becomes the print's up (+z)
 UPS = (
     ("auto", "Auto", "What the file says (an OpenVDB writer: Houdini and Maya y-up, Blender "
-     "z-up, or an up axis in its metadata; the cameras.json beside a 3DGS splat), else a guess "
-     "said under the controls: splats (PLY, .splat, SOG) -y, SPZ +y, InstantNGP +z, otherwise "
-     "the file's z"),
+     "z-up, or an up axis in its metadata; the cameras.json beside a 3DGS splat; MagicaVoxel "
+     "z-up), else a guess said under the controls: the object on its largest flat side, else "
+     "on its longest axis, else its kind's convention (splats -y, SPZ +y, InstantNGP +z, "
+     "otherwise the file's z)"),
     ("z", "+z (file's z)", "The file's z axis points up"),
     ("-z", "-z", "The file's -z axis points up (turned upside down)"),
     ("y", "+y", "The file's y axis points up (y-up scenes)"),

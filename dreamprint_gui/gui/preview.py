@@ -54,7 +54,7 @@ from dreamprint_gui.gui.names import (
     gui_wording,
     printer_name,
 )
-from dreamprint_gui.gui.preview_data import PreviewData, compute_preview, job_context
+from dreamprint_gui.gui.preview_data import PreviewData, compute_preview, estimated_context
 from dreamprint_gui.gui.volume_view import ViewHost, add_rgba_volume
 from dreamprint_gui.gui.workers import Task, run_task
 
@@ -471,7 +471,8 @@ class PreviewPage(QWidget):
 
         def job(report, cancel):
             report(("prepare", None))
-            ctx = job_context(settings, previous)
+            ctx, _, _ = estimated_context(settings, previous,
+                                          lambda line: report(("prepare", line)))
             report(("predict", 0.0))
             return ctx, compute_preview(
                 ctx, profile, progress=lambda f: report(("predict", float(f))), cancel=cancel)
@@ -492,7 +493,11 @@ class PreviewPage(QWidget):
 
     def _preview_progress(self, update) -> None:
         stage, fraction = update
-        self._wait.update(stage=stage, fraction=fraction)
+        if isinstance(fraction, str):   # preparing: the estimate, said before it starts
+            self._wait.update(stage=stage, estimate=fraction)
+            fraction = None
+        else:
+            self._wait.update(stage=stage, fraction=fraction)
         if fraction is None:
             self.busy.setRange(0, 0)   # no fraction to tell: a busy bar and the seconds
         else:
@@ -505,10 +510,10 @@ class PreviewPage(QWidget):
         w = self._wait
         secs = f"{time.monotonic() - w['t0']:.0f} s"
         if w["stage"] == "prepare":
-            extra = (" (the first time on this computer the halftone mask and the compiled "
-                     "kernels are built: this can take a minute or two)") if w["first"] else ""
-            return f"preparing {w['name']}: opening it, the halftone mask, the kernels{extra} "\
-                   f"... {secs}"
+            est = w.get("estimate")
+            if est:   # "preparing: about N s (the source ... ; the colour tables ...)"
+                return f"preparing {w['name']}: {est.removeprefix('preparing: ')} ... {secs}"
+            return f"preparing {w['name']}: opening it, the colour tables ... {secs}"
         pct = f"{100 * (w['fraction'] or 0.0):.0f}%"
         return f"sampling {w['name']} and predicting the print ... {pct}, {secs}"
 

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ["PreviewData", "PreviewCancelled", "compute_preview", "job_context",
+           "estimated_context",
            "opacity_per_voxel", "PREVIEW_VOXELS"]
 
 PREVIEW_VOXELS = 96  # voxels along the longest axis of the preview grid (interaction stays smooth)
@@ -72,6 +73,27 @@ def opacity_per_voxel(sigma_per_mm: NDArray, voxel_mm: float) -> NDArray[np.floa
     """Opacity of one voxel of edge ``voxel_mm`` in a medium of density sigma (Beer-Lambert)."""
     s = np.clip(np.asarray(sigma_per_mm, dtype=np.float64), 0.0, None)
     return (-np.expm1(-s * voxel_mm)).astype(np.float32)
+
+
+def estimated_context(settings, previous=None, report: Callable[[str], None] | None = None):
+    """(:func:`job_context`, what preparing was estimated to take before it started or None
+    when ``previous`` was only resized (``job.plan.resized_job``), the seconds it took):
+    ``report`` is told the estimate (``job.prepare_time``'s line) before the work starts."""
+    import time as _time
+
+    from dreamprint_gui.job.plan import prepare_job, resized_job
+    from dreamprint_gui.job.prepare_time import estimate_preparation
+
+    t0 = _time.perf_counter()
+    ctx = None if previous is None else resized_job(previous, settings)
+    if ctx is not None:
+        return ctx, None, _time.perf_counter() - t0
+    est = estimate_preparation(settings)
+    if report is not None:
+        report(est.describe())
+    t0 = _time.perf_counter()
+    ctx = prepare_job(settings)
+    return ctx, est, _time.perf_counter() - t0
 
 
 def job_context(settings, previous=None):

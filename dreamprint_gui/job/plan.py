@@ -50,6 +50,7 @@ from dreamprint_gui.job.correction import (
     rendering_key,
 )
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
+from dreamprint_gui.job.prepare_time import compile_estimate, source_bytes
 from dreamprint_gui.job.spec import HasSpec
 from dreamprint_gui.job.write import JobCancelled
 from dreamprint_gui.physics.density import scalar_sigma
@@ -184,16 +185,6 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
 OPENING_NOTICE_BYTES = 50_000_000
 
 
-def _source_bytes(spec: str) -> int:
-    """Bytes of a source file, or of the files directly in a source folder (0 for "demo")."""
-    try:
-        if os.path.isdir(spec):
-            return sum(e.stat().st_size for e in os.scandir(spec) if e.is_file())
-        return os.path.getsize(spec)
-    except OSError:
-        return 0
-
-
 def _seconds(s: float) -> str:
     return f"{s:.0f} s" if s < 90 else f"{s / 60:.1f} min"
 
@@ -221,6 +212,9 @@ class JobContext:
     correction: Any = None
     orientation: Any = None  # io.volumes.orient.Orientation (resolved: never "auto")
     fit: dict = field(default_factory=dict)  # placement_json()'s "fit"
+    # measured seconds of preparing: opening and placing the source, loading or building the
+    # tables (what .prepare_time estimates before; the manifest's timings_s.prepare_parts)
+    prepare_timings: dict = field(default_factory=dict)
 
     @property
     def fit_bounds(self):
@@ -345,34 +339,17 @@ def check_settings(settings: ConvertSettings) -> None:
         raise DreamPrintError(f"--fit must be occupied or box, not '{s.fit}'")
 
 
-# Seconds numba takes to compile, on the 2-core development machine (bench_preflight --samples
-# after a source change: 16-38 s under load 15): the job's kernels, and a reader's own.
-COMPILE_SECONDS = 30.0
-COMPILE_READER_SECONDS = 15.0
-
-
 def _compile_notices(source) -> list[str]:
-    """Announcements of the kernels numba has not compiled yet (its cache folder holds none of
-    the job kernels', or of the source reader module's): the first run after an install or
-    upgrade, or of a source kind. Judged from the cache's index files (``*.nbi``)."""
+    """Announcements of the kernels numba has not compiled yet (:func:`.prepare_time.
+    compile_estimate`): the first run after an install or upgrade, or of a source kind."""
     import sys
-    from pathlib import Path
 
-    from numba.core.dispatcher import Dispatcher
-
-    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or "")
-    if not os.environ.get("NUMBA_CACHE_DIR"):
-        return []
+    reader = sys.modules.get(type(source).__module__)
     out = []
-    if not any(folder.glob("*/layer_kernel.*.nbi")):
-        out.append("compiling the conversion kernels: first run after an install or upgrade, "
-                   f"about {_seconds(COMPILE_SECONDS)}; cached after")
-    module = sys.modules.get(type(source).__module__)
-    name = type(source).__module__.rsplit(".", 1)[-1]
-    if module is not None and any(isinstance(v, Dispatcher) for v in vars(module).values()) \
-            and not any(folder.glob(f"*/{name}.*.nbi")):
-        out.append(f"compiling the {name} reader's kernels: first use of this source kind, "
-                   f"about {_seconds(COMPILE_READER_SECONDS)}; cached after")
+    for what, sec in compile_estimate(reader).items():
+        why = ("first use of this source kind" if what.endswith("reader's kernels")
+               else "first run after an install or upgrade")
+        out.append(f"{what}: {why}, about {_seconds(sec)}; cached after")
     return out
 
 
@@ -390,23 +367,27 @@ def prepare_job(settings: ConvertSettings,
     check_settings(s)
     printer = load_printer(s.printer)
     name = os.path.basename(str(s.source).rstrip("/")) or str(s.source)
-    if notify is not None and _source_bytes(s.source) >= OPENING_NOTICE_BYTES:
-        notify(f"opening the source {name} ({_source_bytes(s.source) / 1e6:.0f} MB) ...")
-    t_open = time.perf_counter()
+    if notify is not None and source_bytes(str(s.source)) >= OPENING_NOTICE_BYTES:
+        notify(f"opening the source {name} ({source_bytes(str(s.source)) / 1e6:.0f} MB) ...")
+    t_open = t_source = time.perf_counter()
     source = _open_source(s.source, s.source_options, s.content, s.sampling)
     t_open = time.perf_counter() - t_open
-    if notify is not None and t_open > 2.0:
-        notify(f"opened the source {name} in {t_open:.1f} s")
+    if notify is not None and t_open > 2.0:   # a slow source: its placement samples it too
+        notify(f"opened the source {name} in {t_open:.1f} s; placing it (its up axis, its "
+               "occupied bounds) ...")
     if notify is not None:
         for msg in _compile_notices(source):
             notify(msg)
     orientation = choose_orientation(source, s.up, s.rotate)
     source = orient_source(source, orientation)
     bounds, fit = fitted_bounds(source, s.fit)
+    t_source = time.perf_counter() - t_source
     grid = _job_grid(source, printer, s, bounds)  # the tray checked before any expensive work
     shape = tuple(int(v) for v in grid.shape_xyz)
+    t_tables = time.perf_counter()
     profile, tables = _tables_for(s.profile, printer.layer_thickness_mm, s.objective,
                                   s.table_size, s.intent, notify)
+    t_tables = time.perf_counter() - t_tables
     sigma_clear = getattr(tables, "sigma_clear", None)
     if sigma_clear is None:
         sigma_clear = _clear_sigma(profile)
@@ -424,7 +405,7 @@ def prepare_job(settings: ConvertSettings,
                      palette=printer.palette(), profile_name=profile.name,
                      profile_fingerprint=profile.fingerprint(), source=source, tables=tables,
                      content=content, source_stamp=_stamp(s.source), orientation=orientation,
-                     fit=fit)
+                     fit=fit, prepare_timings={"source": t_source, "tables": t_tables})
     if s.compensation is not None:
         corr = load_correction(s.compensation)
         auto = content.mode if content.requested == "auto" else choose_content(oriented)[0]

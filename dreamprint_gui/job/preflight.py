@@ -136,6 +136,9 @@ class Preflight:
     # seconds the job already spent before this estimate: opening the source and loading or
     # building the colour tables (measured; 0 when the job reuses a prepared context)
     prepared_seconds: float = 0.0
+    # what preparing was estimated to take before it started (.prepare_time.PrepareEstimate's
+    # to_json; None when the job reuses a prepared context, or for a context about to be made)
+    prepare_estimate: dict | None = None
 
     @property
     def ink_fraction(self) -> float:
@@ -149,14 +152,22 @@ class Preflight:
                 + (f"{n} warning{'s' if n != 1 else ''}" if n else "no warnings"))
 
     def time_text(self) -> str:
-        """The conversion's estimate and, when preparing took a while, the job's whole time
-        with it (a first build of the colour tables, a slow source)."""
-        if self.prepared_seconds < 1:
+        """The conversion's estimate and, when preparing takes a while, the job's whole time
+        with it (a first build of the colour tables, a slow source): preparing as estimated
+        before it started (:mod:`.prepare_time`) and, once done, as it took."""
+        est = (self.prepare_estimate or {}).get("seconds", 0.0)
+        if max(est, self.prepared_seconds) < 1:
             return _about_seconds(self.seconds)
+        what = "the source, the colour tables, first-use builds"
+        if not est:
+            how = f"preparing took {_human_seconds(self.prepared_seconds)}: {what}"
+        else:
+            how = f"preparing estimated {_human_seconds(est)} before it started: {what}"
+            if self.prepared_seconds > 0:
+                how += f"; it took {_human_seconds(self.prepared_seconds)}"
         return (f"{_about_seconds(self.seconds)} to convert, about "
-                f"{_human_seconds(self.seconds + self.prepared_seconds)} in all (preparing "
-                f"took {_human_seconds(self.prepared_seconds)}: the source, the colour tables, "
-                "first-use builds)")
+                f"{_human_seconds(self.seconds + (est or self.prepared_seconds))} in all "
+                f"({how})")
 
     def summary_lines(self) -> list[str]:
         """The human-readable summary: one line per figure, then one per warning."""
@@ -174,7 +185,7 @@ class Preflight:
             f"{_about_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
             f"({self.rate_source})",
         ]
-        if self.prepared_seconds >= 1:
+        if max(self.prepared_seconds, (self.prepare_estimate or {}).get("seconds", 0)) >= 1:
             lines.append(f"time: {self.time_text()}")
         lines += [f"warning: {w.message}" for w in self.warnings]
         return lines
@@ -203,6 +214,7 @@ class Preflight:
             "max_unclamped_density_scale": self.max_unclamped_density_scale,
             "intent": self.intent,
             "prepared_seconds": self.prepared_seconds,
+            "prepare_estimate": self.prepare_estimate,
         }
 
 

@@ -58,6 +58,7 @@ from dreamprint_gui.job.plan import (
 )
 from dreamprint_gui.job.preflight import preflight as estimate
 from dreamprint_gui.job.preflight import record_rate
+from dreamprint_gui.job.prepare_time import estimate_preparation
 from dreamprint_gui.job.resume import (
     check_identity,
     find_interrupted,
@@ -287,10 +288,12 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
     if client is not None:
         yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None,
                               cluster_line(client, settings.scheduler))
-    yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, "opening the source and tables")
+    prep_est = None
     if context is not None:
         ctx = context
     else:
+        prep_est = estimate_preparation(settings)
+        yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None, prep_est.describe())
         ctx = yield from _prepare(settings, started)
     load_kernels(ctx)  # now, so that the first slab's speed is the conversion's
     identity = job_identity(job_description(ctx), ctx.source_stamp)
@@ -307,12 +310,16 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
     pf = None
     t_pf = 0.0
     if preflight is True:
-
+        if prep_est is not None and prep_est.source_s >= 2.0:   # samples a slow source too
+            yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None,
+                                  "pre-flight: sampling the job's materials and timing its "
+                                  "slabs ...")
         t0 = time.perf_counter()
         pf = estimate(ctx, seed=settings.seed)
         t_pf = time.perf_counter() - t0
         if context is None:
             pf.prepared_seconds = t0 - started
+            pf.prepare_estimate = prep_est.to_json()
     elif preflight is not False and preflight is not None:
         pf = preflight
     if pf is not None:
@@ -411,7 +418,8 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
         sha_th.join()
         totals["source_sha256"] = sha_box.get("v")
         timings = {"prepare": t_prep, "preflight": t_pf, "convert": time.perf_counter() - t_conv,
-                   "worker_stage_sum": stage_t}
+                   "worker_stage_sum": stage_t,
+                   "prepare_parts": dict(ctx.prepare_timings) if context is None else {}}
         conc_sums = [math.fsum(layer_sums[:, i]) for i in range(7)]
         manifest = _manifest(ctx, {**totals, "counts": totals["counts"].tolist(),
                                    "conc_sums": conc_sums},

@@ -107,6 +107,11 @@ def test_gamut_progress_on_stderr_only_while_building(capsys, tmp_path, monkeypa
     code, out, err = _run(capsys, *args)
     assert code == 0 and json.loads(out)["cached"] is True
     assert "building" not in err
+    # the direct solves (seconds per objective) say each step as it ends (issue 46)
+    code, out, err = _run(capsys, "gamut", "--size", "6", "--samples", "20", "--json")
+    steps = [ln for ln in err.splitlines() if ln.startswith("evaluating: ")]
+    assert code == 0 and len(steps) == 1 + 2 + 2      # started, the lattice, 3 objectives
+    assert steps[0].endswith("0/4, started") and steps[-1].endswith(", done)")
 
 
 def test_lookup_and_gamut_reuse_the_tables_a_job_built(capsys, tmp_path):

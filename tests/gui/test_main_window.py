@@ -300,20 +300,21 @@ def test_preflight_warning_shown_once(window, qtbot):
 
 
 def test_the_first_preview_shows_progress(qtbot, gl_display, table_size, monkeypatch):
-    """Preparing the job (opening the source, the halftone mask, the kernels: minutes on a
-    first start) is said with its seconds counting and a busy bar; then the prediction's
+    """Preparing the job (opening the source, the colour tables, the halftone mask, the
+    kernels: minutes on a first start) is said with its estimate made before it starts
+    (job.prepare_time), its seconds counting and a busy bar; then the prediction's
     percentage; the bar goes once the preview is shown."""
     import time
 
-    from dreamprint_gui.gui import preview as preview_module
+    from dreamprint_gui.job import plan
 
-    real = preview_module.job_context
+    real = plan.prepare_job
 
-    def slow_context(settings, previous=None):  # stands in for a first start's builds
+    def slow_prepare(settings, notify=None):  # stands in for a first start's builds
         time.sleep(2.5)
-        return real(settings, previous)
+        return real(settings, notify)
 
-    monkeypatch.setattr(preview_module, "job_context", slow_context)
+    monkeypatch.setattr(plan, "prepare_job", slow_prepare)
     w = MainWindow(table_size=table_size)
     w.interactive = False
     qtbot.addWidget(w)
@@ -328,14 +329,15 @@ def test_the_first_preview_shows_progress(qtbot, gl_display, table_size, monkeyp
     watch.start()
     w.use_default_profile()
     w.open_path("demo")
-    qtbot.waitUntil(lambda: "preparing demo" in p.view.message.text(), timeout=120000)
+    qtbot.waitUntil(lambda: "preparing demo: about " in p.view.message.text(), timeout=120000)
     assert p.busy.isVisible() and p.busy.maximum() == 0   # busy: no fraction to tell yet
-    assert "first time on this computer" in p.view.message.text()
     qtbot.waitUntil(lambda: " 2 s" in p.view.message.text(), timeout=10000)  # seconds count
     with qtbot.waitSignal(w.ready, timeout=180000):
         pass
     watch.stop()
     assert not p.busy.isVisible()
     assert any("preparing demo" in m and " 1 s" in m for m in seen)
+    # the estimate made before it started, and its parts
+    assert any("preparing demo: about " in m and "(the source about " in m for m in seen)
     assert any("predicting the print" in m and "%" in m for m in seen), seen[-5:]
     w.close()

@@ -20,7 +20,8 @@ Readers, one folder per family:
   stacks), :mod:`.grids.magicavoxel` (``.vox``), :mod:`.grids.demo` (the built-in planet).
 
 Shared, at the top: :mod:`.base` (the protocol, the printer grid), :mod:`.registry` (which
-reader opens which file), :mod:`.orient` (``--up``, ``--rotate``, ``--fit``), :mod:`.dense`
+reader opens which file), :mod:`.orient` (``--up``, ``--rotate``, ``--fit``; :mod:`.stand`, the
+resting side of a source whose up is a guess), :mod:`.dense`
 (a source held as a regular grid: the grids, InstantNGP's exports) and :mod:`.dense_sampler`
 (its trilinear sampler), :mod:`.sampling` (sparse leaf blocks, Gaussian kernels),
 :mod:`.srgb_encode` (linear -> sRGB samples).

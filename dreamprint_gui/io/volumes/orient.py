@@ -25,7 +25,10 @@ object is never mirrored.
 What the file says comes first (:func:`auto_up`): an OpenVDB file's metadata (an ``up_axis``
 entry, or the ``creator`` its writer states: Houdini and Maya scenes are y-up, Blender's
 z-up), the ``cameras.json`` 3D Gaussian Splatting writes beside a splat PLY (the cameras' mean
-up). Otherwise a convention of the kind, said to be a guess: the INRIA 3D Gaussian Splatting
+up), the writer's convention (a MagicaVoxel model is z-up, as the built-in demo is). Otherwise
+a guess, said to be one: the object stood as it would rest, on its largest flat side, else on
+its longest axis (:mod:`.stand`, the resting-side rule), and where neither applies a convention
+of the kind: the INRIA 3D Gaussian Splatting
 PLY and the formats made from it (SuperSplat compressed PLY, antimatter15 ``.splat``,
 ``.ksplat``, PlayCanvas SOG) keep COLMAP's camera-derived world frame, y down (RDF: right,
 down, front): up = -y. Niantic SPZ stores RUB
@@ -48,6 +51,7 @@ from numba import njit
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes.base import PrintGrid, SlabBuffers, occupied_ranges
+from dreamprint_gui.io.volumes.stand import resting_up
 
 __all__ = ["UP_AXES", "ROTATIONS", "FIT_MODES", "orientation_matrix", "Orientation",
            "auto_up", "choose_orientation", "orient_source", "OrientedSource",
@@ -149,8 +153,10 @@ def _cameras_up(path: str) -> tuple[str, str] | None:
 
 def auto_up(source) -> tuple[str, str, bool]:
     """(up, reason, guessed): what the file says (an OpenVDB file's metadata: its up axis or a
-    writer of known convention; the cameras beside a 3DGS splat file), else the convention of
-    its kind (module doc), else the file's z; ``guessed`` unless the file itself said."""
+    writer of known convention; the cameras beside a 3DGS splat file; a MagicaVoxel model and
+    the demo are z-up), else the resting-side rule (:func:`.stand.resting_up`: its largest
+    flat side down, else its longest axis up), else the convention of its kind (module doc) or
+    the file's z; ``guessed`` unless the file or its writer said."""
     fmt = str(getattr(source, "format", ""))
     low = fmt.lower()
     info = {}
@@ -162,16 +168,27 @@ def auto_up(source) -> tuple[str, str, bool]:
     if stated is not None:
         return stated[0], stated[1], False
     name = str(getattr(source, "name", ""))
+    if low.startswith("demo"):
+        return "z", "the built-in demo is made z-up", False
+    if low == "magicavoxel":
+        return "z", "MagicaVoxel models are z-up", False
+    silent = "the file does not say"
     if "spz" in low:
-        return "y", "SPZ stores RUB coordinates, y up", True
-    if low.startswith("splats") or hasattr(source, "n_total"):
+        convention = "y", "SPZ's RUB frame, y up"
+    elif low.startswith("splats") or hasattr(source, "n_total"):
         cams = _cameras_up(name) if name else None
         if cams is not None:
             return cams[0], cams[1], False
-        return "-y", "3DGS splats keep COLMAP's frame, y down, as their first camera stood", True
-    if "instantngp" in low:
-        return "z", "InstantNGP's transforms.json frame, z up", True
-    return "z", "the file does not say; its z kept", True
+        silent = "no cameras.json beside it"
+        convention = "-y", "COLMAP's frame, y down, as its first camera stood"
+    elif "instantngp" in low:
+        convention = "z", "transforms.json's frame, z up"
+    else:
+        convention = "z", "its z kept"
+    rest = resting_up(source, convention[0])
+    if rest is not None:
+        return rest[0], f"{silent}; {rest[1]}", True
+    return convention[0], f"{silent}; no flat side or long axis, so {convention[1]}", True
 
 
 @dataclass(frozen=True)
