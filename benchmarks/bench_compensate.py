@@ -106,6 +106,7 @@ def floor_only(a) -> None:
     from dreamprint_gui.proof.cameras import orbit_views
     from dreamprint_gui.proof.labels import EngineLabels
     from dreamprint_gui.proof.medium import block_for_cell
+    from dreamprint_gui.proof.reference import intent_reference, job_intent
     from dreamprint_gui.proof.runner import ProofSettings, gamut_floor
     from dreamprint_gui.proof.scielab import samples_per_degree
     from dreamprint_gui.proof.source_render import render_source, sample_source
@@ -123,8 +124,9 @@ def floor_only(a) -> None:
             cells = tuple(-(-n // b) for n, b in zip(lab.shape_xyz, block, strict=True))
             lo = -0.5 * np.asarray(size)
             field = sample_source(lab.source, lab.grid, block, lab.density_scale, cells, lo)
+            ref = intent_reference(field, job_intent(lab), lab.profile)
             views = orbit_views(size, 4)
-            src = [render_source(field, v, a.resolution) for v in views]
+            src = [render_source(ref, v, a.resolution) for v in views]
             obs = spectral_bands(lab.profile, 12).observer
             spd = samples_per_degree(2 * views[0].half_mm / a.resolution,
                                      ps.viewing_distance_mm)

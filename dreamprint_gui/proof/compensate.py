@@ -65,6 +65,7 @@ from dreamprint_gui.proof.labels import EngineLabels
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
 from dreamprint_gui.proof.optics import resolve_optics
 from dreamprint_gui.proof.print_render import render_print
+from dreamprint_gui.proof.reference import intent_reference, job_intent
 from dreamprint_gui.proof.runner import (
     DEFAULT_MAX_CELLS,
     ProofProgress,
@@ -332,8 +333,11 @@ class _Loop:
 
     def render_sources(self, medium) -> None:
         lo, _ = medium.box_mm
-        self.src = sample_source(self.lab.source, self.lab.grid, medium.block_xyz,
-                                 self.lab.density_scale, medium.cells_xyz, lo)
+        # the target: the source as the job's intent maps it, as the proof judges it
+        self.src = intent_reference(
+            sample_source(self.lab.source, self.lab.grid, medium.block_xyz,
+                          self.lab.density_scale, medium.cells_xyz, lo),
+            job_intent(self.lab), self.lab.profile)
         self.src_lin, self.src_alpha = [], []
         for v in self.views:
             rgb, a = render_source(self.src, v, self.s.resolution)

@@ -56,6 +56,7 @@ from dreamprint_gui.proof.print_render import (
     render_print_seeds,
     thick_tiles,
 )
+from dreamprint_gui.proof.reference import intent_reference, job_intent
 from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import (
     SourceField,
@@ -236,8 +237,11 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
 
     yield ProofProgress("source", 0, len(views), el(), "rendering the source")
     t1 = time.perf_counter()
-    field = sample_source(lab.source, lab.grid, medium.block_xyz, lab.density_scale,
-                          medium.cells_xyz, lo)
+    # the reference: the source as the job's rendering intent maps it (.reference)
+    intent = job_intent(lab)
+    raw = sample_source(lab.source, lab.grid, medium.block_xyz, lab.density_scale,
+                        medium.cells_xyz, lo)
+    field = intent_reference(raw, intent, lab.profile)
     src_lin, src_alpha = [], []
     floor_rho = 0.5 if s.floor else None
     for i, v in enumerate(views):
@@ -309,7 +313,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     clear = clear_report(lab.profile, bounds, s.clear_low_bound)
     timings["clear_low_bound"] = time.perf_counter() - t5
     t4 = time.perf_counter()
-    floor_fig = gamut_floor(lab, field, views, s.resolution, src_lin, src_alpha, obs, spd,
+    floor_fig = gamut_floor(lab, raw, views, s.resolution, src_lin, src_alpha, obs, spd,
                             floor_rho)
     timings["gamut_floor"] = time.perf_counter() - t4
     timings["total"] = el()
@@ -329,6 +333,9 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
                             else "profile" if lab.profile.proof_optics else "defaults")},
         "renderer": info,
         "source_renderer": "emission-absorption ray march (dreamprint)",
+        "reference": {"intent": intent,
+                      "what": "the source as the job's rendering intent maps its colours "
+                              "(proof/reference.py); colorimetric: the source's own"},
         "lighting": {"environment": "uniform white (D65), radiance 1",
                      "key_light_irradiance": s.key_light, "floor": s.floor},
         "viewing": {"distance_mm": s.viewing_distance_mm,
@@ -403,12 +410,14 @@ def _at_clear_low_bound(s: ProofSettings, lab, medium, optics, views, src_lin: l
 
 def gamut_floor(lab, field, views, resolution: int, src_lin: list, src_alpha: list, obs,
                 samples_per_deg: float, floor_rho: float | None = None) -> dict | None:
-    """The gamut floor: the source rendered (emission-absorption, the same cameras) with each
-    cell's colour and density replaced by what the job's tables deposit for them
+    """The gamut floor: the source ``field`` (its own colours: the tables map them) rendered
+    (emission-absorption, the same cameras) with each cell's colour and density replaced by
+    what the job's tables deposit for them
     (:func:`dreamprint_gui.gamut.alignment.predicted_appearance`: lookup, density alignment,
     the mixture's KM colour at the reference thickness and its sigma; cells below the
     background threshold empty), compared with the source render. No light transport between
-    voxels and no background block: what any method with these inks could at best show. None
+    voxels and no background block: what any method with these inks could at best show,
+    compared with the proof's reference ``src_lin`` (the source as the intent maps it). None
     for a job folder (no tables)."""
     ctx = getattr(lab, "ctx", None)
     if ctx is None or ctx.tables is None:
