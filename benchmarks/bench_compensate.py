@@ -117,7 +117,7 @@ def floor_only(a) -> None:
             t0 = time.perf_counter()
             ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm, views=4,
                                resolution=a.resolution, background=bg,
-                               max_cells=a.cells)
+                               max_cells=a.cells, intent=a.intent)
             lab = EngineLabels(ConvertSettings.from_spec(ps.spec))
             size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
             block = block_for_cell(lab.voxel_mm, size, a.cells)
@@ -139,7 +139,7 @@ def floor_only(a) -> None:
 
 
 def main() -> None:
-    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, inside_source
+    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
     from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS, ProofSettings, render_proof
 
@@ -161,6 +161,9 @@ def main() -> None:
     ap.add_argument("--judge-layers", type=int, default=0,
                     help="Layers read per cell of the held-out proofs (0: every layer).")
     ap.add_argument("--backgrounds", default="clear,empty")
+    ap.add_argument("--intent", default=None,
+                    help="The jobs' rendering intent (default: the profile's); the judge's "
+                         "reference is the source as it maps it.")
     ap.add_argument("--only", default="knight,smoke,splat")
     ap.add_argument("--json", default=None, help="Also write the rows to this file.")
     ap.add_argument("--floor-only", action="store_true",
@@ -187,7 +190,8 @@ def main() -> None:
             cs = CompensateSettings(source=src, output=corr, height_mm=a.height_mm,
                                     views=a.views, iterations=a.iterations, seed=a.seed + 1,
                                     resolution=a.resolution, spp=a.spp, max_cells=a.cells,
-                                    background=bg, overwrite=True, step=a.step)
+                                    background=bg, overwrite=True, step=a.step,
+                                    intent=a.intent)
             rep = drive(run_compensate(cs))
             t_opt = time.perf_counter() - t0
             res = {}
@@ -197,7 +201,8 @@ def main() -> None:
                 ps = ProofSettings(source=src, height_mm=a.height_mm, views=4,
                                    resolution=a.resolution, spp=a.judge_spp, seed=a.seed,
                                    background=bg, max_cells=a.judge_cells,
-                                   layers_per_block=a.judge_layers, compensation=comp)
+                                   layers_per_block=a.judge_layers, compensation=comp,
+                                   intent=a.intent)
                 rep_m = drive(render_proof(ps))["report"]
                 res[method] = rep_m["overall"]
                 floor = rep_m["gamut_floor"] or floor
@@ -205,37 +210,44 @@ def main() -> None:
             os.unlink(corr)
             load1 = open("/proc/loadavg").read().split()[:3]
             p, c = res["paper"], res["compensated"]
-            row = {"source": name, "background": bg, "paper": p, "compensated": c,
-                   "gamut_floor": floor, "noise_floor": noise,
-                   "reduction_de_mean": 1 - c["mean_de2000"] / p["mean_de2000"],
+            hp, hc, hf = headline(p), headline(c), headline(floor)
+            row = {"source": name, "background": bg, "intent": a.intent, "paper": p,
+                   "compensated": c, "gamut_floor": floor, "noise_floor": noise,
+                   "headline": {"paper": hp, "compensated": hc, "gamut_floor": hf},
+                   "reduction_de_mean": 1 - hc["mean_de2000"] / hp["mean_de2000"],
+                   "reduction_scielab_mean": 1 - hc["mean_scielab_de2000"]
+                   / hp["mean_scielab_de2000"],
                    "optimise_s": round(t_opt, 1), "training": rep["figures"],
+                   "optimiser_method": rep["method"],
                    "cpu_s": round(time.process_time() - cpu0, 1),
                    "load_before": load0, "load_after": load1}
             rows.append(row)
-            print(f"{name:7s} {bg:6s} paper dE {p['mean_de2000']:5.2f}/{p['p95_de2000']:5.2f} "
-                  f"S-CIELAB {p['mean_scielab_de2000']:5.2f} "
-                  f"cov {p['coverage_error']:+.3f} | compensated dE {c['mean_de2000']:5.2f}/"
-                  f"{c['p95_de2000']:5.2f} S-CIELAB {c['mean_scielab_de2000']:5.2f} "
-                  f"cov {c['coverage_error']:+.3f} | "
-                  f"{-100 * row['reduction_de_mean']:+.0f}% dE mean | floor dE "
-                  f"{floor['mean_de2000']:5.2f} S-CIELAB {floor['mean_scielab_de2000']:5.2f} | "
+            nf = noise["paper"]
+            print(f"{name:7s} {bg:6s} {hp['where']}: paper dE {hp['mean_de2000']:5.2f}/"
+                  f"{hp['p95_de2000']:5.2f} S-CIELAB {hp['mean_scielab_de2000']:5.2f} "
+                  f"cov {hp['coverage_error']:+.3f} | compensated dE {hc['mean_de2000']:5.2f}/"
+                  f"{hc['p95_de2000']:5.2f} S-CIELAB {hc['mean_scielab_de2000']:5.2f} "
+                  f"cov {hc['coverage_error']:+.3f} | "
+                  f"{-100 * row['reduction_de_mean']:+.0f}% dE, "
+                  f"{-100 * row['reduction_scielab_mean']:+.0f}% S-CIELAB | floor dE "
+                  f"{hf['mean_de2000']:5.2f} S-CIELAB {hf['mean_scielab_de2000']:5.2f} | "
                   "render noise dE "
-                  f"{noise['paper']['mean_de2000']:4.2f} S-CIELAB "
-                  f"{noise['paper']['mean_scielab_de2000']:4.2f} | optimise {t_opt:.0f} s, all "
-                  f"{row['cpu_s']:.0f} CPU s "
+                  f"{nf.get('inside_source_mean_de2000', nf['mean_de2000']):4.2f} S-CIELAB "
+                  f"{nf.get('inside_source_mean_scielab_de2000', nf['mean_scielab_de2000']):4.2f}"
+                  f" | optimise {t_opt:.0f} s, all {row['cpu_s']:.0f} CPU s "
                   f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)
             if p["empty_source_fraction"] >= EMPTY_NOTE_MIN:
-                print(f"{'':14s} where the source is empty ({100 * p['empty_source_fraction']:.0f}"
-                      f" % of the object pixels): shares of dE {p['empty_source_de2000']:5.2f} /"
-                      f" {c['empty_source_de2000']:5.2f}, S-CIELAB "
-                      f"{p['empty_source_scielab_de2000']:5.2f} / "
+                print(f"{'':14s} all object pixels: dE {p['mean_de2000']:5.2f} -> "
+                      f"{c['mean_de2000']:5.2f}, S-CIELAB {p['mean_scielab_de2000']:5.2f} -> "
+                      f"{c['mean_scielab_de2000']:5.2f}, cov {p['coverage_error']:+.3f} -> "
+                      f"{c['coverage_error']:+.3f}; where the source is empty "
+                      f"({100 * p['empty_source_fraction']:.0f} % of them): shares of dE "
+                      f"{p['empty_source_de2000']:5.2f} / {c['empty_source_de2000']:5.2f}, "
+                      f"S-CIELAB {p['empty_source_scielab_de2000']:5.2f} / "
                       f"{c['empty_source_scielab_de2000']:5.2f}, cov "
                       f"{p['empty_source_coverage_error']:+.3f} / "
-                      f"{c['empty_source_coverage_error']:+.3f} (paper / compensated); inside "
-                      f"the source dE {inside_source(p, 'mean_de2000'):5.2f} -> "
-                      f"{inside_source(c, 'mean_de2000'):5.2f}, S-CIELAB "
-                      f"{inside_source(p, 'mean_scielab_de2000'):5.2f} -> "
-                      f"{inside_source(c, 'mean_scielab_de2000'):5.2f}", flush=True)
+                      f"{c['empty_source_coverage_error']:+.3f} (paper / compensated)",
+                      flush=True)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
             json.dump(rows, fh, indent=2)

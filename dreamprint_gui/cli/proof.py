@@ -188,7 +188,7 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
     source, and measure how alike they look; or, with --chart, a printed chart's recipes as
     an instrument would measure them."""
     from dreamprint_gui.proof.clear_report import clear_lines
-    from dreamprint_gui.proof.compare import empty_source_note
+    from dreamprint_gui.proof.compare import empty_source_note, headline_text
     from dreamprint_gui.proof.runner import run_proof
 
     if chart is not None or reflectance is not None:
@@ -205,12 +205,12 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
         emit_json(report)
         return
     o = report["overall"]
-    click.echo(f"wrote {output}: {len(report['views'])} views; dE2000 mean "
-               f"{o['mean_de2000']:.2f} p95 {o['p95_de2000']:.2f}, S-CIELAB dE2000 mean "
-               f"{o['mean_scielab_de2000']:.2f} at {kw['viewing_distance_mm']:g} mm, PSNR "
-               f"{o['psnr_db']:.1f} dB, SSIM {o['ssim']:.3f}, coverage "
-               f"{o['source_coverage']:.3f} -> {o['print_coverage']:.3f} "
-               f"({report['timings_s']['total']:.0f} s, {report['renderer']['variant']})")
+    click.echo(f"wrote {output}: {len(report['views'])} views, judged against the source in "
+               f"the {report['reference']['intent']} intent; {headline_text(o)}; S-CIELAB at "
+               f"{kw['viewing_distance_mm']:g} mm, PSNR {o['psnr_db']:.1f} dB, SSIM "
+               f"{o['ssim']:.3f}, coverage {o['source_coverage']:.3f} -> "
+               f"{o['print_coverage']:.3f} ({report['timings_s']['total']:.0f} s, "
+               f"{report['renderer']['variant']})")
     note = empty_source_note(o)
     if note:
         click.echo(note)
@@ -277,7 +277,12 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
     """Proof SOURCE with each method and halftoning (same cameras, seed, size) and tabulate the
     figures: one row per --method x --halftone."""
     from dreamprint_gui.proof.clear_report import clear_lines
-    from dreamprint_gui.proof.compare import SIGNIFICANCE_FACTOR, mark_significance
+    from dreamprint_gui.proof.compare import (
+        SIGNIFICANCE_FACTOR,
+        SIGNIFICANCE_KEYS,
+        headline,
+        mark_significance,
+    )
     from dreamprint_gui.proof.runner import render_proof
 
     _check_source(source)
@@ -306,29 +311,45 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
             row["training"] = comp["figures"]
         rows.append(row)
         gfloor = gfloor or r.get("gamut_floor")
-    mark_significance(rows)
+    # the headline: inside the source (compare.headline); all object pixels beside it
+    mark_significance(rows, keys=(*SIGNIFICANCE_KEYS, "mean_de2000", "mean_scielab_de2000"))
     table = {"source": source, "height_mm": kw["height_mm"], "size_mm": kw["size_mm"],
              "views": kw["views"], "resolution": kw["resolution"], "spp": kw["spp"],
              "seed": kw["seed"], "background": kw["background"],
              "viewing_distance_mm": kw["viewing_distance_mm"],
              "significance": f"a row's difference from the best row is significant when it "
                              f"exceeds {SIGNIFICANCE_FACTOR:g} x the larger noise floor of the "
-                             "two (vs_best)", "methods": rows, "gamut_floor": gfloor}
+                             "two (vs_best)", "methods": rows, "gamut_floor": gfloor,
+             "headline": "inside the source: each row's inside_source_* figures, over the "
+                         "object pixels where the source has coverage; the keys without the "
+                         "prefix are over all object pixels, as before"}
     if kw["as_json"]:
         emit_json(table)
         return
+    click.echo("inside the source (object pixels where the source has coverage); all object "
+               "pixels and the share where the source is empty (the Clear block's body) beside")
     click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'dE p95':>8s} "
-               f"{'S-CIELAB':>9s} {'floor':>11s} {'PSNR':>6s} {'SSIM':>6s} {'coverage':>9s}")
+               f"{'S-CIELAB':>9s} {'floor':>11s} {'coverage':>9s} | {'all: dE':>8s} "
+               f"{'S-CIELAB':>9s} {'coverage':>9s} {'PSNR':>6s} {'SSIM':>6s} {'empty':>6s}")
 
     mark = noise_mark
     for r in rows:
         f = r["noise_floor"]
-        floor = f"{f['mean_de2000']:.2f}/{f['mean_scielab_de2000']:.2f}" if f else "-"
-        click.echo(f"{r['method']:14s} {r['halftone']:10s} {r['mean_de2000']:8.2f}"
-                   f"{mark(r, 'mean_de2000')} {r['p95_de2000']:8.2f} "
-                   f"{r['mean_scielab_de2000']:8.2f}{mark(r, 'mean_scielab_de2000')} "
-                   f"{floor:>11s} {r['psnr_db']:6.1f} {r['ssim']:6.3f} "
-                   f"{r['coverage_error']:+9.3f}")
+        inside = "inside_source_mean_de2000" in (f or {})
+        floor = (f"{f['inside_source_mean_de2000']:.2f}/"
+                 f"{f['inside_source_mean_scielab_de2000']:.2f}" if inside else
+                 f"{f['mean_de2000']:.2f}/{f['mean_scielab_de2000']:.2f}" if f else "-")
+        click.echo(f"{r['method']:14s} {r['halftone']:10s} "
+                   f"{r['inside_source_mean_de2000']:8.2f}"
+                   f"{mark(r, 'inside_source_mean_de2000')} "
+                   f"{r['inside_source_p95_de2000']:8.2f} "
+                   f"{r['inside_source_mean_scielab_de2000']:8.2f}"
+                   f"{mark(r, 'inside_source_mean_scielab_de2000')} {floor:>11s} "
+                   f"{r['inside_source_coverage_error']:+9.3f} | {r['mean_de2000']:7.2f}"
+                   f"{mark(r, 'mean_de2000')} {r['mean_scielab_de2000']:8.2f}"
+                   f"{mark(r, 'mean_scielab_de2000')} {r['coverage_error']:+9.3f} "
+                   f"{r['psnr_db']:6.1f} {r['ssim']:6.3f} "
+                   f"{100 * r['empty_source_fraction']:5.0f}%")
     for line in noise_legend(rows, kw["spp"]):
         click.echo(line)
     for r in rows:
@@ -340,8 +361,10 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
     if rows and rows[0]["clear"].get("figures") is None and rows[0]["clear"].get("note"):
         click.echo(f"Clear: {rows[0]['clear']['origin']} ({rows[0]['clear']['note']})")
     if gfloor is not None:
-        click.echo(f"{'gamut floor':25s} {gfloor['mean_de2000']:8.2f} {gfloor['p95_de2000']:8.2f} "
-                   f"{gfloor['psnr_db']:6.1f} {gfloor['ssim']:6.3f} "
+        g = headline(gfloor)
+        click.echo(f"{'gamut floor':25s} {g['mean_de2000']:8.2f} {g['p95_de2000']:9.2f} "
+                   f"{g['mean_scielab_de2000']:8.2f} {'':>12s} {g['coverage_error']:+9.3f} | "
+                   f"{gfloor['mean_de2000']:7.2f}  {gfloor['mean_scielab_de2000']:8.2f}  "
                    f"{gfloor['coverage_error']:+9.3f}  (the source in the printable colours, "
                    "no light transport)")
 
@@ -429,7 +452,7 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
                **rendering) -> None:
     """Optimise a correction (colour and density factors on a coarse field) so that the proof
     of the print of SOURCE matches its render; apply it with convert --compensation."""
-    from dreamprint_gui.proof.compare import empty_source_note
+    from dreamprint_gui.proof.compare import empty_source_note, headline
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
 
     _check_source(source)
@@ -442,10 +465,12 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
         emit_json(report)
         return
     b, a = report["figures"]["before"], report["figures"]["after"]
-    click.echo(f"wrote {output}: training dE2000 mean {b['mean_de2000']:.2f} -> "
-               f"{a['mean_de2000']:.2f}, coverage error {b['coverage_error']:+.3f} -> "
-               f"{a['coverage_error']:+.3f} (iteration {a['iteration']}; "
-               f"{report['seconds']:.0f} s)")
+    hb, ha = headline(b), headline(a)
+    click.echo(f"wrote {output}: on the training cameras, {hb['where']}, dE2000 mean "
+               f"{hb['mean_de2000']:.2f} -> {ha['mean_de2000']:.2f}, S-CIELAB "
+               f"{hb['mean_scielab_de2000']:.2f} -> {ha['mean_scielab_de2000']:.2f}, coverage "
+               f"error {hb['coverage_error']:+.3f} -> {ha['coverage_error']:+.3f} (iteration "
+               f"{a['iteration']}; {report['seconds']:.0f} s)")
     note = empty_source_note(b)
     if note:
         click.echo(f"on the training cameras, {note}")

@@ -49,37 +49,36 @@ COMPENSATION_TITLES = ("source (emission-absorption)", "open-loop print (paper's
 def compensation_text(result: dict) -> str:
     """The figures of a compensation (:func:`..proof.compensated.compare_compensation`):
     open loop and compensated on the proof's cameras, the gamut floor, the optimiser's own."""
-    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, inside_source
+    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline
     rows = []
     for key, name in (("open_loop", "open loop"), ("compensated", "compensated")):
-        o = result[key]["report"]["overall"]
-        rows.append(f"{name}: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "
-                    f"S-CIELAB {o['mean_scielab_de2000']:.2f}; coverage error "
-                    f"{o['coverage_error']:+.3f}")
+        o = headline(result[key]["report"]["overall"])
+        rows.append(f"{name}, {o['where']}: dE2000 mean {o['mean_de2000']:.2f}, p95 "
+                    f"{o['p95_de2000']:.2f}; S-CIELAB {o['mean_scielab_de2000']:.2f}; coverage "
+                    f"error {o['coverage_error']:+.3f}")
     a = result["open_loop"]["report"]["overall"]
     b = result["compensated"]["report"]["overall"]
-    rows.append(f"change: dE2000 {100 * (b['mean_de2000'] / a['mean_de2000'] - 1):+.0f} %, "
-                f"S-CIELAB {100 * (b['mean_scielab_de2000'] / a['mean_scielab_de2000'] - 1):+.0f}"
-                " %")
+    ha, hb = headline(a), headline(b)
+    rows.append(f"change: dE2000 {100 * (hb['mean_de2000'] / ha['mean_de2000'] - 1):+.0f} %, "
+                f"S-CIELAB "
+                f"{100 * (hb['mean_scielab_de2000'] / ha['mean_scielab_de2000'] - 1):+.0f} %")
     if a.get("empty_source_fraction", 0.0) >= EMPTY_NOTE_MIN:
-        rows.append(f"of which where the source is empty ({100 * a['empty_source_fraction']:.0f} "
-                    f"% of the object pixels, e.g. the Clear block; no correction changes it): "
-                    f"dE2000 {a['empty_source_de2000']:.2f} -> {b['empty_source_de2000']:.2f}, "
-                    f"coverage error {a['empty_source_coverage_error']:+.3f} -> "
+        rows.append(f"all object pixels: dE2000 mean {a['mean_de2000']:.2f} -> "
+                    f"{b['mean_de2000']:.2f}, S-CIELAB {a['mean_scielab_de2000']:.2f} -> "
+                    f"{b['mean_scielab_de2000']:.2f}; of which where the source is empty "
+                    f"({100 * a['empty_source_fraction']:.0f} % of them, e.g. the Clear block; "
+                    f"no correction changes it): dE2000 {a['empty_source_de2000']:.2f} -> "
+                    f"{b['empty_source_de2000']:.2f}, coverage error "
+                    f"{a['empty_source_coverage_error']:+.3f} -> "
                     f"{b['empty_source_coverage_error']:+.3f}")
-        de = [inside_source(o, "mean_de2000") for o in (a, b)]
-        sc = [inside_source(o, "mean_scielab_de2000") for o in (a, b)]
-        if None not in de:
-            rows.append(f"inside the source: dE2000 mean {de[0]:.2f} -> {de[1]:.2f}, "
-                        f"S-CIELAB {sc[0]:.2f} -> {sc[1]:.2f}")
     floor = result["open_loop"]["report"].get("gamut_floor")
     opt = result["optimiser"]
     f = opt["figures"]
     rows.append((f"gamut floor (the inks' best, no light transport): dE2000 "
-                 f"{floor['mean_de2000']:.2f}; " if floor else "")
+                 f"{headline(floor)['mean_de2000']:.2f}; " if floor else "")
                 + f"optimised on {len(opt['training_views'])} other cameras, seed "
-                f"{opt['settings']['seed']}: dE2000 {f['before']['mean_de2000']:.2f} -> "
-                f"{f['after']['mean_de2000']:.2f} in {opt['seconds']:.0f} s")
+                f"{opt['settings']['seed']}: dE2000 {headline(f['before'])['mean_de2000']:.2f} "
+                f"-> {headline(f['after'])['mean_de2000']:.2f} in {opt['seconds']:.0f} s")
     return "\n".join(rows)
 
 
@@ -381,7 +380,7 @@ class ProofPage(QWidget):
 
     def _on_result(self, result: dict) -> None:
         from dreamprint_gui.proof.clear_report import clear_lines
-        from dreamprint_gui.proof.compare import empty_source_note
+        from dreamprint_gui.proof.compare import empty_source_note, headline
 
         self.comparison = None
         self._set_mode(PROOF_TITLES)
@@ -393,10 +392,15 @@ class ProofPage(QWidget):
         f = self.result.get("noise_floor")
         floor = (f"; noise floor (halves at seeds {f['seeds'][0]}, {f['seeds'][1]}): dE2000 "
                  f"{f['mean_de2000']:.2f}, S-CIELAB {f['mean_scielab_de2000']:.2f}" if f else "")
+        h = headline(o)
         self.figures.setText(
-            f"overall: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "
-            f"S-CIELAB dE2000 mean {o['mean_scielab_de2000']:.2f} at "
-            f"{self.result['viewing']['distance_mm']:g} mm{floor}; PSNR {o['psnr_db']:.1f} dB; "
+            f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}, p95 {h['p95_de2000']:.2f}; "
+            f"S-CIELAB dE2000 mean {h['mean_scielab_de2000']:.2f} at "
+            f"{self.result['viewing']['distance_mm']:g} mm; coverage error "
+            f"{h['coverage_error']:+.3f}\n"
+            f"all object pixels: dE2000 mean {o['mean_de2000']:.2f}, p95 {o['p95_de2000']:.2f}; "
+            f"S-CIELAB dE2000 mean {o['mean_scielab_de2000']:.2f}{floor}; PSNR "
+            f"{o['psnr_db']:.1f} dB; "
             f"SSIM {o['ssim']:.3f}; coverage "
             f"{o['source_coverage']:.3f} (source) -> {o['print_coverage']:.3f} (print); "
             f"{self.result['renderer']['variant']}, {self.result['timings_s']['total']:.0f} s"

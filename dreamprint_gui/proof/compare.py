@@ -32,6 +32,11 @@ Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_
   pixels / all object pixels, so that a figure is its share inside the source plus this one).
   What lies there is not the object's reproduction: no ink placed inside the source's
   silhouette changes it.
+- Inside the source (``inside_source_*``, the headline figures since issue 44:
+  :func:`headline`): the same figures (dE2000 and S-CIELAB mean and p95, coverage error and
+  its mean absolute value) over the other object pixels, where the source has coverage and ink
+  placed in the object acts; ``inside_source_pixels`` counts them. The figures over all object
+  pixels keep their keys.
 - PSNR and SSIM (scikit-image, ``data_range = 1``, SSIM per channel with its default 7 x 7
   window) on the display images (sRGB-encoded, clipped to [0, 1]) over the whole frame.
 """
@@ -46,11 +51,15 @@ from dreamprint_gui.proof.scielab import scielab_de2000
 
 __all__ = ["compare_view", "noise_floor", "noise_floor_from_halves", "summarise",
            "summarise_floor", "FLOOR_KEYS",
-           "mark_significance", "SIGNIFICANCE_FACTOR", "de_heatmap", "to_display",
+           "mark_significance", "SIGNIFICANCE_FACTOR", "SIGNIFICANCE_KEYS", "de_heatmap",
+           "to_display",
            "empty_source_note", "EMPTY_SOURCE_KEYS", "EMPTY_NOTE_MIN", "inside_source",
-           "COVERAGE_THRESHOLD", "DE_MAP_MAX"]
+           "COVERAGE_THRESHOLD", "DE_MAP_MAX", "INSIDE_KEYS", "headline", "headline_text"]
 
 COVERAGE_THRESHOLD = 0.05
+# the headline figures (compare_view's inside_source_*: where the source has coverage)
+INSIDE_KEYS = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000",
+               "coverage_error", "coverage_abs_error")
 # compare_view's figures of the object pixels where the source is empty (module docstring)
 EMPTY_SOURCE_KEYS = ("empty_source_fraction", "empty_source_de2000",
                      "empty_source_scielab_de2000", "empty_source_coverage_error")
@@ -103,6 +112,7 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     d_alpha = prn_alpha - src_alpha
     cov = d_alpha[mask]
     empty = mask & (src_alpha <= threshold)
+    inside = mask & ~empty
     share = 1.0 / n if n else 0.0
     figures = {
         "object_pixels": n,
@@ -119,25 +129,49 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
         "empty_source_de2000": float(de[empty].sum() * share),
         "empty_source_scielab_de2000": float(sde[empty].sum() * share),
         "empty_source_coverage_error": float(d_alpha[empty].sum() * share),
+        **_inside_figures(de, sde, d_alpha, inside),
     }
     return figures, np.where(mask, de, np.nan)
 
 
+def _inside_figures(de: NDArray, sde: NDArray, d_alpha: NDArray, inside: NDArray) -> dict:
+    """The headline figures (:data:`INSIDE_KEYS`) over the object pixels where the source
+    has coverage."""
+    n = int(inside.sum())
+    cov = d_alpha[inside]
+    return {"inside_source_pixels": n,
+            **{f"inside_source_{k}": v for k, v in _stats(de, inside, "de2000").items()},
+            **{f"inside_source_{k}": v for k, v in
+               _stats(sde, inside, "scielab_de2000").items()},
+            "inside_source_coverage_error": float(cov.mean()) if n else 0.0,
+            "inside_source_coverage_abs_error": float(np.abs(cov).mean()) if n else 0.0}
+
+
 def noise_floor(prn_xyz: NDArray, prn_xyz2: NDArray, prn_alpha: NDArray, observer: Observer,
-                samples_per_degree: float, threshold: float = COVERAGE_THRESHOLD) -> dict:
+                samples_per_degree: float, threshold: float = COVERAGE_THRESHOLD,
+                source_alpha: NDArray | None = None) -> dict:
     """Per-pixel and S-CIELAB dE2000 (mean, p95) between two renders of the same print, over
-    the print's object pixels (coverage > ``threshold``)."""
+    the print's object pixels (coverage > ``threshold``); with ``source_alpha``, also over
+    those where the source has coverage (``inside_source_*``, the headline's pixels)."""
     de = delta_E2000(observer.XYZ_to_Lab(np.maximum(prn_xyz, 0.0)),
                      observer.XYZ_to_Lab(np.maximum(prn_xyz2, 0.0)))
     sde = scielab_de2000(prn_xyz, prn_xyz2, observer, samples_per_degree)
     mask = prn_alpha > threshold
-    return {"object_pixels": int(mask.sum()), **_stats(de, mask, "de2000"),
-            **_stats(sde, mask, "scielab_de2000")}
+    out = {"object_pixels": int(mask.sum()), **_stats(de, mask, "de2000"),
+           **_stats(sde, mask, "scielab_de2000")}
+    if source_alpha is not None:
+        inside = mask & (source_alpha > threshold)
+        out["inside_source_pixels"] = int(inside.sum())
+        for k, v in {**_stats(de, inside, "de2000"),
+                     **_stats(sde, inside, "scielab_de2000")}.items():
+            out[f"inside_source_{k}"] = v
+    return out
 
 
 def noise_floor_from_halves(half_a_xyz: NDArray, half_b_xyz: NDArray, prn_alpha: NDArray,
                             observer: Observer, samples_per_degree: float,
-                            threshold: float = COVERAGE_THRESHOLD) -> dict:
+                            threshold: float = COVERAGE_THRESHOLD,
+                            source_alpha: NDArray | None = None) -> dict:
     """The noise floor of a proof whose print is the mean of two independent halves of its
     samples (XYZ ``half_a_xyz``, ``half_b_xyz``): :func:`noise_floor` between
     ``x +- (x_a - x_b) / (2 sqrt 2)``, ``x = (x_a + x_b) / 2``, a pair centred on the proof that
@@ -146,7 +180,8 @@ def noise_floor_from_halves(half_a_xyz: NDArray, half_b_xyz: NDArray, prn_alpha:
     b = np.asarray(half_b_xyz, np.float64)
     mean = (a + b) / 2.0
     d = (a - b) / (2.0 * np.sqrt(2.0))
-    return noise_floor(mean + d, mean - d, prn_alpha, observer, samples_per_degree, threshold)
+    return noise_floor(mean + d, mean - d, prn_alpha, observer, samples_per_degree, threshold,
+                       source_alpha)
 
 
 FLOOR_KEYS = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000")
@@ -159,6 +194,12 @@ def summarise_floor(views: list[dict]) -> dict:
         w = np.ones(len(views))
     out = {k: float(np.average([v[k] for v in views], weights=w)) for k in FLOOR_KEYS}
     out["object_pixels"] = int(sum(v["object_pixels"] for v in views))
+    if all("inside_source_pixels" in v for v in views):
+        wi = np.array([v["inside_source_pixels"] for v in views], float)
+        wi = wi if wi.sum() > 0 else np.ones(len(views))
+        out.update({f"inside_source_{k}": float(np.average(
+            [v[f"inside_source_{k}"] for v in views], weights=wi)) for k in FLOOR_KEYS})
+        out["inside_source_pixels"] = int(sum(v["inside_source_pixels"] for v in views))
     return out
 
 
@@ -173,7 +214,41 @@ def summarise(views: list[dict]) -> dict:
             "print_coverage", *EMPTY_SOURCE_KEYS)
     out = {k: float(np.average([v[k] for v in views], weights=w)) for k in keys}
     out["object_pixels"] = int(sum(v["object_pixels"] for v in views))
+    if all("inside_source_pixels" in v for v in views):
+        wi = np.array([v["inside_source_pixels"] for v in views], float)
+        wi = wi if wi.sum() > 0 else np.ones(len(views))
+        out.update({f"inside_source_{k}": float(np.average(
+            [v[f"inside_source_{k}"] for v in views], weights=wi)) for k in INSIDE_KEYS})
+        out["inside_source_pixels"] = int(sum(v["inside_source_pixels"] for v in views))
     return out
+
+
+def headline(figures: dict) -> dict:
+    """The headline figures of a proof (``evaluate methods``, the proof's text, the proof
+    tab): inside the source, i.e. over the object pixels where the source has coverage, where
+    ink placed in the object acts; ``where`` says so. A figures dict without those pixels
+    (a source empty on every camera, or one from before they were recorded) gives its figures
+    over all object pixels, ``where`` "all object pixels" (NaN for a figure it lacks)."""
+    if figures.get("inside_source_pixels", 0) > 0:
+        return {"where": "inside the source", **{k: figures[f"inside_source_{k}"]
+                                                  for k in INSIDE_KEYS}}
+    return {"where": "all object pixels",
+            **{k: figures.get(k, float("nan")) for k in INSIDE_KEYS}}
+
+
+def headline_text(figures: dict) -> str:
+    """One line: the headline figures (:func:`headline`), then the same over all object pixels
+    and the share of the pixels where the source is empty (the Clear block's body)."""
+    h = headline(figures)
+    line = (f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}, p95 {h['p95_de2000']:.2f}; "
+            f"S-CIELAB {h['mean_scielab_de2000']:.2f}; coverage error "
+            f"{h['coverage_error']:+.3f}")
+    if h["where"] == "all object pixels":
+        return line
+    return (line + f" (all object pixels: dE2000 mean {figures['mean_de2000']:.2f}, S-CIELAB "
+            f"{figures['mean_scielab_de2000']:.2f}, coverage error "
+            f"{figures['coverage_error']:+.3f}; where the source is empty "
+            f"{100 * figures['empty_source_fraction']:.0f} % of them)")
 
 
 def inside_source(figures: dict, key: str) -> float | None:
@@ -206,6 +281,8 @@ def empty_source_note(figures: dict, min_fraction: float = EMPTY_NOTE_MIN) -> st
 
 
 SIGNIFICANCE_FACTOR = 3.0
+# the headline figures a methods table ranks (inside the source, :func:`headline`)
+SIGNIFICANCE_KEYS = ("inside_source_mean_de2000", "inside_source_mean_scielab_de2000")
 
 
 def mark_significance(rows: list[dict], factor: float = SIGNIFICANCE_FACTOR,
@@ -219,7 +296,8 @@ def mark_significance(rows: list[dict], factor: float = SIGNIFICANCE_FACTOR,
         best = min(rows, key=lambda r: r[key])
         for r in rows:
             d = r[key] - best[key]
-            floors = [x["noise_floor"][key] for x in (r, best) if x.get("noise_floor")]
+            floors = [x["noise_floor"][key] for x in (r, best)
+                      if key in (x.get("noise_floor") or {})]
             thr = factor * max(floors) if len(floors) == 2 else None
             r.setdefault("vs_best", {})[key] = {
                 "difference": d, "threshold": thr,

@@ -60,7 +60,13 @@ from dreamprint_gui.job.correction import (
 from dreamprint_gui.job.plan import ConvertSettings, JobCancelled
 from dreamprint_gui.job.spec import HasSpec
 from dreamprint_gui.proof.cameras import View, orbit_views
-from dreamprint_gui.proof.compare import EMPTY_SOURCE_KEYS, compare_view, summarise
+from dreamprint_gui.proof.compare import (
+    EMPTY_SOURCE_KEYS,
+    INSIDE_KEYS,
+    compare_view,
+    headline,
+    summarise,
+)
 from dreamprint_gui.proof.labels import EngineLabels
 from dreamprint_gui.proof.medium import block_for_cell, block_fractions, medium_coefficients
 from dreamprint_gui.proof.optics import resolve_optics
@@ -87,6 +93,8 @@ __all__ = ["CompensateSettings", "run_compensate", "optimise", "backproject",
            "training_views", "TRAIN_ELEVATION_DEG"]
 
 TRAIN_ELEVATION_DEG = 35.0
+# the history's headline figures (inside the source)
+HEADLINE_KEYS = ("inside_source_pixels", *(f"inside_source_{k}" for k in INSIDE_KEYS))
 # The training renders use the proof's own cells: the field learns to correct the print the
 # proof judges. On coarser cells the print is another medium: a solid's boundary cell holds
 # enough ink to be opaque where the source (read at the cell's centre) is empty (the knight at
@@ -373,9 +381,11 @@ class _Loop:
 
 
 def _score(o: dict) -> float:
-    """The objective the loop keeps its best field by: dE2000 mean plus coverage error
-    (0.01 of |coverage| costs as much as 0.25 dE2000)."""
-    return float(o["mean_de2000"] + 25.0 * o["coverage_abs_error"])
+    """The objective the loop keeps its best field by: the headline's (inside the source,
+    :func:`.compare.headline`) dE2000 mean plus coverage error (0.01 of |coverage| costs as
+    much as 0.25 dE2000)."""
+    h = headline(o)
+    return float(h["mean_de2000"] + 25.0 * h["coverage_abs_error"])
 
 
 def optimise(s: CompensateSettings, cancel: threading.Event | None = None
@@ -430,14 +440,16 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         history.append({"iteration": it, "elapsed_s": round(el(), 2),
                         **{k: o[k] for k in ("mean_de2000", "p95_de2000", "mean_scielab_de2000",
                                              "coverage_error", "coverage_abs_error",
-                                             *EMPTY_SOURCE_KEYS)}})
+                                             *EMPTY_SOURCE_KEYS, *HEADLINE_KEYS)}})
         if it == 0:
             t_first = el()
         left = "" if it == 0 or it == n_it else \
             f", about {(el() - t_first) / it * (n_it - it):.0f} s left"
+        h = headline(o)
         yield ProofProgress("iteration", it + 1, n_it + 1, el(),
-                            f"{tag}: dE2000 mean {o['mean_de2000']:.2f}, coverage error "
-                            f"{o['coverage_error']:+.3f}{left}")
+                            f"{tag}: {h['where']}, dE2000 mean {h['mean_de2000']:.2f}, "
+                            f"S-CIELAB {h['mean_scielab_de2000']:.2f}, coverage error "
+                            f"{h['coverage_error']:+.3f}{left}")
         if _score(o) < best[0]:
             best = (_score(o), gain.copy(), o)
         if it == n_it:
@@ -459,7 +471,7 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         "field_cells_xyz": list(loop.gshape[::-1]),
         "history": history,
         "figures": {"before": history[0], "after": {**history[int(np.argmin(
-            [h["mean_de2000"] + 25 * h["coverage_abs_error"] for h in history]))]}},
+            [_score(h) for h in history]))]}},
         "renderer": getattr(loop, "render_info", {}),
         "seconds": round(el(), 2),
     }

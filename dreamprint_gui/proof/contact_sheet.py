@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image, ImageDraw
 
-from dreamprint_gui.proof.compare import DE_MAP_MAX
+from dreamprint_gui.proof.compare import DE_MAP_MAX, headline
 
 __all__ = ["contact_sheet"]
 
@@ -25,9 +25,12 @@ def contact_sheet(rows: list[tuple[np.ndarray, np.ndarray, np.ndarray]], report:
     draw.text((pad, 4), f"{report['source']}  method {report['method']}  "
               f"{' x '.join(f'{x:.1f}' for x in report['print_size_mm'])} mm  "
               f"spp {report['renderer']['spp']}", fill=(0, 0, 0))
-    draw.text((pad, 18), f"overall: dE2000 mean {o['mean_de2000']:.2f}  p95 "
-              f"{o['p95_de2000']:.2f}  PSNR {o['psnr_db']:.1f} dB  SSIM {o['ssim']:.3f}  "
-              f"coverage {o['coverage_error']:+.3f}", fill=(0, 0, 0))
+    h = headline(o)
+    draw.text((pad, 18), f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}  p95 "
+              f"{h['p95_de2000']:.2f}  S-CIELAB {h['mean_scielab_de2000']:.2f}  coverage "
+              f"{h['coverage_error']:+.3f}   all object pixels: dE2000 mean "
+              f"{o['mean_de2000']:.2f}  PSNR {o['psnr_db']:.1f} dB  SSIM {o['ssim']:.3f}",
+              fill=(0, 0, 0))
     draw.text((pad, 30), f"columns: source (emission-absorption) | print (Mitsuba volpath) | "
               f"dE2000 0..{DE_MAP_MAX:g}", fill=(90, 90, 90))
     for r, (src, prn, de) in enumerate(rows):
@@ -37,7 +40,8 @@ def contact_sheet(rows: list[tuple[np.ndarray, np.ndarray, np.ndarray]], report:
         v = report["views"][r]
         x = 3 * (res + pad) + pad
         lines = [f"view {r}  az {v['azimuth_deg']:.0f}  el {v['elevation_deg']:.0f}",
-                 f"dE2000 mean {v['mean_de2000']:.2f}", f"dE2000 p95 {v['p95_de2000']:.2f}",
+                 f"{headline(v)['where']}: dE2000 {headline(v)['mean_de2000']:.2f}",
+                 f"all: dE2000 mean {v['mean_de2000']:.2f}", f"dE2000 p95 {v['p95_de2000']:.2f}",
                  f"PSNR {v['psnr_db']:.1f} dB", f"SSIM {v['ssim']:.3f}",
                  f"coverage {v['source_coverage']:.2f} -> {v['print_coverage']:.2f}"]
         for k, line in enumerate(lines):

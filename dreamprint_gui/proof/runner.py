@@ -298,7 +298,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         if s.noise_floor:
             fig["noise_floor"] = noise_floor_from_halves(
                 print_xyz(bands, halves[0][i], T, s.floor, optics),
-                print_xyz(bands, halves[1][i], T, s.floor, optics), prn_alpha, obs, spd)
+                print_xyz(bands, halves[1][i], T, s.floor, optics), prn_alpha, obs, spd,
+                source_alpha=src_alpha[i])
         per_view.append({"view": i, **v.describe(), **fig})
         images.append({"source": src_lin[i], "print": obs.XYZ_to_linear_sRGB(prn_xyz),
                        "de2000": de})
@@ -344,6 +345,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
                     "metric": "S-CIELAB (Zhang & Wandell 1996) then CIEDE2000"},
         "views": per_view,
         "overall": overall,
+        "headline": "overall.inside_source_*: inside the source (compare.headline)",
         "clear": clear,
         "compensation": _compensation(lab),
         "gamut_floor": floor_fig,

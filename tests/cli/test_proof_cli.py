@@ -35,6 +35,10 @@ def test_proof_demo_writes_everything_and_is_deterministic(tmp_path, capsys):
     # the default Clear block: the object pixels where the source is empty are part of the
     # figures (their shares are at most the figures themselves)
     assert 0 <= o["empty_source_de2000"] <= o["mean_de2000"]
+    # the headline, inside the source, beside them (issue 44); judged in the job's intent
+    assert o["inside_source_pixels"] > 0 and rep["reference"]["intent"] == "colorimetric"
+    assert o["inside_source_mean_de2000"] == pytest.approx(
+        (o["mean_de2000"] - o["empty_source_de2000"]) / (1 - o["empty_source_fraction"]))
     # the noise floor: from the two halves (seeds 0, 1); S-CIELAB blurs what the eye does not see
     f = rep["noise_floor"]
     assert f["seeds"] == [0, 1] and f["object_pixels"] > 0
@@ -151,7 +155,11 @@ def test_evaluate_methods_table(capsys):
     assert code == 2 and "'nope' is not one of" in err and err.count("\n") == 1
     for r in t["methods"]:   # each row has its floor, and is judged against the best row's
         assert r["noise_floor"]["mean_scielab_de2000"] > 0
-        for key in ("mean_de2000", "mean_scielab_de2000"):
+        # the headline is inside the source; all object pixels beside it, keys unchanged
+        assert r["inside_source_pixels"] > 0 and r["noise_floor"]["inside_source_pixels"] > 0
+        assert r["inside_source_mean_de2000"] <= r["inside_source_p95_de2000"] + 1e-9
+        for key in ("inside_source_mean_de2000", "inside_source_mean_scielab_de2000",
+                    "mean_de2000", "mean_scielab_de2000"):
             v = r["vs_best"][key]
             assert v["difference"] >= 0 and v["significant"] == (v["difference"] > v["threshold"])
 

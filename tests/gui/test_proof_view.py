@@ -4,7 +4,7 @@ import numpy as np
 
 from dreamprint_gui.gui.proof_view import COMPENSATION_TITLES, ProofPage, compensation_text
 from dreamprint_gui.job.plan import ConvertSettings
-from dreamprint_gui.proof.compare import to_display
+from dreamprint_gui.proof.compare import headline, inside_source, to_display
 
 
 def _page(qtbot, table_size):
@@ -152,9 +152,10 @@ def test_proof_page_compensates_and_shows_both_prints(qtbot, table_size):
     for key, shown in (("open_loop", open_loop), ("compensated", comp)):
         np.testing.assert_array_equal(shown, to_display(res[key]["images"][0]["print"]))
     text = page.figures.text()
-    for key in ("open_loop", "compensated"):
-        o = res[key]["report"]["overall"]
-        assert f"dE2000 mean {o['mean_de2000']:.2f}" in text
+    for key, name in (("open_loop", "open loop"), ("compensated", "compensated")):
+        o = headline(res[key]["report"]["overall"])    # inside the source
+        assert o["where"] == "inside the source"
+        assert f"{name}, inside the source: dE2000 mean {o['mean_de2000']:.2f}" in text
         assert f"S-CIELAB {o['mean_scielab_de2000']:.2f}" in text
         assert f"coverage error {o['coverage_error']:+.3f}" in text
     assert not page.colour_bar.isVisibleTo(page)
@@ -210,10 +211,16 @@ def test_compensation_text_names_the_share_where_the_source_is_empty():
     """With a Clear block the comparison says how much of each figure lies where the source is
     empty (what no correction changes); without one it says nothing of it."""
     def overall(de, share, frac):
-        return {"mean_de2000": de, "p95_de2000": 2 * de, "mean_scielab_de2000": de / 2,
-                "coverage_error": 0.1, "empty_source_fraction": frac,
-                "empty_source_de2000": share, "empty_source_scielab_de2000": 2.0,
-                "empty_source_coverage_error": 0.08}
+        o = {"mean_de2000": de, "p95_de2000": 2 * de, "mean_scielab_de2000": de / 2,
+             "coverage_error": 0.1, "empty_source_fraction": frac,
+             "empty_source_de2000": share, "empty_source_scielab_de2000": 2.0,
+             "empty_source_coverage_error": 0.08, "inside_source_pixels": 10}
+        for k in ("mean_de2000", "mean_scielab_de2000", "coverage_error"):  # as compare_view
+            o[f"inside_source_{k}"] = inside_source(o, k) if frac < 1 else 0.0
+        o["inside_source_p95_de2000"] = 3 * de
+        o["inside_source_p95_scielab_de2000"] = de
+        o["inside_source_coverage_abs_error"] = 0.1
+        return o
 
     def result(frac):
         return {"open_loop": {"report": {"overall": overall(8.0, 5.5, frac),
@@ -224,10 +231,15 @@ def test_compensation_text_names_the_share_where_the_source_is_empty():
                                                           "after": {"mean_de2000": 8.0}}}}
 
     text = compensation_text(result(0.8))
-    assert "where the source is empty (80 % of the object pixels" in text
+    assert "where the source is empty (80 % of them" in text
     assert "dE2000 5.50 -> 5.40, coverage error +0.080 -> +0.080" in text
-    # inside the source: (8.0 - 5.5) / 0.2 -> (7.0 - 5.4) / 0.2; S-CIELAB (4 - 2) / 0.2 -> ...
-    assert "inside the source: dE2000 mean 12.50 -> 8.00, S-CIELAB 10.00 -> 7.50" in text
+    # the headline, inside the source: (8.0 - 5.5) / 0.2 -> (7.0 - 5.4) / 0.2; S-CIELAB
+    # (4 - 2) / 0.2 -> (3.5 - 2) / 0.2; the change is the headline's
+    assert "open loop, inside the source: dE2000 mean 12.50" in text
+    assert "compensated, inside the source: dE2000 mean 8.00" in text
+    assert "S-CIELAB 10.00" in text and "S-CIELAB 7.50" in text
+    assert "change: dE2000 -36 %, S-CIELAB -25 %" in text
+    assert "all object pixels: dE2000 mean 8.00 -> 7.00" in text
     assert "source is empty" not in compensation_text(result(0.0))
 
 

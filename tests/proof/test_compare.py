@@ -63,6 +63,51 @@ def test_inside_the_source_is_the_figure_over_the_source_pixels(obs):
     assert inside_source({**fig, "empty_source_fraction": 1.0}, "mean_de2000") is None
 
 
+def test_the_headline_is_inside_the_source(obs):
+    """compare_view's inside_source_* are the figures over the source's pixels (the square):
+    coverage 0.92 against 0.9, dE2000 the map's mean there, and the derived inside_source()
+    agrees; summarise weights views by those pixels; without them the headline is all object
+    pixels."""
+    from dreamprint_gui.proof.compare import headline, headline_text, inside_source
+
+    src, prn, sa, pa = _scene(obs, 0.2)
+    fig, de = compare_view(src, prn, sa, pa, obs, samples_per_degree=10.0)
+    h = headline(fig)
+    assert h["where"] == "inside the source"
+    assert fig["inside_source_pixels"] == 16 * 16
+    assert h["coverage_error"] == pytest.approx(0.02)
+    assert h["coverage_abs_error"] == pytest.approx(0.02)
+    assert h["mean_de2000"] == pytest.approx(float(de[8:24, 8:24].mean()))
+    assert h["p95_de2000"] == pytest.approx(float(np.percentile(de[8:24, 8:24], 95)))
+    assert h["mean_de2000"] == pytest.approx(inside_source(fig, "mean_de2000"))
+    assert h["mean_scielab_de2000"] == pytest.approx(inside_source(fig, "mean_scielab_de2000"))
+    assert h["mean_de2000"] != pytest.approx(fig["mean_de2000"])  # the veil is not counted
+    assert headline_text(fig).startswith("inside the source: dE2000 mean")
+    # two views: one with the object, one where the source is empty everywhere
+    src0, prn0, sa0, pa0 = _scene(obs, 0.2)
+    sa0[:] = 0.0
+    empty, _ = compare_view(src0, prn0, sa0, pa0, obs, samples_per_degree=10.0)
+    assert empty["inside_source_pixels"] == 0
+    assert headline(empty)["where"] == "all object pixels"
+    both = summarise([fig, empty])
+    assert both["inside_source_pixels"] == 16 * 16
+    assert headline(both)["mean_de2000"] == pytest.approx(h["mean_de2000"])
+
+
+def test_the_noise_floor_inside_the_source(obs):
+    from dreamprint_gui.proof.compare import noise_floor
+
+    src, prn, sa, pa = _scene(obs, 0.2)
+    other = prn.copy()
+    other[8:24, 8:24] *= 1.05                      # the two renders differ only in the square
+    f = noise_floor(prn, other, pa, obs, 10.0, source_alpha=sa)
+    assert f["inside_source_pixels"] == 16 * 16
+    de = delta_E2000(obs.XYZ_to_Lab(prn[8:24, 8:24]), obs.XYZ_to_Lab(other[8:24, 8:24]))
+    assert f["inside_source_mean_de2000"] == pytest.approx(float(de.mean()))
+    assert f["mean_de2000"] == pytest.approx(float(de.sum()) / (RES * RES))
+    assert "inside_source_pixels" not in noise_floor(prn, other, pa, obs, 10.0)
+
+
 def test_no_empty_source_share_without_haze(obs):
     src, prn, sa, pa = _scene(obs, 0.0)
     fig, _ = compare_view(src, prn, sa, pa, obs, samples_per_degree=10.0)
