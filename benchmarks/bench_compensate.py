@@ -154,6 +154,9 @@ def main() -> None:
                          "proof's.")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--step", type=float, default=1.0, help="The optimiser's step.")
+    ap.add_argument("--fine-cells", type=int, default=None,
+                    help="The fine field's cells (proof/fine_field.py; 0: the coarse field "
+                         "alone; default: the optimiser's).")
     ap.add_argument("--judge-spp", type=int, default=256,
                     help="Samples per pixel of the held-out proofs.")
     ap.add_argument("--judge-cells", type=int, default=128,
@@ -191,7 +194,8 @@ def main() -> None:
                                     views=a.views, iterations=a.iterations, seed=a.seed + 1,
                                     resolution=a.resolution, spp=a.spp, max_cells=a.cells,
                                     background=bg, overwrite=True, step=a.step,
-                                    intent=a.intent)
+                                    intent=a.intent, **({} if a.fine_cells is None else
+                                                        {"fine_cells": a.fine_cells}))
             rep = drive(run_compensate(cs))
             t_opt = time.perf_counter() - t0
             res = {}

@@ -433,7 +433,10 @@ def _held_out_correction(source, kw, prefix, iterations, views):
               help="Proof cells along the print's longest axis of the training renders "
                    "(the proof's).")
 @click.option("--field-cells", type=int, default=32, show_default=True,
-              help="Correction cells along the print's longest axis.")
+              help="Correction cells along the print's longest axis (the coarse field).")
+@click.option("--fine-cells", type=int, default=64, show_default=True,
+              help="The fine field's cells along the longest axis, where the camera sees the "
+                   "object's surface (no finer than --cells); 0: the coarse field alone.")
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",
               show_default=True)
 @click.option("--density-scale", type=float, default=1.0, show_default=True)
@@ -447,7 +450,8 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @placement_options
 @rendering_options
 def compensate(source, output, height_mm, size_mm, printer, profile, views, iterations, seed,
-               resolution, spp, max_cells, field_cells, halftone, density_scale, background,
+               resolution, spp, max_cells, field_cells, fine_cells, halftone, density_scale,
+               background,
                source_options, table_size, overwrite, as_json, up, rotate, fit,
                **rendering) -> None:
     """Optimise a correction (colour and density factors on a coarse field) so that the proof
@@ -459,7 +463,7 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
     cs = CompensateSettings.from_spec(
         print_spec(source, {**locals(), **rendering}), output=output, views=views,
         iterations=iterations, resolution=resolution, spp=spp, max_cells=max_cells,
-        field_cells=field_cells, overwrite=overwrite)
+        field_cells=field_cells, fine_cells=fine_cells, overwrite=overwrite)
     report = _drive(run_compensate(cs))
     if as_json:
         emit_json(report)

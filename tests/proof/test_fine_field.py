@@ -1,0 +1,100 @@
+"""The two-scale correction (proof/fine_field.py): the coarse field at the fine cells is the
+job's own interpolation, the fine detail is what the coarse field cannot hold, shrunk where
+few pixels see a cell, and bounded."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dreamprint_gui.job.correction import apply_correction
+from dreamprint_gui.proof.fine_field import FINE_RANGE, compose, fine_update, upsample
+
+
+def test_upsampled_coarse_field_is_what_the_job_applies_at_those_points():
+    """A voxel grid with one voxel per fine cell: the job's density factor at each voxel
+    (job/correction.apply_correction, the numba kernel) equals up(g) there."""
+    rng = np.random.default_rng(0)
+    coarse = np.exp(rng.normal(0.0, 0.3, (3, 4, 5, 4)))
+    fshape = (7, 9, 11)
+    up = upsample(coarse, fshape)
+    assert up.shape == fshape + (4,)
+    dens = np.full(fshape, 1.0, np.float32)
+    rgb = np.full(fshape + (3,), 0.5, np.float32)
+    apply_correction(coarse.astype(np.float32), fshape[::-1], 0, rgb, dens)
+    np.testing.assert_allclose(dens, up[..., 3], rtol=1e-5)
+
+
+def test_a_linear_coarse_field_is_reproduced_inside():
+    """Trilinear interpolation is exact for a field linear in the cell-centre coordinates
+    (away from the clamped outer half cells)."""
+    g, n = 4, 16
+    x = (np.arange(g) + 0.5) / g
+    coarse = np.broadcast_to((2.0 * x)[None, None, :, None], (g, g, g, 1))
+    up = upsample(coarse, (n, n, n))
+    xf = (np.arange(n) + 0.5) / n
+    inner = (xf >= x[0]) & (xf <= x[-1])
+    np.testing.assert_allclose(up[0, 0, inner, 0], 2.0 * xf[inner], atol=1e-12)
+
+
+def test_fine_detail_is_the_residual_of_the_coarse_update_shrunk_by_its_weight():
+    shape = (6, 6, 6)
+    coarse_upd = np.full((3, 3, 3, 1), 0.2)
+    # data agreeing with the coarse mean everywhere: no detail
+    den = np.full(shape, 4.0)
+    num = 0.2 * den[..., None]
+    np.testing.assert_allclose(fine_update(num, den, coarse_upd), 0.0, atol=1e-12)
+    # one well-seen fine region that asks for more: detail there, of the right sign, below
+    # the residual (shrinkage), and less where the same residual is seen by fewer pixels
+    num2 = num.copy()
+    num2[2:4, 2:4, 2:4, 0] = 0.6 * den[2:4, 2:4, 2:4]
+    d_many = fine_update(num2, den, coarse_upd)
+    d_few = fine_update(num2 / 20, den / 20, coarse_upd)
+    assert 0.0 < d_many[2, 2, 2, 0] < 0.4
+    assert 0.0 < d_few[2, 2, 2, 0] < d_many[2, 2, 2, 0]
+    # no weight at all: no detail (the coarse field alone)
+    np.testing.assert_array_equal(fine_update(num * 0, den * 0, coarse_upd), 0.0)
+
+
+def test_compose_bounds_the_total_and_without_fine_is_the_coarse_field():
+    coarse = np.full((2, 2, 2, 4), math.log(6.0))
+    np.testing.assert_allclose(compose(coarse, None), 6.0)
+    fine = np.full((4, 4, 4, 4), math.log(FINE_RANGE))
+    g = compose(coarse, fine)
+    assert g.shape == (4, 4, 4, 4)
+    np.testing.assert_allclose(g, 8.0)        # 6 x 2 clipped to the coarse field's 8
+    np.testing.assert_allclose(compose(coarse * 0, fine * 0), 1.0)
+
+
+def test_the_optimiser_writes_a_fine_field_or_the_coarse_one(tmp_path):
+    """fine_cells above field_cells: the correction is the composed fine field (no finer than
+    the proof's cells); 0: the coarse field as before."""
+    from dreamprint_gui.proof.compensate import CompensateSettings, optimise
+
+    def run(**kw):
+        kw = {"iterations": 1, **kw}
+        gen = optimise(CompensateSettings(source="demo", height_mm=3.0, views=1,
+                                          resolution=16, spp=2, max_cells=12, field_cells=4,
+                                          table_size=17, **kw))
+        try:
+            while True:
+                next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+    fine = run(fine_cells=64)
+    assert max(fine["correction"].gain.shape[:3]) == 12
+    assert fine["report"]["fine_cells_xyz"] is not None
+    coarse = run(fine_cells=0, iterations=0)
+    assert max(coarse["correction"].gain.shape[:3]) == 4
+    assert coarse["report"]["fine_cells_xyz"] is None
+    with pytest.raises(Exception, match="--fine-cells"):
+        run(fine_cells=2)
+
+
+def test_the_command_line_default_is_the_optimisers():
+    from dreamprint_gui.cli.proof import compensate
+    from dreamprint_gui.proof.compensate import FINE_CELLS
+
+    opt = {p.name: p for p in compensate.params}["fine_cells"]
+    assert opt.default == FINE_CELLS
