@@ -14,6 +14,13 @@ since the wall time depends on it.
     PYTHONPATH=. python benchmarks/bench_compensate.py [--height-mm 20] [--iterations 4]
         [--resolution 64] [--spp 32] [--views 3] [--backgrounds clear,empty] [--only knight]
         [--seed 0] [--step 1.0] [--judge-spp 256] [--judge-cells 128] [--judge-layers 0]
+        [--intent relative] [--fine-cells 0]
+
+Every figure is the proof's headline, inside the source (``compare.headline``; all object
+pixels and the share where the source is empty on a second line), against the source as the
+jobs' ``--intent`` maps it (``proof/reference.py``). ``--fine-cells 0``: the coarse field
+alone (``proof/fine_field.py``). docs/proof-measurements.md has the figures (2026-12-02:
+``--intent relative --judge-spp 128``).
 
 The held-out proofs are rendered finer than the optimisation's (defaults: 256 spp, 128 cells,
 every layer read into its cell): at 32 spp, 32 cells and one layer per cell their own noise
