@@ -35,9 +35,9 @@ def test_the_print_is_the_mean_of_the_halves_and_the_floor_is_between_them(monke
         xyz_of.append((np.array(rendered, np.float64), T))
         return real_xyz(bands, rendered, T, *a)
 
-    def floor_spy(xa, xb, *a):
+    def floor_spy(xa, xb, *a, **k):
         floors.append((xa, xb))
-        return real_floor(xa, xb, *a)
+        return real_floor(xa, xb, *a, **k)
 
     monkeypatch.setattr(pr, "render_print_seeds", seeds_spy)
     monkeypatch.setattr(runner, "print_xyz", xyz_spy)
