@@ -95,9 +95,9 @@ def main() -> None:
     tim = report["timings_s"]
     print(f"proof {args.source} {args.height_mm} mm: {s.views} views, {s.resolution} px, "
           f"{s.spp} spp; cells {report['medium'].get('cells_xyz')}")
-    for k in ("prepare", "labels", "source_render", "print_render", "compare", "total"):
-        if k in tim:
-            print(f"  {k:32s} {tim[k]:7.1f} s")
+    for k, v in tim.items():
+        print(f"  {k:32s} {v:7.1f} s")
+    print(f"  source views read from the cache  {report.get('source_renders_cached', 0)}")
     print(f"  {'whole run_proof (wall / CPU)':32s} {wall:7.1f} s / {cpu:.1f} CPU s")
     print(f"  {'process so far (wall / CPU)':32s} {time.perf_counter() - t0:7.1f} s / "
           f"{time.process_time() - c0:.1f} CPU s")
