@@ -363,3 +363,45 @@ def test_the_print_is_the_mean_of_two_independent_halves():
     assert info["pass_spp"] == [8, 2] and info["spp"] == 8
     assert info["halves"] == {"seeds": [5, 6], "pass_spp": [4, 1], "extra_spp": 0}
     assert pr.half_spp(7) == 4 and pr.half_spp([64, 16, 1]) == [32, 8, 1]
+
+
+def test_every_pass_runs_one_kernel(monkeypatch):
+    """The passes of a render share one brick layout (print_render.brick_layout), so Mitsuba
+    traces one kernel for all of them: here the first pass's bands alone would be cut into
+    other bricks than the second's (its ink only in one half, deep there), and each pass
+    compiled a kernel of its own."""
+    mi, variant, _ = load_mitsuba()      # first: it gives Dr.Jit its libLLVM
+    import drjit as dr
+
+    if variant == "scalar_rgb":
+        pytest.skip("no JIT kernels in the scalar variant")
+    n, cell = 16, 0.5
+    st = np.full((n, n, n, 6), 0.2, np.float32)
+    st[:, :, : n // 2, :3] = 40.0        # pass 0: dense ink in one half
+    st[:, :, n // 2:, :3] = 0.01
+    al = np.full_like(st, 0.5)
+    lo = -np.full(3, n * cell / 2)
+    per_pass = [pr.brick_layout(st[..., 3 * p:3 * p + 3], (cell,) * 3) for p in range(2)]
+    assert per_pass[0] != per_pass[1]    # what each pass had before
+    shared = pr.brick_layout(st, (cell,) * 3)
+    d = [pr.scene_dict(mi, np.ascontiguousarray(st[..., 3 * p:3 * p + 3]),
+                       np.ascontiguousarray(al[..., 3 * p:3 * p + 3]), lo, -lo,
+                       orbit_views((n * cell,) * 3, 1), 8, 1, 8, bricks=shared)
+         for p in range(2)]
+    assert [k for k in d[0] if k.startswith("brick_")] == [k for k in d[1]
+                                                           if k.startswith("brick_")]
+    hashes = []
+    real = mi.render
+
+    def render(scene, *a, **kw):
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
+        dr.kernel_history()
+        out = real(scene, *a, **kw)
+        dr.eval(out)
+        hist = [h for h in dr.kernel_history() if h["type"] == dr.KernelType.JIT]
+        hashes.append(max(hist, key=lambda h: h["operation_count"])["hash"])
+        return out
+
+    monkeypatch.setattr(mi, "render", render)
+    pr.render_print_seeds(st, al, lo, -lo, orbit_views((n * cell,) * 3, 1), 8, 1, (0,))
+    assert len(hashes) == 2 and hashes[0] == hashes[1]
