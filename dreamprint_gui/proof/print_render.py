@@ -38,20 +38,18 @@ rendered at a quarter of the samples (:func:`pass_spp`).
 
 from __future__ import annotations
 
-import gc
 from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dreamprint_gui.job.plan import JobCancelled
-from dreamprint_gui.proof.bricks import Box, optically_deep, partition, uniform
+from dreamprint_gui.proof.bricks import optically_deep, partition, uniform
 from dreamprint_gui.proof.cameras import View
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics
 
 __all__ = ["render_print", "render_print_seeds", "render_print_halves", "half_spp",
-           "brick_layout",
            "hides_direct", "thick_tiles", "pass_spp", "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER",
            "SAMPLERS"]
 
@@ -102,32 +100,15 @@ def hides_direct(floor: bool, optics: Optics | None) -> bool:
     return not floor and (optics is None or optics.surface == "none")
 
 
-def brick_layout(sigma_t: NDArray, cell_mm: tuple[float, float, float],
-                 brick: int | None = None) -> tuple[list[Box], list[bool]]:
-    """The bricks of a medium (ncz, ncy, ncx, bands): the boxes (:func:`.bricks.partition` of
-    the largest extinction over the bands, or cubes of ``brick`` cells) and, per box, whether it
-    is optically deep in every band (:func:`.bricks.optically_deep`: its least extinct band).
-
-    One layout for all the passes of a render: Mitsuba's kernel is traced from the scene's
-    structure (one callable per brick's medium, and whether it samples emitters), not from the
-    grids' values, so passes of one layout run one JIT kernel, compiled once (LLVM, seconds to
-    minutes for a scene of hundreds of bricks) and found in Dr.Jit's cache for the others;
-    with a layout per pass each pass compiled its own (benchmarks/profile_proof.py)."""
-    boxes = partition(sigma_t, cell_mm) if brick is None else uniform(sigma_t, int(brick))
-    return boxes, [optically_deep(sigma_t, b, cell_mm) for b in boxes]
-
-
 def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray,
                views: list[View], resolution: int, spp: int, max_depth: int,
                key_light: float = 0.0, floor: bool = False, brick: int | None = None,
                sampler: str = "independent", optics: Optics | None = None,
                rr_depth: int | None = None,
-               crops: list[tuple[int, tuple[int, int, int, int]]] = (),
-               bricks: tuple[list[Box], list[bool]] | None = None) -> dict:
+               crops: list[tuple[int, tuple[int, int, int, int]]] = ()) -> dict:
     """The Mitsuba scene description of one pass (three bands). ``crops``: extra sensors
     ``view_NN_crop_MMM``, (view index, (x0, y0, width, height) in pixels) each, rendering part
-    of a view's frame. ``bricks``: the boxes and, per box, whether it is optically deep
-    (:func:`brick_layout`), when the caller shares them between passes; else this pass's own."""
+    of a view's frame."""
     T = mi.ScalarTransform4f
     optics = optics or Optics()
     phase = ({"type": "isotropic"} if optics.g == 0
@@ -154,7 +135,8 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
     # with BRICK_GAP (1.5e-4 relative per side: 3 um in a 40 mm print, 0.1 % of a 16-cell
     # brick) they agree (tests/proof/test_print_render.py).
     gap = BRICK_GAP * (1.0 + float(np.abs(np.concatenate([lo, hi])).max()))
-    boxes, deep = bricks if bricks is not None else brick_layout(sigma_t3, tuple(cell), brick)
+    boxes = (partition(sigma_t3, tuple(cell)) if brick is None
+             else uniform(sigma_t3, int(brick)))
     for n_bricks, box in enumerate(boxes):
         z0, z1, y0, y1, x0, x1 = box
         st = sigma_t3[z0:z1, y0:y1, x0:x1]
@@ -170,7 +152,7 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
                              "grid": mi.VolumeGrid(np.ascontiguousarray(al)),
                              "to_world": grid_tf, "raw": True},
                   "phase": dict(phase)}
-        if key_light <= 0 and deep[n_bricks]:
+        if key_light <= 0 and optically_deep(sigma_t3, box, tuple(cell)):
             # no shadow rays from deep inside the ink (bricks.optically_deep); a directional
             # key light can only be reached by them, so it keeps them everywhere
             medium["sample_emitters"] = False
@@ -245,10 +227,6 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
 
     mi, variant, note = load_mitsuba()
     nb_ = sigma_t.shape[-1]
-    cell = (np.asarray(hi, np.float64) - np.asarray(lo, np.float64)) / np.array(
-        sigma_t.shape[2::-1], np.float64)
-    # one brick layout for every pass (of the real bands, before any padding): one kernel
-    layout = brick_layout(np.asarray(sigma_t, np.float32), tuple(cell), brick)
     passes = -(-nb_ // 3)
     pad = passes * 3 - nb_
     if pad:
@@ -263,19 +241,14 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
     extra = list(extra) if extra_spp > 0 else []
     total = passes * (len(views) + len(extra)) * len(seeds)
     done = 0
-    scene = sensors = img = None
     for p in range(passes):
         ch = slice(3 * p, 3 * p + 3)
-        # the last pass's scene released first: its objects' registry ids are then reused by
-        # this one's, part of the traced kernel, which is the last pass's (brick_layout)
-        scene = sensors = img = None
-        gc.collect()
         scene = mi.load_dict(scene_dict(
             mi, np.ascontiguousarray(sigma_t[..., ch], np.float32),
             np.ascontiguousarray(albedo[..., ch], np.float32), lo, hi, views, resolution,
             pass_spp_[p],
             max_depth, key_light, floor, brick=brick, sampler=sampler, optics=optics,
-            rr_depth=rr_depth, crops=extra, bricks=layout))
+            rr_depth=rr_depth, crops=extra))
         sensors = {sn.id(): sn for sn in scene.sensors()}
         for out, seed in zip(outs, seeds, strict=True):
             for i in range(len(views)):
