@@ -1,9 +1,11 @@
 """Writing an output file so that a failure never leaves half of it: one place for the rule.
 
-Defines :func:`check_file_target` (refuse a path that cannot be a new file, before any work)
-and :func:`write_atomically` (a temporary sibling, then a rename). The file gets the
-permissions of any new file (0666 less the umask), not ``tempfile.mkstemp``'s owner-only 0600:
-profiles are shared with colour daemons, RIPs and other users.
+Defines :func:`check_file_target` (refuse a path that cannot be a new file, before any work),
+:func:`write_atomically` (a temporary sibling, then a rename) and :func:`cache_folder` (where
+the product keeps what it can compute again: ``DREAMPRINT_CACHE`` or the user cache folder).
+A written file gets the permissions of any new file (0666 less the umask), not
+``tempfile.mkstemp``'s owner-only 0600: profiles are shared with colour daemons, RIPs and
+other users.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from pathlib import Path
 
 from dreamprint_gui.core.errors import DreamPrintError
 
-__all__ = ["check_file_target", "write_atomically"]
+__all__ = ["check_file_target", "write_atomically", "cache_folder"]
 
 
 def check_file_target(path: str | os.PathLike, example: str = "output.json") -> Path:
@@ -46,3 +48,16 @@ def write_atomically(path: str | os.PathLike, data: bytes, example: str = "outpu
     except OSError as exc:
         tmp.unlink(missing_ok=True)
         raise DreamPrintError(f"cannot write: {exc.strerror or exc}", p) from None
+
+
+def cache_folder(name: str = "") -> Path:
+    """The cache sub-folder ``name`` (not created): under ``DREAMPRINT_CACHE`` when it is set,
+    else under the platform's user cache folder for dreamprint (platformdirs)."""
+    env = os.environ.get("DREAMPRINT_CACHE")
+    if env:
+        root = Path(env)
+    else:
+        from platformdirs import user_cache_path
+
+        root = user_cache_path("dreamprint")
+    return root / name if name else root

@@ -57,6 +57,7 @@ from typing import Any
 
 import numpy as np
 
+from dreamprint_gui.core.files import cache_folder
 from dreamprint_gui.core.profile import INKS, load_profile
 from dreamprint_gui.core.threads import DaemonCall
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
@@ -241,12 +242,7 @@ def _human_seconds(s: float) -> str:
 
 # ----------------------------------------------------------------------------- rate
 def _rates_file() -> Path:
-    env = os.environ.get("DREAMPRINT_CACHE")
-    if env:
-        return Path(env) / "rates.json"
-    from platformdirs import user_cache_path
-
-    return user_cache_path("dreamprint") / "rates.json"
+    return cache_folder() / "rates.json"
 
 
 def record_rate(voxels: int, seconds: float) -> None:

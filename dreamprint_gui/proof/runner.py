@@ -58,10 +58,10 @@ from dreamprint_gui.proof.print_render import (
 )
 from dreamprint_gui.proof.reference import intent_reference, job_intent
 from dreamprint_gui.proof.scielab import samples_per_degree
+from dreamprint_gui.proof.source_cache import cached_render_source
 from dreamprint_gui.proof.source_render import (
     SourceField,
     optical_depth,
-    render_source,
     sample_source,
 )
 from dreamprint_gui.proof.spectral import spectral_bands
@@ -244,10 +244,13 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     field = intent_reference(raw, intent, lab.profile)
     src_lin, src_alpha = [], []
     floor_rho = 0.5 if s.floor else None
+    hits = 0
     for i, v in enumerate(views):
         if is_cancelled():
             raise JobCancelled("the proof was cancelled")
-        rgb, a = render_source(field, v, s.resolution, floor_rho=floor_rho)
+        # the same field on the same camera renders the same image: kept on disk
+        rgb, a, hit = cached_render_source(field, v, s.resolution, floor_rho=floor_rho)
+        hits += hit
         src_lin.append(rgb)
         src_alpha.append(a)
         yield ProofProgress("source", i + 1, len(views), el())
@@ -337,6 +340,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         "reference": {"intent": intent,
                       "what": "the source as the job's rendering intent maps its colours "
                               "(proof/reference.py); colorimetric: the source's own"},
+        # views whose source render was read from the disk cache (proof/source_cache.py)
+        "source_renders_cached": hits,
         "lighting": {"environment": "uniform white (D65), radiance 1",
                      "key_light_irradiance": s.key_light, "floor": s.floor},
         "viewing": {"distance_mm": s.viewing_distance_mm,
@@ -440,7 +445,7 @@ def gamut_floor(lab, field, views, resolution: int, src_lin: list, src_alpha: li
     to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
     per_view = []
     for i, v in enumerate(views):
-        rgb_f, a_f = render_source(floor_field, v, resolution, floor_rho=floor_rho)
+        rgb_f, a_f, _ = cached_render_source(floor_field, v, resolution, floor_rho=floor_rho)
         fig, _ = compare_view(src_lin[i] @ to_xyz.T, rgb_f @ to_xyz.T, src_alpha[i], a_f, obs,
                               samples_per_deg)
         per_view.append(fig)

@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dreamprint_gui.core.files import cache_folder
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics
 from dreamprint_gui.proof.print_render import INTEGRATOR
@@ -137,10 +138,7 @@ def _key(optics: Optics, geometry: str) -> dict:
 
 
 def _cache_dir() -> Path:
-    from platformdirs import user_cache_dir
-
-    env = os.environ.get("DREAMPRINT_CACHE")
-    return (Path(env) if env else Path(user_cache_dir("dreamprint"))) / "rte_curves"
+    return cache_folder("rte_curves")
 
 
 def render_curve(optics: Optics, geometry: str, albedos: ArrayLike = CURVE_ALBEDOS,
