@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from dreamprint_gui import __version__
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.files import cache_folder, write_atomically
 from dreamprint_gui.proof import cameras, source_render
@@ -44,8 +45,6 @@ def _code_digest() -> bytes:
         try:
             h.update(Path(mod.__file__).read_bytes())
         except (OSError, TypeError):       # a frozen bundle: its version stands for the code
-            from dreamprint_gui import __version__
-
             h.update(__version__.encode())
     return h.digest()
 
