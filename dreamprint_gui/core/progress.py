@@ -1,12 +1,13 @@
 """When a long step says how it goes: :data:`HEARTBEAT_S` and :func:`percent_reporter`, the
-one rule for a build's percentage (the command line's bar, the job's notices, the GUI's)."""
+one rule for a build's percentage (the command line's bar, the job's notices, the GUI's), and
+:func:`every_heartbeat` for the messages inside a step."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
 
-__all__ = ["HEARTBEAT_S", "percent_reporter"]
+__all__ = ["HEARTBEAT_S", "percent_reporter", "every_heartbeat"]
 
 # a step under way says how it goes at most this often, and at least this often when its work
 # allows (issue 46: every step over 2 s shows progress)
@@ -27,3 +28,18 @@ def percent_reporter(say: Callable[[int], None]) -> Callable[[float], None]:
             say(pct)
 
     return report
+
+
+def every_heartbeat(say: Callable[[str], None]) -> Callable[[str], None]:
+    """``say`` for the messages inside a step (e.g. each iteration): passed on only when
+    :data:`HEARTBEAT_S` seconds passed since the last one passed (or since this was made,
+    when the step was announced), so a quick step adds no line."""
+    last = [time.monotonic()]
+
+    def detail(message: str) -> None:
+        now = time.monotonic()
+        if now - last[0] >= HEARTBEAT_S:
+            last[0] = now
+            say(message)
+
+    return detail
