@@ -17,7 +17,7 @@ from dreamprint_gui.cli.options import (
     size_options,
 )
 from dreamprint_gui.cli.output import emit_json
-from dreamprint_gui.cli.progress import fmt_time
+from dreamprint_gui.cli.progress import fmt_time, step_progress
 from dreamprint_gui.core.errors import DreamPrintError
 
 
@@ -242,13 +242,15 @@ class _Progress:
               help="Check against this printer (built-in name or .toml file) instead of the "
                    "one the manifest records, e.g. the one you will print on.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-def evaluate_job(job, printer, as_json) -> None:
+@click.option("-q", "--quiet", is_flag=True, help="No progress on stderr.")
+def evaluate_job(job, printer, as_json, quiet) -> None:
     """Read a finished JOB back and check it against its printer (voxel size, image size,
     dpi, material codes, layer count, tray) and its manifest (counts; fractions vs intended
     concentrations); report each material's volume (ml) and mass (g)."""
     from dreamprint_gui.job.check import Z_LIMIT, check_job
 
-    report = check_job(Path(job), printer)
+    report = check_job(Path(job), printer,
+                       progress=step_progress(f"{job}: reading the slices back", quiet))
     if as_json:
         emit_json(report)
     else:

@@ -1,12 +1,15 @@
 """Progress and time on the command line's stderr: :func:`fmt_time` (``m:ss`` / ``h:mm:ss``),
-:func:`progress_bar` (a colour table build's progress, every 10 %) and :func:`step_progress`
-(the steps of the slow commands)."""
+:func:`progress_bar` (a colour table build's progress, every 10 % or 2 s) and
+:func:`step_progress` (the steps of the slow commands)."""
 
 from __future__ import annotations
 
 import math
 
 import click
+
+from dreamprint_gui.core import progress as _core
+from dreamprint_gui.core.progress import percent_reporter
 
 __all__ = ["fmt_time", "progress_bar", "step_progress"]
 
@@ -22,36 +25,42 @@ def fmt_time(s: float | None) -> str:
 
 def progress_bar(what: str = ""):
     """A table build's progress on stderr (also with --json: stdout carries the JSON), every
-    10 %. Called only while building: a table loaded from the cache prints nothing."""
-    state = {"last": -1}
+    10 % and every :data:`~dreamprint_gui.core.progress.HEARTBEAT_S` s in between
+    (:func:`~dreamprint_gui.core.progress.percent_reporter`). Called only while building: a
+    table loaded from the cache prints nothing."""
     label = f"building colour tables{f' ({what})' if what else ''}"
-
-    def report(fraction: float) -> None:
-        pct = int(100 * fraction)
-        if pct // 10 != state["last"]:
-            state["last"] = pct // 10
-            click.echo(f"{label}: {pct:3d} %", err=True)
-
-    return report
+    return percent_reporter(lambda pct: click.echo(f"{label}: {pct:3d} %", err=True))
 
 
 def step_progress(label: str, quiet: bool = False):
     """``progress(done, total)`` printing ``label: done/total steps, elapsed, about T left``
     on stderr after each step (a step of the slow commands, seconds each: fits, render
     passes); ``progress(0, total)``, called once the inputs are checked, says what started.
-    None when ``quiet``."""
+    ``progress(done, total, detail)`` says how the step under way goes (``detail``, e.g. a
+    fit's iteration, the slices read), at most every ``core.progress.HEARTBEAT_S`` seconds:
+    ``label: done/total, detail (elapsed)`` (no ``done/total`` for a single step). None when
+    ``quiet``."""
     import time
 
     if quiet:
         return None
     t0 = [time.monotonic()]
+    last = [t0[0]]
 
-    def report(done: int, total: int) -> None:
+    def report(done: int, total: int, detail: str | None = None) -> None:
+        now = time.monotonic()
+        if detail is not None:
+            if now - last[0] >= _core.HEARTBEAT_S:
+                last[0] = now
+                steps = f"{done}/{total}, " if total > 1 else ""
+                click.echo(f"{label}: {steps}{detail} ({now - t0[0]:.0f} s)", err=True)
+            return
+        last[0] = now
         if done == 0:
-            t0[0] = time.monotonic()
+            t0[0] = now
             click.echo(f"{label}: 0/{total}, started", err=True)
             return
-        el = time.monotonic() - t0[0]
+        el = now - t0[0]
         left = el / done * (total - done) if done else float("nan")
         tail = f", about {left:.0f} s left" if done < total else ", done"
         click.echo(f"{label}: {done}/{total} ({el:.0f} s{tail})", err=True)

@@ -50,6 +50,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.files import check_file_target
 from dreamprint_gui.core.files import write_atomically as core_write_atomically
 from dreamprint_gui.core.profile import InkProfile
+from dreamprint_gui.core.progress import every_heartbeat
 from dreamprint_gui.gamut import lcms
 from dreamprint_gui.gamut.evaluation import IN_GAMUT_DE2000
 from dreamprint_gui.gamut.inverse import nearest_rgb
@@ -115,10 +116,15 @@ def build_icc(profile: InkProfile, tables: ColourTables, *, printer: str = "",
     say(f"A2B: the print of {a2b_grid}^3 RGB colours")
     a2b = encode_lab(forward(rgb_cube(a2b_grid)), version).reshape((a2b_grid,) * 3 + (3,))
     nodes = _pcs_nodes(b2a_grid, version)
+    def iterations(step: str):
+        detail = every_heartbeat(say)
+        return lambda i, n: detail(f"{step}: refining, iteration {i} of {n}")
+
     say(f"B2A colorimetric: the nearest print for {b2a_grid}^3 PCS colours")
-    rgb_col, de_col = nearest_rgb(forward, nodes)
+    rgb_col, de_col = nearest_rgb(forward, nodes, progress=iterations("B2A colorimetric"))
     say("B2A perceptual: gamut compression, then the nearest print")
-    rgb_per, _ = nearest_rgb(forward, _perceptual_targets(pcs, nodes))
+    rgb_per, _ = nearest_rgb(forward, _perceptual_targets(pcs, nodes),
+                             progress=iterations("B2A perceptual"))
 
     def device(rgb: NDArray) -> NDArray[np.uint16]:
         v = np.clip(np.round(rgb * 65535.0), 0, 65535).astype(np.uint16)

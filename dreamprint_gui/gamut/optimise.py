@@ -50,6 +50,9 @@ _CODE = {"srgb": 0, "cielab": 1, "de2000": 2}
 REGULARISATION = {"cielab": 1e-4, "de2000": 1e-4, "srgb": 1e-8}
 # targets this close to grey get the cielab alternative start in the table's final level
 NEUTRAL_CHROMA = 10.0
+# solve_grid solves a level in pieces of this many nodes and reports progress after each (the
+# 100^3 table's last level is 1e6 nodes, tens of seconds: 16 pieces; a piece keeps both cores busy)
+GRID_CHUNK = 65536
 _DEG = math.pi / 180.0
 _25_7 = 25.0 ** 7
 
@@ -512,12 +515,6 @@ def solve_grid(model: ForwardModel, objective: str, size: int,
     """
     objective = canonical_objective(objective, "cielab")
 
-    def run(rgb, starts, max_iter, polish: bool | float = True, polish_iter=None):
-        if target_xyz is None:
-            return solve(model, objective, rgb, starts, max_iter, polish, polish_iter)
-        return solve_xyz(model, objective, target_xyz(rgb), starts, max_iter, polish,
-                         polish_iter)
-
     levels = [5]
     while levels[-1] * 2 - 1 < size:
         levels.append(levels[-1] * 2 - 1)
@@ -526,6 +523,25 @@ def solve_grid(model: ForwardModel, objective: str, size: int,
     work = np.array([lv ** 3 for lv in levels], dtype=float)
     work[0] *= 6
     done = 0.0
+
+    def run(rgb, starts, max_iter, polish: bool | float = True, polish_iter=None):
+        """Solve ``rgb`` in pieces of ``GRID_CHUNK`` nodes (each node's solve is independent:
+        the same result as one call), reporting progress after each piece."""
+        starts = np.broadcast_to(starts, (rgb.shape[0], N_COLOUR_INKS))
+        pieces = []
+        for a in range(0, rgb.shape[0], GRID_CHUNK):
+            b = min(a + GRID_CHUNK, rgb.shape[0])
+            if target_xyz is None:
+                pieces.append(solve(model, objective, rgb[a:b], starts[a:b], max_iter, polish,
+                                    polish_iter))
+            else:
+                pieces.append(solve_xyz(model, objective, target_xyz(rgb[a:b]), starts[a:b],
+                                        max_iter, polish, polish_iter))
+            if progress is not None and len(pieces) * GRID_CHUNK < rgb.shape[0]:
+                progress(0.8 * (done + work[levels.index(lv)] * b / rgb.shape[0])
+                         / work.sum())
+        return tuple(np.concatenate(p) for p in zip(*pieces, strict=True))
+
     conc = cost = None
     for lv in levels:
         rgb = _grid_rgb(lv).reshape(-1, 3)

@@ -342,7 +342,7 @@ class ExportDialog(QDialog):
             from dreamprint_gui.job.preflight import preflight
 
             ctx, est, took = estimated_context(settings, previous, report)
-            pf = preflight(ctx, seed=settings.seed)
+            pf = preflight(ctx, seed=settings.seed, notify=report)  # each step as it starts
             if est is not None:   # preparing as estimated before it started, and as it took
                 pf.prepare_estimate, pf.prepared_seconds = est.to_json(), took
             return settings, pf

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -62,9 +63,12 @@ def _dpi(ppm: float) -> float:
     return ppm * 0.0254
 
 
-def check_job(job: str | Path, printer: str | PrinterProfile | None = None) -> dict[str, Any]:
+def check_job(job: str | Path, printer: str | PrinterProfile | None = None,
+              progress: Callable[..., None] | None = None) -> dict[str, Any]:
     """The report of ``dreamprint evaluate job`` (module doc). ``printer``: the printer to
-    check against (a name, a .toml file or a profile; default: the manifest's)."""
+    check against (a name, a .toml file or a profile; default: the manifest's).
+    ``progress(0, 1)`` before reading the slices (a 1e9-voxel job's take minutes),
+    ``progress(0, 1, "z of nz slices read")`` after each, ``progress(1, 1)`` when done."""
     job = Path(job)
     mpath = job / MANIFEST
     if not job.is_dir():
@@ -145,7 +149,11 @@ def check_job(job: str | Path, printer: str | PrinterProfile | None = None) -> d
     phys_seen: set = set()
     bad_codes: list[str] = []
     bad_size = 0
+    if progress is not None:
+        progress(0, 1)
     for z in range(nz):
+        if progress is not None and z:
+            progress(0, 1, f"{z} of {nz} slices read")
         name = slice_name(z, nz)
         if name not in present:
             problems.append(f"missing slices/{name}")
@@ -162,6 +170,8 @@ def check_job(job: str | Path, printer: str | PrinterProfile | None = None) -> d
                 problems.append(f"slices/{name} is {lab.shape[1]} x {lab.shape[0]} px, "
                                 f"expected {want_w} x {want_h}")
         counts += np.bincount(lab.ravel(), minlength=len(codes))[: len(codes)]
+    if progress is not None:
+        progress(1, 1)
     if bad_size > 1:
         problems.append(f"{bad_size} slices have the wrong image size")
     check("codes in slices", not bad_codes,

@@ -29,6 +29,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.print_size import check_print_size
 from dreamprint_gui.core.printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from dreamprint_gui.core.profile import INKS, load_profile
+from dreamprint_gui.core.progress import percent_reporter
 from dreamprint_gui.gamut import get_tables
 from dreamprint_gui.gamut.alignment import kernel_table
 from dreamprint_gui.gamut.mapping import canonical_intent
@@ -170,12 +171,7 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
         obj, how = resolve_choice(profile, objective, intent)
         notify(f"building colour tables ({obj}, {how}, {size}^3) for this profile and "
                f"{layer_mm * 1000:g} um layers: first use, about {_seconds(est)}; cached after")
-        last = [-1]
-
-        def progress(f: float) -> None:
-            if int(10 * f) != last[0]:
-                last[0] = int(10 * f)
-                notify(f"building colour tables: {int(100 * f):3d} %")
+        progress = percent_reporter(lambda pct: notify(f"building colour tables: {pct:3d} %"))
 
     return profile, get_tables(profile, objective=objective, size=size, intent=intent,
                                progress=progress)

@@ -51,6 +51,7 @@ import os
 import shutil
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -333,7 +334,8 @@ def _node_fields(tables, rgb: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndar
     return reach, de
 
 
-def _slab_estimate(ctx, workers: int) -> tuple[int, float, int, int, float, int]:
+def _slab_estimate(ctx, workers: int, say: Callable[[str], None] = lambda _m: None
+                   ) -> tuple[int, float, int, int, float, int]:
     """(bytes of the job's slices, seconds per voxel on one worker, slabs and layers timed,
     seconds to write one slice file, the job's slab count).
 
@@ -351,12 +353,16 @@ def _slab_estimate(ctx, workers: int) -> tuple[int, float, int, int, float, int]
     # over the cores when called from the main thread (InstantNGP) then runs one thread, as in
     # the job (timed on the main thread, a CLI's InstantNGP job was estimated 1.6x too fast).
     # A daemon thread, so that an interrupted pre-flight (Ctrl-C) need not wait for its slabs.
-    return DaemonCall(lambda: _time_slabs(ctx, workers), "dreamprint-preflight-timing").result()
+    return DaemonCall(lambda: _time_slabs(ctx, workers, say),
+                      "dreamprint-preflight-timing").result()
 
 
-def _time_slabs(ctx, workers: int) -> tuple[int, float, int, int, float, int]:
+def _time_slabs(ctx, workers: int, say: Callable[[str], None]
+                ) -> tuple[int, float, int, int, float, int]:
     nx, ny, nz = ctx.shape_xyz
     slabs = slab_plan(ctx, workers)
+    say(f"pre-flight: timing the job's middle slab (layers {slabs[len(slabs) // 2][0]}-"
+        f"{slabs[len(slabs) // 2][1] - 1} of {nz})")
 
     def convert(z0: int, z1: int) -> tuple[float, list[bytes]]:
         t0 = time.perf_counter()
@@ -370,7 +376,9 @@ def _time_slabs(ctx, workers: int) -> tuple[int, float, int, int, float, int]:
     layers = 0
     png_bytes = 0
     sample: list[bytes] = []  # the PNGs whose writing is timed: at most 64
-    for i in sorted(picks):
+    for k, i in enumerate(sorted(picks)):
+        say(f"pre-flight: timing slab {k + 1} of {len(picks)} (layers {slabs[i][0]}-"
+            f"{slabs[i][1] - 1})")
         t, pngs = convert(*slabs[i])
         timed += t
         layers += len(pngs)
@@ -419,13 +427,16 @@ TIMED_SECONDS = 0.3
 
 
 def preflight(source: JobContext | ConvertSettings, *, sample_voxels: int = 200_000,
-              seed: int = 0) -> Preflight:
+              seed: int = 0, notify: Callable[[str], None] | None = None) -> Preflight:
     """The pre-flight estimate of a job (module doc for how each figure is made).
 
     ``source``: a prepared :class:`...job.plan.JobContext` (the CLI and the GUI pass the job's
     own, so nothing is opened twice), or a :class:`...job.plan.ConvertSettings` to prepare.
     ``sample_voxels``: the size of the material sample; ``seed``: its lattice offset.
+    ``notify(message)``: each step as it starts (sampling, each timed slab: seconds each on a
+    slow source; called from a worker thread too).
     """
+    say = notify or (lambda _m: None)
 
     t0 = time.perf_counter()
     ctx = source if isinstance(source, JobContext) else prepare_job(source)
@@ -444,6 +455,7 @@ def preflight(source: JobContext | ConvertSettings, *, sample_voxels: int = 200_
     lat = [_lattice(n, st, rng) for n, st in zip((nx, ny, nz), strides, strict=True)]
     sub = _sub_grid(ctx.grid, strides, [o for o, _ in lat], [c for _, c in lat])
     snx, sny, snz = sub.shape_xyz
+    say(f"pre-flight: sampling {snx * sny * snz:,} voxels of the job's materials")
     rgb, dens = src.sample_slab(sub, 0, snz, density_scale=s.density_scale)
     rgb = np.ascontiguousarray(np.asarray(rgb, np.float32).reshape(snz, -1, 3))
     dens = np.ascontiguousarray(np.asarray(dens, np.float32).reshape(snz, -1))
@@ -476,7 +488,7 @@ def preflight(source: JobContext | ConvertSettings, *, sample_voxels: int = 200_
     oog = float(np.mean(de > IN_GAMUT_DE2000)) if len(de) else 0.0
     worst = float(de.max()) if len(de) else 0.0
     n_workers = job_workers(s)
-    disk, spv, n_slabs, n_layers, write_s, job_slabs = _slab_estimate(ctx, n_workers)
+    disk, spv, n_slabs, n_layers, write_s, job_slabs = _slab_estimate(ctx, n_workers, say)
     # the slabs that run at once: no more than the job has, one with --scheduler sync
     workers = 1 if scheduler_kind(s) == "sync" else max(1, min(n_workers, job_slabs))
     seconds = CONVERT_OVERHEAD_S + (spv * total + write_s * nz) / (workers * PARALLEL_EFFICIENCY)

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from dreamprint_gui.core import progress as core_progress
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.threads import DaemonCall
 from dreamprint_gui.job.cluster import (
@@ -242,6 +243,39 @@ def _prepare(settings: ConvertSettings, started: float
     return call.result()
 
 
+def _preflight(ctx: JobContext, seed: int, started: float
+               ) -> Generator[ConvertProgress, None, Any]:
+    """:func:`.preflight.preflight` in a thread; while it runs, the step under way (its
+    notices) is yielded as "preparing" progress once ``core.progress.HEARTBEAT_S`` passed
+    since the last line, with the pre-flight's elapsed time: a quick pre-flight says nothing
+    more, a slow source's (a minute on a 7.6e8-voxel demo under load) a line every 2 s."""
+    notices: queue.Queue = queue.Queue()
+
+    def work() -> Any:
+        try:
+            return estimate(ctx, seed=seed, notify=notices.put)
+        finally:
+            notices.put(None)
+
+    call = DaemonCall(work, "dreamprint-preflight")
+    t0 = last = time.monotonic()
+    step = "pre-flight"
+    while True:
+        try:
+            msg = notices.get(timeout=0.25)
+        except queue.Empty:
+            msg = ""
+        if msg is None:
+            break
+        step = msg or step
+        now = time.monotonic()
+        if now - last >= core_progress.HEARTBEAT_S:
+            last = now
+            yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None,
+                                  f"{step} ({now - t0:.0f} s)")
+    return call.result()
+
+
 def run_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,
                    context: JobContext | None = None, preflight: Any = True
                    ) -> Generator[ConvertProgress, None, dict[str, Any]]:
@@ -315,7 +349,7 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
                                   "pre-flight: sampling the job's materials and timing its "
                                   "slabs ...")
         t0 = time.perf_counter()
-        pf = estimate(ctx, seed=settings.seed)
+        pf = yield from _preflight(ctx, settings.seed, started)
         t_pf = time.perf_counter() - t0
         if context is None:
             pf.prepared_seconds = t0 - started

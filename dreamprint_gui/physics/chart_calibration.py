@@ -33,6 +33,9 @@ from dreamprint_gui.physics import saunderson as sd
 from dreamprint_gui.physics.colorimetry import delta_E2000, observer_for
 from dreamprint_gui.physics.kubelka_munk import mix, reflectance_transmittance
 
+# least_squares evaluations per fit (each trust-region iteration takes one Jacobian and >= 1)
+_MAX_NFEV = 100
+
 __all__ = ["ChartFit", "fit_chart"]
 
 
@@ -97,8 +100,12 @@ class _Model:
 
 
 def _fit(model: _Model, recipes: NDArray, target_lab: NDArray, p0: NDArray, ridge: float,
-         saunderson: tuple | None) -> NDArray:
+         saunderson: tuple | None,
+         iteration: Callable[[int], None] | None = None) -> NDArray:
+    """``iteration(n)`` after the n-th Jacobian (one trust-region step, about 0.1-1 s)."""
     from scipy.optimize import least_squares
+
+    steps = [0]
 
     def dE(params: NDArray) -> NDArray:
         K, S = model.unpack(params)
@@ -114,9 +121,12 @@ def _fit(model: _Model, recipes: NDArray, target_lab: NDArray, p0: NDArray, ridg
         stack = np.vstack([p, p + np.diag(h)])
         values = dE(stack)
         J = ((values[1:] - values[0]) / h[:, None]).T
+        steps[0] += 1
+        if iteration is not None:
+            iteration(steps[0])
         return np.vstack([J, ridge * np.eye(p.size)])
 
-    sol = least_squares(residuals, p0, jac=jacobian, method="trf", max_nfev=100, xtol=1e-8,
+    sol = least_squares(residuals, p0, jac=jacobian, method="trf", max_nfev=_MAX_NFEV, xtol=1e-8,
                         ftol=1e-8)
     return sol.x
 
@@ -125,7 +135,7 @@ def fit_chart(base: InkProfile, recipes: ArrayLike, reflectance: ArrayLike, *,
               n_basis: int = 5, folds: int = 5, ridge: float = 0.05,
               saunderson: tuple[float, float] | None = None, name: str = "chart-calibrated",
               source: str | None = None,
-              progress: Callable[[int, int], None] | None = None) -> ChartFit:
+              progress: Callable[..., None] | None = None) -> ChartFit:
     """Refit the inks used in ``recipes`` (n, 6) to the measured ``reflectance`` (n, n_wl).
 
     Reflectance is on ``base.wavelengths_nm`` as fractions. ``saunderson=(k1, k2)`` when the
@@ -152,7 +162,13 @@ def fit_chart(base: InkProfile, recipes: ArrayLike, reflectance: ArrayLike, *,
     k = max(2, min(folds, n_patches))
     if progress is not None:
         progress(0, k + 1)
-    p_full = _fit(model, c, target, np.zeros(model.n_params), ridge, saunderson)
+    def during(done: int):
+        if progress is None:
+            return None
+        return lambda n: progress(done, k + 1,
+                                  f"fit {done + 1}: iteration {n} of at most {_MAX_NFEV}")
+
+    p_full = _fit(model, c, target, np.zeros(model.n_params), ridge, saunderson, during(0))
     if progress is not None:
         progress(1, k + 1)
     K, S = model.unpack(p_full)
@@ -163,7 +179,7 @@ def fit_chart(base: InkProfile, recipes: ArrayLike, reflectance: ArrayLike, *,
     for f in range(k):
         test = order[f::k]
         train = np.setdiff1d(order, test)
-        p = _fit(model, c[train], target[train], p_full, ridge, saunderson)
+        p = _fit(model, c[train], target[train], p_full, ridge, saunderson, during(f + 1))
         Kf, Sf = model.unpack(p)
         cv[test] = delta_E2000(model.lab(Kf, Sf, c[test], saunderson), target[test])
         if progress is not None:

@@ -1,6 +1,7 @@
 """The command line as an operator meets it: closed pipes, summaries of large files, a missing
 size reported before any work."""
 
+import json
 import os
 import subprocess
 import sys
@@ -68,8 +69,8 @@ def test_evaluate_job_explains_its_columns(tmp_path, capsys):
     code, _, err = run(capsys, "convert", "demo", "-o", job, "--height-mm", "0.3",
                        "--table-size", "17", "-q")
     assert code == 0, err
-    code, out, err = run(capsys, "evaluate", "job", job)
-    assert code == 0, err
+    code, out, err = run(capsys, "evaluate", "job", job, "-q")
+    assert code == 0 and err == "", err
     lines = out.splitlines()
     header = next(ln for ln in lines if ln.split()[:1] == ["material"])
     assert header.split() == ["material", "voxels", "fraction", "intended", "z", "volume", "ml",
@@ -78,3 +79,22 @@ def test_evaluate_job_explains_its_columns(tmp_path, capsys):
     for column in ("voxels = ", "fraction = ", "intended = ", "z = ", "volume ml = ",
                    "mass g = "):
         assert column in legend, column
+
+
+def test_evaluate_job_says_how_reading_the_slices_goes(tmp_path, capsys, monkeypatch):
+    """A 1e9-voxel job's slices take minutes to read back (issue 46: 187 s without a line):
+    progress on stderr while reading, the JSON alone on stdout."""
+    from dreamprint_gui.core import progress
+
+    job = tmp_path / "JOB"
+    code, _, err = run(capsys, "convert", "demo", "-o", job, "--height-mm", "0.3",
+                       "--table-size", "17", "-q")
+    assert code == 0, err
+    nz = json.loads((job / "manifest.json").read_text())["grid_dimensions"][2]
+    monkeypatch.setattr(progress, "HEARTBEAT_S", 0.0)
+    code, out, err = run(capsys, "evaluate", "job", job, "--json")
+    assert code == 0 and json.loads(out)["consistent"] is True
+    lines = [ln for ln in err.splitlines() if ln.startswith(f"{job}: reading the slices back")]
+    assert lines[0].endswith(": 0/1, started") and lines[-1].endswith(", done)")
+    assert [ln.split(": ")[-1].split(" (")[0] for ln in lines[1:-1]] == [
+        f"{z} of {nz} slices read" for z in range(1, nz)]

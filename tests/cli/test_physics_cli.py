@@ -130,7 +130,8 @@ def test_optically_thick_reflectance_joins_the_fit():
     np.testing.assert_allclose(fit.S, S, rtol=1e-6)
 
 
-def test_calibrate_chart_as_published_reports_cross_validated_de(tmp_path, capsys):
+def test_calibrate_chart_as_published_reports_cross_validated_de(tmp_path, capsys,
+                                                                 monkeypatch):
     """The layouts of a published PolyJet chart (issue 46): recipes as ``k50,c0,...`` under a
     ``K,C,M,Y,W`` header, measurements as ``LAB_L,LAB_A,LAB_B,SPECTRAL_NM380,...``."""
     from dreamprint_gui.physics.colorimetry import observer_for
@@ -152,6 +153,9 @@ def test_calibrate_chart_as_published_reports_cross_validated_de(tmp_path, capsy
         + "\n" + "".join(",".join(f"{x:.2f}" for x in lab[r]) + ","
                          + ",".join(f"{x:.4f}" for x in R[r]) + "\n" for r in range(24)))
     out = tmp_path / "chart.json"
+    from dreamprint_gui.core import progress
+
+    monkeypatch.setattr(progress, "HEARTBEAT_S", 0.0)  # every iteration says itself
     code, stdout, err = run(capsys, "calibrate", "--chart", str(tmp_path / "ratios.csv"),
                             "--reflectance", str(tmp_path / "color_measurements.csv"),
                             "-o", str(out), "--folds", "2", "--json")
@@ -160,6 +164,12 @@ def test_calibrate_chart_as_published_reports_cross_validated_de(tmp_path, capsy
     assert rep["patches"] == 24
     assert rep["cross_validated_dE2000"]["mean"] < rep["base_dE2000"]["mean"]
     # the wait is visible: a line when it starts and after each of the 1 + 2 fits
-    steps = [ln for ln in err.splitlines() if ln.startswith("calibrate --chart, 24 patches")]
+    steps = [ln for ln in err.splitlines() if ln.startswith("calibrate --chart, 24 patches")
+             and ": iteration " not in ln]
     assert len(steps) == 4 and steps[-1].endswith("3/3 (" + steps[-1].split("(")[-1])
+    # and each fit (seconds on a real chart) says its iterations as they go (issue 46)
+    for f in range(3):
+        during = [ln for ln in err.splitlines() if f": {f}/3, fit {f + 1}: iteration " in ln]
+        assert len(during) >= 2 and "of at most 100 (" in during[-1]
+    assert err.index(": 0/3, fit 1: iteration 1 ") < err.index(": 1/3 (")
     assert load_profile(out).residuals["chart"]["folds"] == 2

@@ -130,3 +130,28 @@ def test_cache_reused_and_invalidated_by_profile_change(profile, tmp_path):
     for f in tmp_path.glob("*.npz"):
         f.write_bytes(b"garbage")
     assert not get_tables(profile, "rgb", 5, cache=tmp_path).cached
+
+
+@pytest.mark.parametrize("intent", ["colorimetric", "perceptual"])
+def test_grid_solve_reports_progress_within_its_last_level(profile, monkeypatch, intent):
+    """The table's last level (1e6 nodes at the default size, tens of seconds) reports progress
+    piece by piece (issue 46: it jumped from 19 % to 80 %), with the same table as one piece."""
+    from dreamprint_gui.gamut import optimise
+    from dreamprint_gui.gamut.mapping import intent_map
+    from dreamprint_gui.gamut.optimise import solve_grid, srgb_to_xyz
+
+    model = forward_model(profile)
+    imap = intent_map(model, intent)
+    target = None if imap is None else (lambda rgb: imap.map_xyz(srgb_to_xyz(model, rgb)))
+    seen: list[float] = []
+    monkeypatch.setattr(optimise, "GRID_CHUNK", 1000)
+    conc, cost = solve_grid(model, "de2000", 21, seen.append, target)
+    monkeypatch.setattr(optimise, "GRID_CHUNK", 10 ** 9)
+    whole, whole_cost = solve_grid(model, "de2000", 21, None, target)
+    np.testing.assert_array_equal(conc, whole)
+    np.testing.assert_array_equal(cost, whole_cost)
+    # levels 5, 9, 17, 21: 21^3 = 9261 nodes in the last one, 10 pieces
+    assert seen == sorted(seen) and seen[-1] == pytest.approx(0.8)
+    assert len(seen) >= 4 + 9
+    gaps = np.diff([0.0, *seen])
+    assert gaps.max() < 0.8 * 21 ** 3 / (6 * 125 + 9 ** 3 + 17 ** 3 + 21 ** 3) / 5

@@ -273,3 +273,22 @@ def test_written_atomically_and_readable_by_others(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["print.icc"]
     with pytest.raises(DreamPrintError, match="is a folder"):
         write_atomically(tmp_path, b"x")
+
+
+def test_b2a_says_its_iterations_once_2_s_passed(profile, small_tables, monkeypatch):
+    """The B2A steps (9 s each under load) say their refining iterations between the steps'
+    lines (issue 46), only once 2 s passed: here every one."""
+    from dreamprint_gui.core import progress
+
+    said: list[str] = []
+    monkeypatch.setattr(progress, "HEARTBEAT_S", 0.0)
+    build_icc(profile, small_tables, a2b_grid=A2B_GRID, b2a_grid=B2A_GRID, progress=said.append)
+    for step in ("B2A colorimetric", "B2A perceptual"):
+        first = said.index(next(m for m in said if m.startswith(step + ":")))
+        its = [m for m in said if m.startswith(f"{step}: refining, iteration ")]
+        assert its and its[0] == f"{step}: refining, iteration 1 of 12"
+        assert said.index(its[0]) == first + 1
+    monkeypatch.setattr(progress, "HEARTBEAT_S", 2.0)
+    said.clear()
+    build_icc(profile, small_tables, a2b_grid=A2B_GRID, b2a_grid=B2A_GRID, progress=said.append)
+    assert not any(": refining" in m for m in said)  # quick steps add no line

@@ -351,6 +351,29 @@ def test_export_shows_the_preflight_before_export(qtbot, tmp_path, table_size):
     assert not (tmp_path / "job").exists()  # nothing written by an estimate
 
 
+def test_export_shows_the_preflight_step_under_way(qtbot, tmp_path, table_size, monkeypatch):
+    """A pre-flight that takes a minute (a slow source, under load) says its step as it
+    starts in the dialog, as `convert` does (issue 46)."""
+    import threading
+
+    from dreamprint_gui.job import preflight as pf_module
+
+    release = threading.Event()
+    real = pf_module.encode_slab
+
+    def held(c, z0, z1):  # the slabs of a slow source
+        release.wait(60)
+        return real(c, z0, z1)
+
+    monkeypatch.setattr(pf_module, "encode_slab", held)
+    dlg = _dialog(qtbot, tmp_path, table_size, 2.0)
+    qtbot.waitUntil(lambda: "pre-flight: timing the job's middle slab"
+                    in dlg.preflight_view.toPlainText(), timeout=120000)
+    assert dlg.preflight_view.toPlainText().startswith("estimating the job ... ")
+    release.set()
+    qtbot.waitUntil(lambda: dlg.preflight is not None, timeout=120000)
+
+
 TINY_COMPENSATION = {"views": 1, "iterations": 1, "resolution": 24, "spp": 2, "max_cells": 12,
                      "field_cells": 6}
 

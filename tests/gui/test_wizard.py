@@ -285,22 +285,10 @@ def test_calibration_set_fills_the_page(qtbot, tmp_path):
     assert page.set_measurements is None and "bad.toml" in page.set_label.text()
 
 
-def test_stopping_a_running_chart_fit(qtbot, tmp_path, truth, monkeypatch):
-    """Stop returns the page at once; the abandoned fit's result, when it comes, is dropped."""
-    import threading
-
-    from dreamprint_gui.physics import chart_calibration
+def _wizard_fitting_a_chart(qtbot, tmp_path, truth):
+    """A wizard whose fit page has started fitting a 12-patch chart."""
     from dreamprint_gui.physics.mixture import predict
 
-    started, release, returned = threading.Event(), threading.Event(), threading.Event()
-
-    def slow_fit(profile, recipes, reflectance, **kw):  # stands in for a minute-long fit
-        started.set()
-        release.wait(60)
-        returned.set()
-        return chart_calibration.ChartFit.__new__(chart_calibration.ChartFit)
-
-    monkeypatch.setattr(chart_calibration, "fit_chart", slow_fit)
     rng = np.random.default_rng(4)
     recipes = rng.dirichlet(np.ones(5), size=12)
     R = predict(truth, recipes, thickness_mm=np.inf).R
@@ -318,6 +306,48 @@ def test_stopping_a_running_chart_fit(qtbot, tmp_path, truth, monkeypatch):
     wiz.chart_page.spectra_edit.setText(str(spec_path))
     wiz.chart_page.load()
     wiz.next()
+    return wiz
+
+
+def test_a_chart_fit_shows_its_iterations(qtbot, tmp_path, truth, monkeypatch):
+    """A fit (seconds each on a real chart) shows its iterations as they go (issue 46)."""
+    import threading
+
+    from dreamprint_gui.physics import chart_calibration
+
+    release = threading.Event()
+
+    def fit_reporting(profile, recipes, reflectance, progress=None, **kw):
+        progress(0, 3)
+        progress(0, 3, "fit 1: iteration 4 of at most 100")
+        release.wait(60)
+        raise chart_calibration.DreamPrintError("stopped by the test")
+
+    monkeypatch.setattr(chart_calibration, "fit_chart", fit_reporting)
+    wiz = _wizard_fitting_a_chart(qtbot, tmp_path, truth)
+    page = wiz.fit_page
+    qtbot.waitUntil(lambda: "iteration 4 of at most 100" in page.elapsed.text(), timeout=10000)
+    assert "fit 1 of 3" in page.elapsed.text()
+    release.set()
+    qtbot.waitUntil(lambda: not page.running, timeout=10000)
+
+
+def test_stopping_a_running_chart_fit(qtbot, tmp_path, truth, monkeypatch):
+    """Stop returns the page at once; the abandoned fit's result, when it comes, is dropped."""
+    import threading
+
+    from dreamprint_gui.physics import chart_calibration
+
+    started, release, returned = threading.Event(), threading.Event(), threading.Event()
+
+    def slow_fit(profile, recipes, reflectance, **kw):  # stands in for a minute-long fit
+        started.set()
+        release.wait(60)
+        returned.set()
+        return chart_calibration.ChartFit.__new__(chart_calibration.ChartFit)
+
+    monkeypatch.setattr(chart_calibration, "fit_chart", slow_fit)
+    wiz = _wizard_fitting_a_chart(qtbot, tmp_path, truth)
     page = wiz.fit_page
     fitted: list = []
     page.fitted.connect(fitted.append)

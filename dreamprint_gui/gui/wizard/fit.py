@@ -216,9 +216,10 @@ class FitPage(TaskPage):
                        f"{folds}-fold cross-validation (this can take a minute):")
                 start = profile
 
-                def step(done: int, total: int) -> None:
+                def step(done: int, total: int, detail: str | None = None) -> None:
                     report(f"refitting the inks to the chart's {n} patches: fit {done + 1} "
-                           f"of {total} (all patches, then each of the {total - 1} folds):"
+                           f"of {total} (all patches, then each of the {total - 1} folds)"
+                           + (f", {detail.split(': ', 1)[-1]}:" if detail else ":")
                            if done < total else
                            f"refitted to the chart's {n} patches ({total} fits):")
 
