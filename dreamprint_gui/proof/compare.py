@@ -264,8 +264,9 @@ def inside_source(figures: dict, key: str) -> float | None:
 
 def empty_source_note(figures: dict, min_fraction: float = EMPTY_NOTE_MIN) -> str:
     """One line on the share of the figures from the object pixels where the source is empty
-    (:func:`compare_view`) and the figures inside the source, or "" when those pixels are under
-    ``min_fraction`` of the object pixels."""
+    (:func:`compare_view`), or "" when those pixels are under ``min_fraction`` of the object
+    pixels. The figures inside the source are the headline (:func:`headline_text`), which
+    every surface shows first, so they are not repeated here."""
     if figures.get("empty_source_fraction", 0.0) < min_fraction:
         return ""
     note = (f"where the source is empty ({100 * figures['empty_source_fraction']:.0f} % of the "
@@ -273,11 +274,7 @@ def empty_source_note(figures: dict, min_fraction: float = EMPTY_NOTE_MIN) -> st
             f"{figures['empty_source_de2000']:.2f} of the dE2000 mean, "
             f"{figures['empty_source_scielab_de2000']:.2f} of the S-CIELAB mean, "
             f"{figures['empty_source_coverage_error']:+.3f} of the coverage error")
-    inside = [inside_source(figures, k) for k in _EMPTY_SHARE]
-    if inside[0] is None:
-        return note
-    return (note + f"; inside the source: dE2000 mean {inside[0]:.2f}, S-CIELAB "
-            f"{inside[1]:.2f}, coverage error {inside[2]:+.3f}")
+    return note
 
 
 SIGNIFICANCE_FACTOR = 3.0

@@ -119,13 +119,16 @@ def test_no_empty_source_share_without_haze(obs):
 
 
 def test_the_note_names_the_empty_source_share_only_when_there_is_one(obs):
-    from dreamprint_gui.proof.compare import empty_source_note
+    from dreamprint_gui.proof.compare import empty_source_note, headline_text
 
     src, prn, sa, pa = _scene(obs, 0.2)
     fig, _ = compare_view(src, prn, sa, pa, obs, samples_per_degree=10.0)
     note = empty_source_note(fig)
     assert "75 % of the object pixels" in note and "+0.150 of the coverage error" in note
-    assert "inside the source: dE2000 mean" in note and "coverage error +0.020" in note
+    # the figures inside the source are the headline, shown first; the note does not repeat them
+    assert "inside the source" not in note
+    head = headline_text(fig)
+    assert head.startswith("inside the source") and "coverage error +0.020" in head
     src, prn, sa, pa = _scene(obs, 0.0)
     assert empty_source_note(compare_view(src, prn, sa, pa, obs, 10.0)[0]) == ""
 
