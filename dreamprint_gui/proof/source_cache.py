@@ -19,6 +19,7 @@ or written is skipped: the source is rendered as without it.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import io
 from pathlib import Path
@@ -39,6 +40,7 @@ CACHE_NAME = "proof_source"
 MAX_ENTRIES = 256      # 2 MB each at 256 px (RGB + alpha, float64): 0.5 GB at most
 
 
+@functools.cache  # the code does not change while the process runs: read it once
 def _code_digest() -> bytes:
     h = hashlib.blake2b(digest_size=16)
     for mod in (source_render, cameras):
