@@ -6,7 +6,13 @@ gap between two of them, in wall seconds and in the CPU seconds the command used
     PYTHONPATH=. .venv/bin/python benchmarks/bench_silence.py -- -m dreamprint_gui.cli icc -o x.icc
 
 Everything after ``--`` is passed to this Python interpreter. Prints the three longest
-silences, ``silence W s wall (C CPU s) after: LINE``, and the total.
+silences, ``silence W s wall (C CPU s) after: LINE``, and the total. ``--case NAME`` runs one
+of :data:`CASES` instead (from the repository's folder, output in a temporary folder):
+
+    PYTHONPATH=. .venv/bin/python benchmarks/bench_silence.py --case chart-proof
+
+``chart-proof``: ``dreamprint proof --chart resources/charts/starter-24.csv`` at its defaults
+(512 spp, 12 bands: 4 render passes of about 20 s each on the 2-core machine).
 """
 
 from __future__ import annotations
@@ -15,7 +21,14 @@ import os
 import selectors
 import subprocess
 import sys
+import tempfile
 import time
+
+# Commands measured by name: arguments after the interpreter, "{tmp}" a temporary folder
+CASES = {
+    "chart-proof": ["-m", "dreamprint_gui.cli", "proof", "--chart",
+                    "resources/charts/starter-24.csv", "-o", "{tmp}/chart", "--json"],
+}
 
 
 def _cpu(pid: int) -> float:
@@ -29,7 +42,16 @@ def _cpu(pid: int) -> float:
 
 
 def main(argv: list[str]) -> int:
-    args = argv[argv.index("--") + 1:] if "--" in argv else argv
+    if argv[:1] == ["--case"]:
+        if len(argv) < 2 or argv[1] not in CASES:
+            print(f"--case: one of {', '.join(CASES)}", file=sys.stderr)
+            return 2
+        with tempfile.TemporaryDirectory(prefix="bench_silence_") as tmp:
+            return _measure([a.replace("{tmp}", tmp) for a in CASES[argv[1]]])
+    return _measure(argv[argv.index("--") + 1:] if "--" in argv else argv)
+
+
+def _measure(args: list[str]) -> int:
     proc = subprocess.Popen([sys.executable, *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE)
     sel = selectors.DefaultSelector()

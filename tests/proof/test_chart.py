@@ -140,7 +140,8 @@ def test_chart_proof_command(tmp_path, capsys):
     assert len(lines) == 4 and lines[0].endswith("de2000")
     # the wait is visible (issue 46): a line when rendering starts and after each of the 12
     # passes of 3 bands
-    steps = [ln for ln in err.splitlines() if ln.startswith("chart proof: render passes")]
+    steps = [ln for ln in err.splitlines() if ln.startswith("chart proof: render passes")
+             and ", pass " not in ln]          # not the heartbeat within a pass
     assert len(steps) == 13 and "12/12" in steps[-1] and "done" in steps[-1]
 
 
@@ -216,3 +217,36 @@ def test_the_chart_picture_numbers_its_patches_as_the_report_does():
     one = black[corner].min(axis=-1) > 200
     two = white[corner].max(axis=-1) < 60
     assert (one != two).any()                                  # "1" and "2" differ
+
+
+def test_a_render_pass_says_how_it_goes_and_the_numbers_stay(monkeypatch):
+    """While a pass renders (one Mitsuba call: about 20 s at the default 512 spp), progress
+    hears 'pass k of n: elapsed, about T left' every HEARTBEAT_S seconds (here 0.02 s): the
+    render leaves the GIL to the heartbeat's thread (with the scene a temporary it kept it: one
+    beat per pass, at its end). The reflectances are bit-identical to a render without progress
+    (same seed). Fails if the heartbeat is removed (no detail between the passes' lines)."""
+    import time
+
+    from dreamprint_gui.core import progress as core_progress
+
+    p = default_profile()
+    b = spectral_bands(p, 6)                       # 2 passes
+    args = (RECIPES[:2], p, Optics("none"), b, "d:8")
+    quiet, _ = render_chart(*args, spp=256, seed=3)
+    monkeypatch.setattr(core_progress, "HEARTBEAT_S", 0.02)
+    heard: list[tuple] = []
+    told, _ = render_chart(*args, spp=256, seed=3,
+                           progress=lambda *a: heard.append((time.monotonic(), *a)))
+    np.testing.assert_array_equal(told, quiet)
+    ends = [i for i, a in enumerate(heard) if len(a) == 3]
+    assert [heard[i][1:] for i in ends] == [(0, 2), (1, 2), (2, 2)]
+    for k in (0, 1):
+        beats = heard[ends[k] + 1:ends[k + 1]]
+        took = heard[ends[k + 1]][0] - heard[ends[k]][0]
+        assert all(a[1:3] == (k, 2) and a[3].startswith(f"pass {k + 1} of 2: ") for a in beats)
+        # a beat every 0.02 s while the pass renders (a quarter of them, for a loaded machine)
+        assert len(beats) >= max(2, 0.25 * took / 0.02), (len(beats), took)
+    first, second = heard[ends[0] + 1:ends[1]], heard[ends[1] + 1:ends[2]]
+    # no pass before the first to go by; the second's time left from the first's
+    assert not any(w in a[3] for a in first for w in ("left", "any moment"))
+    assert all("left" in a[3] or "any moment now" in a[3] for a in second)

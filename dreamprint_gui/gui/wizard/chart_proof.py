@@ -83,6 +83,7 @@ class ChartProofPage(TaskPage):
         lay.addWidget(self.legend)
         lay.addWidget(self.image, 1)
         self._t0 = 0.0
+        self._detail = ""          # the pass under way, as the render's heartbeat says it
         self._clock = QTimer(self, interval=500)
         self._clock.timeout.connect(self._tick)
         self._set_running(False)
@@ -94,7 +95,8 @@ class ChartProofPage(TaskPage):
         self._run_clock(running)
 
     def _tick(self) -> None:
-        self.elapsed.setText(f"rendering {time.monotonic() - self._t0:.0f} s")
+        self.elapsed.setText(f"rendering {time.monotonic() - self._t0:.0f} s"
+                             + (f" ({self._detail})" if self._detail else ""))
 
     def _inputs(self):
         fit = self.wiz.fit_page.result
@@ -128,20 +130,26 @@ class ChartProofPage(TaskPage):
 
             chart = chart_from_arrays(recipes, refl, profile, geometry=geometry)
             s = ChartSettings(recipes="(calibration wizard)", geometry=geometry, spp=spp)
-            rep, band_R, bands = proof_chart(chart, s, progress=lambda d, t: report((d, t)),
-                                             cancelled=cancel.is_set)
+            rep, band_R, bands = proof_chart(
+                chart, s, progress=lambda d, t, detail=None: report((d, t, detail)),
+                cancelled=cancel.is_set)
             return rep, chart_picture(chart, band_R, bands)
 
         self.status.setText("")
         self.status.setStyleSheet("")
         self.bar.setMaximum(1)
         self.bar.setValue(0)
+        self._detail = ""
         self._start_task(job, "chart-proof")
 
     def _progress(self, item) -> None:
-        done, total = item
+        """A pass done (``(done, total, None)``) or how the pass under way goes (``detail``:
+        'pass 2 of 4: 12 s, about 8 s left', every ``core.progress.HEARTBEAT_S`` s)."""
+        done, total, detail = item
         self.bar.setMaximum(int(total))
         self.bar.setValue(int(done))
+        self._detail = detail or ""
+        self._tick()
 
     def stop(self) -> None:
         """Stop the running proof: the page is ready at once; the render ends after its
