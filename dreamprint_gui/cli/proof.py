@@ -19,6 +19,7 @@ from dreamprint_gui.cli.options import (
 )
 from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.cli.progress import fmt_time
+from dreamprint_gui.core import progress as core_progress
 from dreamprint_gui.core.errors import DreamPrintError
 
 # Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
@@ -61,7 +62,8 @@ def _drive(gen, prefix: str = "", quiet: bool = False):
             if p.stage == "iteration":
                 click.echo(f"{prefix}{p.message}  elapsed {fmt_time(p.elapsed_s)}", err=True)
                 continue
-            if tty or now - last_line > 10 or p.done == p.total:
+            # a log (no terminal) gets the bar's line every HEARTBEAT_S while a stage runs
+            if tty or now - last_line >= core_progress.HEARTBEAT_S or p.done == p.total:
                 last_line = now
                 frac = p.done / p.total if p.total else 0.0
                 bar = "#" * int(frac * 30) + "-" * (30 - int(frac * 30))

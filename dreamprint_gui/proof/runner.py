@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from dreamprint_gui.core import progress as core_progress
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gamut.alignment import predicted_appearance
 from dreamprint_gui.job.halftone import HALFTONE_METHODS
@@ -472,17 +473,22 @@ def print_xyz(bands, rendered: np.ndarray, direct_T: np.ndarray, floor: bool,
 
 def in_thread(fn, stage, prog, el, box, cancel):
     """Run ``fn`` in a thread and yield :class:`ProofProgress` of ``stage`` whenever
-    ``prog["p"]`` (done, total) changes; an error ``fn`` put in ``box["e"]`` is raised here, and
-    a consumer that stops (cancel, close) sets ``cancel`` and waits for the thread."""
+    ``prog["p"]`` (done, total) changes, and again (same counts, the elapsed time) once
+    ``core.progress.HEARTBEAT_S`` seconds passed without a change: one Mitsuba render of the
+    print, about 20 s, leaves the GIL to this generator while it runs. An error ``fn`` put in
+    ``box["e"]`` is raised here, and a consumer that stops (cancel, close) sets ``cancel`` and
+    waits for the thread."""
     th = threading.Thread(target=fn, name=f"dreamprint-proof-{stage}", daemon=True)
     th.start()
     last = None
+    said = time.monotonic()
     try:
         while th.is_alive():
             th.join(0.2)
             p = prog["p"]
-            if p != last:
-                last = p
+            now = time.monotonic()
+            if p != last or now - said >= core_progress.HEARTBEAT_S:
+                last, said = p, now
                 yield ProofProgress(stage, p[0], p[1], el())
     except BaseException:
         if cancel is not None:
