@@ -11,7 +11,7 @@ import click
 from dreamprint_gui.cli.group import cli
 from dreamprint_gui.cli.options import INTENT_HELP, INTENTS, OBJECTIVE_HELP, OBJECTIVES
 from dreamprint_gui.cli.output import emit_json
-from dreamprint_gui.cli.progress import progress_bar, step_progress
+from dreamprint_gui.cli.progress import notice, progress_bar, step_progress
 from dreamprint_gui.core.errors import DreamPrintError
 
 _PRINTER = click.option(
@@ -97,7 +97,8 @@ def lookup(rgb_text, rgb_file, density, profile_path, objective, intent, printer
         raise DreamPrintError("--density must be a finite number >= 0 (1/mm)")
     colours = [_parse_rgb(rgb_text)] if rgb_text else _read_rgb_file(rgb_file)
     profile = profile_for_printer(profile_path, printer)
-    tables = get_tables(profile, objective, size, progress=progress_bar(), intent=intent)
+    tables = get_tables(profile, objective, size, progress=progress_bar(), intent=intent,
+                        notify=notice)
     rgb = np.asarray(colours, dtype=np.float64)
     conc5 = table_lookup(tables, rgb)
     pred = predict(profile, conc5)  # exactly what `dreamprint predict --mix` computes
@@ -159,13 +160,14 @@ def gamut(profile_path, objective, intent, compare, size, samples, chart, plot, 
     profile = profile_for_printer(profile_path, printer)
     objective, intent = resolve_choice(profile, objective, intent)
     tables = get_tables(profile, objective, size, progress=progress_bar(f"{objective}, {intent}"),
-                        intent=intent)
+                        intent=intent, notify=notice)
     others = []
     if compare:
         for other in OBJECTIVES:
             if other != objective:
                 others.append(get_tables(profile, other, size, intent=intent,
-                                         progress=progress_bar(f"{other}, {intent}")))
+                                         progress=progress_bar(f"{other}, {intent}"),
+                                         notify=notice))
     label = (f"evaluating: {samples} colours solved directly vs the table"
              + (f", for {1 + len(others)} objectives" if others else "")
              + " (the lattice's best, then each objective)")

@@ -7,7 +7,7 @@ import click
 from dreamprint_gui.cli.group import cli
 from dreamprint_gui.cli.options import INTENT_HELP, INTENTS, OBJECTIVE_HELP, OBJECTIVES
 from dreamprint_gui.cli.output import emit_json
-from dreamprint_gui.cli.progress import progress_bar
+from dreamprint_gui.cli.progress import notice, progress_bar
 
 
 @cli.command()
@@ -52,7 +52,7 @@ def icc(output, profile_path, printer, intent, objective, size, icc_version, gri
     profile = profile_for_printer(load_profile(profile_path), printer_profile)
     objective, intent = resolve_choice(profile, objective, intent)
     tables = get_tables(profile, objective, size, intent=intent,
-                        progress=progress_bar(f"{objective}, {intent}"))
+                        progress=progress_bar(f"{objective}, {intent}"), notify=notice)
     report = export_icc(output, profile, tables, printer=printer_profile.display_name,
                         version=int(icc_version), a2b_grid=grid, b2a_grid=grid, cgats=cgats,
                         patches=patches, progress=lambda msg: click.echo(msg, err=True))

@@ -1,6 +1,7 @@
 """Progress and time on the command line's stderr: :func:`fmt_time` (``m:ss`` / ``h:mm:ss``),
 :func:`progress_bar` (a colour table build's progress, every 10 % or 2 s) and
-:func:`step_progress` (the steps of the slow commands)."""
+:func:`step_progress` (the steps of the slow commands) and :func:`notice` (a first-use build's
+announcement and heartbeat, e.g. ``gamut.get_tables(notify=notice)``)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import click
 from dreamprint_gui.core import progress as _core
 from dreamprint_gui.core.progress import percent_reporter
 
-__all__ = ["fmt_time", "progress_bar", "step_progress"]
+__all__ = ["fmt_time", "progress_bar", "step_progress", "notice"]
 
 
 def fmt_time(s: float | None) -> str:
@@ -66,3 +67,8 @@ def step_progress(label: str, quiet: bool = False):
         click.echo(f"{label}: {done}/{total} ({el:.0f} s{tail})", err=True)
 
     return report
+
+
+def notice(message: str) -> None:
+    """One line on stderr (stdout stays a command's result, e.g. its JSON)."""
+    click.echo(message, err=True)

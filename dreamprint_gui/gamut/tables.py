@@ -34,13 +34,16 @@ import os
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dreamprint_gui.core.kernel_cache import compile_notice, uncached, while_compiling
 from dreamprint_gui.core.profile import INKS, InkProfile
+from dreamprint_gui.gamut import optimise
 from dreamprint_gui.gamut.forward import (
     N_COLOUR_INKS,
     ForwardModel,
@@ -64,7 +67,8 @@ from dreamprint_gui.physics.kubelka_munk import mix
 __all__ = ["ColourTables", "build_tables", "get_tables", "lookup", "printed_xyz",
            "interpolate_fields", "tetrahedral_nodes", "mixture_sigma",
            "DEFAULT_OBJECTIVE", "DEFAULT_INTENT", "DEFAULT_SIZE", "GREY_MAX", "CLEAR_KNOTS",
-           "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice"]
+           "FIELDS", "TABLE_VERSION", "cache_dir", "resolve_choice", "kernels_estimate",
+           "COMPILE_SECONDS"]
 
 TABLE_VERSION = 3
 DEFAULT_OBJECTIVE = "de2000"
@@ -286,6 +290,12 @@ def _load(path: Path, key_profile: str, objective: str, size: int,
 # docs/physics.md: de2000 35 CPU s, srgb 19; cielab solves like srgb), for the announcement of
 # a first-use build; scaled by the node count.
 BUILD_SECONDS_100 = {"de2000": 30.0, "cielab": 17.0, "srgb": 17.0}
+# Seconds numba takes to compile the table solve's kernel (.optimise) before a first build
+# after an install or upgrade (its cache is keyed on the sources): 15.9 CPU s of one thread
+# (53 s wall at load 7.9; `dreamprint gamut` with empty caches, numba's compile events,
+# 2026-12-02), an idle machine's wall seconds
+COMPILE_SECONDS = 16.0
+COMPILE_WHAT = "compiling the colour kernels"
 
 
 def tables_path(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
@@ -308,16 +318,29 @@ def build_estimate(profile: InkProfile, objective: str | None = None,
     return BUILD_SECONDS_100.get(objective, 30.0) * extra * (size / 100) ** 3
 
 
+def kernels_estimate() -> float | None:
+    """Seconds numba will spend compiling the table solve's kernels (:mod:`.optimise`) before
+    a build, :data:`COMPILE_SECONDS`, or None when they are cached
+    (:func:`..core.kernel_cache.uncached`, the rule the job's first-use compiles follow)."""
+    return COMPILE_SECONDS if uncached(optimise) else None
+
+
 def get_tables(profile: InkProfile, objective: str | None = None, size: int = DEFAULT_SIZE,
                progress: Callable[[float], None] | None = None,
                cache: str | os.PathLike | None = None,
-               intent: str | None = None) -> ColourTables:
+               intent: str | None = None,
+               notify: Callable[[str], None] | None = None) -> ColourTables:
     """The tables for ``profile``: from the disk cache when present, else built and cached.
 
     ``objective``/``intent`` default to the profile's ``table`` settings, else to
     :data:`DEFAULT_OBJECTIVE` / ``colorimetric``. ``cache`` overrides the folder (default:
     :func:`cache_dir`). ``progress(fraction)`` is called during a build only (a table loaded
     from the cache reports nothing: the caller would otherwise say "building").
+    ``notify(message)``: before a build whose kernels numba has not cached
+    (:func:`kernels_estimate`), "compiling the colour kernels: first run after an install or
+    upgrade, about 16 s; cached after", then "compiling the colour kernels: 12 s" every
+    ``core.progress.HEARTBEAT_S`` seconds while numba compiles
+    (:func:`..core.kernel_cache.while_compiling`); nothing when they are cached.
     """
     objective, intent = resolve_choice(profile, objective, intent)
     path = tables_path(profile, objective, size, intent, cache)
@@ -327,7 +350,13 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
     if found is not None:
         found.load_seconds = time.perf_counter() - t0
         return found
-    tables = build_tables(profile, objective, size, progress, intent)
+    compiling: AbstractContextManager = nullcontext()
+    est = kernels_estimate() if notify is not None else None
+    if est is not None:
+        notify(compile_notice(COMPILE_WHAT, "first run after an install or upgrade", est))
+        compiling = while_compiling(lambda el: notify(f"{COMPILE_WHAT}: {el:.0f} s"))
+    with compiling:
+        tables = build_tables(profile, objective, size, progress, intent)
     try:
         _save(tables, path)
     except OSError:

@@ -368,13 +368,16 @@ class GamutPage(QWidget):
             from dreamprint_gui.gamut import get_tables
 
             return get_tables(profile, objective, size, intent=want,
-                              progress=lambda f: report(float(f)))
+                              progress=lambda f: report(float(f)), notify=report)
 
         if self._intent_task is not None:
             self._intent_task.cancel()
         self.chart_status.setText(f"loading the {want} colour tables ...")
         self.de_label.setText(f"dE2000 - (loading the {want} colour tables)")
         task = Task(job, "intent-tables")
+        # numba compiling the build's kernels (first use): its announcement and heartbeat
+        task.progress.connect(lambda m: self.chart_status.setText(m) if isinstance(m, str)
+                              else None)
         task.succeeded.connect(lambda t, w=want, p=profile: self._intent_ready(t, w, p))
         task.failed.connect(lambda msg, _tb: self._failed(f"The {want} colour tables", msg))
         self._intent_task = run_task(task)

@@ -140,7 +140,7 @@ class IccExportBox(QWidget):
             if tables is None:
                 kwargs = {} if req.size is None else {"size": req.size}
                 tables = get_tables(req.profile, intent=req.intent, progress=lambda f: report(
-                    f"building the colour tables: {int(100 * f)} %"), **kwargs)
+                    f"building the colour tables: {int(100 * f)} %"), notify=report, **kwargs)
             return export_icc(path, req.profile, tables, printer=req.printer, cgats=cgats,
                               progress=report)
 

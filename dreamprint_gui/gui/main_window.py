@@ -450,7 +450,7 @@ class MainWindow(QMainWindow):
             from dreamprint_gui.gamut import get_tables
 
             kwargs = {} if size is None else {"size": size}
-            return get_tables(eff, progress=lambda f: report(float(f)), **kwargs)
+            return get_tables(eff, progress=lambda f: report(float(f)), notify=report, **kwargs)
 
         task = Task(job, "tables")
         self._tables_for = profile.fingerprint()
@@ -463,7 +463,10 @@ class MainWindow(QMainWindow):
         self._say_waiting("loading the colour tables of the profile ...")
         self._tables_task = run_task(task)
 
-    def _tables_progress(self, fraction: float) -> None:
+    def _tables_progress(self, fraction: float | str) -> None:
+        if isinstance(fraction, str):  # numba compiling the build's kernels (first use)
+            self._say_waiting(fraction)
+            return
         self.progress.setValue(int(100 * fraction))
         if fraction < 1.0:  # reported during a build only (a cached table loads in one go)
             text = (f"building the colour tables of the profile: {100 * fraction:.0f}% "

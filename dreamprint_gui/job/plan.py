@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.kernel_cache import compile_notice
 from dreamprint_gui.core.print_size import check_print_size
 from dreamprint_gui.core.printer import EMPTY_LABEL, PrinterProfile, check_tray, load_printer
 from dreamprint_gui.core.profile import INKS, load_profile
@@ -162,7 +163,8 @@ def profile_for_printer(profile, printer=None):
 def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None,
                 notify: Callable[[str], None] | None = None):
     """The profile at the printer's layer and its tables; a first-use build is announced with
-    its estimated time and its progress through ``notify``."""
+    its estimated time and its progress through ``notify`` (and, first, numba compiling its
+    kernels, :func:`..gamut.tables.get_tables`)."""
 
     profile = load_profile(profile_spec).with_settings(layer_thickness_mm=layer_mm)
     progress = None
@@ -173,8 +175,9 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
                f"{layer_mm * 1000:g} um layers: first use, about {_seconds(est)}; cached after")
         progress = percent_reporter(lambda pct: notify(f"building colour tables: {pct:3d} %"))
 
+    # a build's kernels not yet compiled: announced and their compile's heartbeat relayed
     return profile, get_tables(profile, objective=objective, size=size, intent=intent,
-                               progress=progress)
+                               progress=progress, notify=notify)
 
 
 # A source file at least this large is announced before it is read (reading takes seconds).
@@ -345,7 +348,7 @@ def _compile_notices(source) -> list[str]:
     for what, sec in compile_estimate(reader).items():
         why = ("first use of this source kind" if what.endswith("reader's kernels")
                else "first run after an install or upgrade")
-        out.append(f"{what}: {why}, about {_seconds(sec)}; cached after")
+        out.append(compile_notice(what, why, sec))
     return out
 
 

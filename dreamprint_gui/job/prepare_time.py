@@ -38,11 +38,13 @@ from typing import Any
 
 import numpy as np
 
+from dreamprint_gui.core.kernel_cache import uncached
 from dreamprint_gui.core.printer import load_printer
 from dreamprint_gui.core.profile import load_profile
-from dreamprint_gui.gamut.tables import build_estimate
+from dreamprint_gui.gamut.tables import COMPILE_WHAT, build_estimate, kernels_estimate
 from dreamprint_gui.io.volumes.registry import FORMATS, sniff_format
 from dreamprint_gui.job.halftone import mask_build_estimate
+from dreamprint_gui.job.sample_label import layer_kernel
 
 __all__ = ["SOURCE_MODEL", "TABLE_LOAD_SECONDS", "SETUP_SECONDS", "COMPILE_SECONDS",
            "COMPILE_READER_SECONDS", "PrepareEstimate", "estimate_preparation", "source_bytes",
@@ -103,25 +105,15 @@ def source_bytes(spec: str) -> int:
 
 def compile_estimate(reader: ModuleType | None) -> dict[str, float]:
     """The kernels numba has not compiled yet and their estimated seconds: the conversion's
-    (its cache folder holds no ``layer_kernel`` index: the first run after an install or
-    upgrade) and the ``reader`` module's own when it has any (the first use of a source
-    kind). Judged from the cache's index files (``*.nbi``)."""
-    from numba.core.dispatcher import Dispatcher
-
-    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or "")
-    if not os.environ.get("NUMBA_CACHE_DIR"):
-        return {}
+    (``layer_kernel``'s: the first run after an install or upgrade) and the ``reader``
+    module's own when it has any (the first use of a source kind), by
+    :func:`..core.kernel_cache.uncached` (the cache's index files, ``*.nbi``)."""
     out = {}
-    if not any(folder.glob("*/layer_kernel.*.nbi")):
+    if uncached(layer_kernel):
         out["compiling the conversion kernels"] = COMPILE_SECONDS
-    if reader is not None:
-        # the modules of the cached kernels the reader holds (its own, or imported ones)
-        homes = {v.py_func.__module__.rsplit(".", 1)[-1] for v in vars(reader).values()
-                 if isinstance(v, Dispatcher)
-                 and type(getattr(v, "_cache", None)).__name__ != "NullCache"}
-        if any(not any(folder.glob(f"*/{home}.*.nbi")) for home in homes):
-            name = reader.__name__.rsplit(".", 1)[-1]
-            out[f"compiling the {name} reader's kernels"] = COMPILE_READER_SECONDS
+    if reader is not None and uncached(reader):
+        name = reader.__name__.rsplit(".", 1)[-1]
+        out[f"compiling the {name} reader's kernels"] = COMPILE_READER_SECONDS
     return out
 
 
@@ -233,6 +225,8 @@ def estimate_preparation(settings: Any) -> PrepareEstimate:
         if mask is not None:
             builds["the blue-noise mask"] = mask
     builds.update(compile_estimate(_reader_module(str(s.source))))
+    if cold is not None and (colour := kernels_estimate()) is not None:
+        builds[COMPILE_WHAT] = colour          # the table build's kernels, first
     size = source_bytes(str(s.source))
     text = "" if str(s.source) == "demo" else f" ({size / 1e6:.1f} MB)"
     slow = machine_slowdown()
