@@ -341,3 +341,29 @@ def test_the_first_preview_shows_progress(qtbot, gl_display, table_size, monkeyp
     assert any("preparing demo: about " in m and "(the source about " in m for m in seen)
     assert any("predicting the print" in m and "%" in m for m in seen), seen[-5:]
     w.close()
+
+
+def test_the_tables_compile_is_said_while_the_window_waits(qtbot, gl_display, table_size,
+                                                          monkeypatch):
+    """A first build's kernel compile (gamut.get_tables' notify: 'compiling the colour kernels
+    ...', issue 46) reaches the window's waiting line, as the build's percentage does."""
+    import dreamprint_gui.gamut as gamut
+
+    real = gamut.get_tables
+
+    def first_use(*a, notify=None, **k):          # stands in for a cold kernel cache
+        assert notify is not None                  # the window passes it
+        notify("compiling the colour kernels: first run after an install or upgrade, about "
+               "16 s; cached after")
+        return real(*a, notify=notify, **k)
+
+    monkeypatch.setattr(gamut, "get_tables", first_use)
+    w = MainWindow(table_size=table_size)
+    w.interactive = False
+    qtbot.addWidget(w)
+    said: list[str] = []
+    monkeypatch.setattr(w, "_say_waiting", said.append)
+    w.use_default_profile()
+    qtbot.waitUntil(lambda: w.tables is not None, timeout=120000)
+    assert any(m.startswith("compiling the colour kernels: first run") for m in said), said
+    w.close()
