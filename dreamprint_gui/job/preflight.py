@@ -138,6 +138,9 @@ class Preflight:
     # seconds the job already spent before this estimate: opening the source and loading or
     # building the colour tables (measured; 0 when the job reuses a prepared context)
     prepared_seconds: float = 0.0
+    # the CPU seconds of the process meanwhile (all threads): on a shared machine, what the
+    # idle machine's estimate is compared with (benchmarks/bench_preflight.py)
+    prepared_cpu_seconds: float = 0.0
     # what preparing was estimated to take before it started (.prepare_time.PrepareEstimate's
     # to_json; None when the job reuses a prepared context, or for a context about to be made)
     prepare_estimate: dict | None = None
@@ -216,6 +219,7 @@ class Preflight:
             "max_unclamped_density_scale": self.max_unclamped_density_scale,
             "intent": self.intent,
             "prepared_seconds": self.prepared_seconds,
+            "prepared_cpu_seconds": self.prepared_cpu_seconds,
             "prepare_estimate": self.prepare_estimate,
         }
 

@@ -13,9 +13,11 @@ states it beside the conversion's own estimate. The model, written once here:
   compiled kernels cached (``benchmarks/bench_preflight.py --samples`` prints the estimate
   against the actual per kind, cold and warm).
 * **The machine's present speed**: every part is an idle machine's time times
-  :func:`machine_slowdown` (wall / CPU time of a 30 ms fixed workload timed as the estimate
-  is made): on a shared machine a job's steps get the same share of a core as it does (the
-  conversion's own estimate times the job's slabs, so it sees the load itself).
+  :func:`machine_slowdown` (a 0.1 s fixed workload timed as the estimate is made: the share of
+  a core it gets, wall / CPU time, times how much more CPU time it needs than on the idle
+  model machine): on a shared machine a job's steps get the same share of a core as it does,
+  and its CPU seconds do as little work (the conversion's own estimate times the job's slabs,
+  so it sees the load itself).
 * **Colour tables**: cached for this profile, printer layer, objective, intent and size:
   :data:`TABLE_LOAD_SECONDS` (the cache is opened lazily); not cached: a first build,
   :func:`..gamut.tables.build_estimate`.
@@ -47,6 +49,7 @@ from dreamprint_gui.job.halftone import mask_build_estimate
 from dreamprint_gui.job.sample_label import layer_kernel
 
 __all__ = ["SOURCE_MODEL", "TABLE_LOAD_SECONDS", "SETUP_SECONDS", "COMPILE_SECONDS",
+           "PROBE_SORT_CPU_S",
            "COMPILE_READER_SECONDS", "PrepareEstimate", "estimate_preparation", "source_bytes",
            "source_seconds",
            "compile_estimate", "machine_slowdown", "opening_notice"]
@@ -177,17 +180,31 @@ def _reader_module(spec: str) -> ModuleType | None:
 
 
 _PROBE = np.random.default_rng(0).random(50_000)
+# CPU seconds of one sort of _PROBE on the development machine at its quickest (the model's
+# machine): the least of 36 windows of 0.1 s, 0.200 ms, at load 5.9-6.1 (2026-12-02; most
+# 0.20-0.23 ms there, 0.27-0.33 ms at load 7.6: a CPU second does less work when the other
+# helpers keep both cores busy)
+PROBE_SORT_CPU_S = 2.0e-4
 
 
-def machine_slowdown(cpu_seconds: float = 0.03) -> float:
-    """How much slower than on an idle machine one thread runs now: wall / CPU time of a fixed
-    workload of about ``cpu_seconds`` (sorting a 50,000-number array again and again), at
-    least 1. On a shared machine the job's steps get the same share of a core."""
+def machine_slowdown(cpu_seconds: float = 0.1) -> float:
+    """How much slower than the model's idle machine one thread runs now, from a fixed
+    workload of about ``cpu_seconds`` (sorting a 50,000-number array again and again): the
+    share of a core it gets (wall / CPU time; on a shared machine the job's steps get the same
+    share) times how much longer each sort takes in CPU time than :data:`PROBE_SORT_CPU_S`
+    (each at least 1). Measured on the 2-core machine under the other helpers' load: 30 ms of
+    probe read 2.86-8.11 against a following 0.5 CPU s's 3.0-3.5, 100 ms 3.11-3.37; the share
+    alone missed the slower CPU seconds (jobs prepared 1.4-2.2 x the CPU seconds the idle
+    estimate holds at load 7-8)."""
     t0, c0 = time.perf_counter(), time.thread_time()
+    n = 0
     while time.thread_time() - c0 < cpu_seconds:
         np.sort(_PROBE)
+        n += 1
     wall, cpu = time.perf_counter() - t0, time.thread_time() - c0
-    return max(1.0, wall / cpu) if cpu > 0 else 1.0
+    if cpu <= 0:
+        return 1.0
+    return max(1.0, wall / cpu) * max(1.0, cpu / n / PROBE_SORT_CPU_S)
 
 
 def opening_notice(spec: str, at_least_s: float = 2.0) -> str | None:

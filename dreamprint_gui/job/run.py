@@ -323,6 +323,7 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
         yield ConvertProgress("preparing", 0, 0, 0, 0, 0.0, None,
                               cluster_line(client, settings.scheduler))
     prep_est = None
+    started_cpu = time.process_time()
     if context is not None:
         ctx = context
     else:
@@ -353,6 +354,7 @@ def _convert(settings: ConvertSettings, cancel: threading.Event | None,
         t_pf = time.perf_counter() - t0
         if context is None:
             pf.prepared_seconds = t0 - started
+            pf.prepared_cpu_seconds = time.process_time() - started_cpu
             pf.prepare_estimate = prep_est.to_json()
     elif preflight is not False and preflight is not None:
         pf = preflight

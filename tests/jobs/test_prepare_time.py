@@ -5,7 +5,9 @@ the CLI says it before the work and the pre-flight states it beside the conversi
 from __future__ import annotations
 
 import json
+import time
 
+import numpy as np
 import pytest
 
 from dreamprint_gui.cli import main
@@ -144,3 +146,19 @@ def test_inspect_says_a_slow_opening_before_it(monkeypatch, capsys):
     monkeypatch.setattr(prepare_time, "machine_slowdown", lambda *a: 1.0)
     assert main(["inspect", "demo", "--json"]) == 0
     assert capsys.readouterr().err == ""        # quick: nothing said
+
+
+def test_the_slowdown_counts_slower_cpu_seconds(monkeypatch):
+    """The probe's CPU time per sort against the model machine's (PROBE_SORT_CPU_S): a machine
+    whose CPU second sorts a tenth as much is 10 x slower whatever its share of a core; one as
+    quick or quicker counts as the model's (the share alone)."""
+    monkeypatch.setattr(prepare_time, "PROBE_SORT_CPU_S", 1.0)          # far quicker: share
+    share = prepare_time.machine_slowdown(0.05)
+    assert 1.0 <= share < 50
+    c0, n = time.thread_time(), 0
+    while time.thread_time() - c0 < 0.05:
+        np.sort(prepare_time._PROBE)
+        n += 1
+    per_sort = (time.thread_time() - c0) / n
+    monkeypatch.setattr(prepare_time, "PROBE_SORT_CPU_S", per_sort / 10)
+    assert prepare_time.machine_slowdown(0.05) > 4.0     # ~10 x, less the sorts' own spread
