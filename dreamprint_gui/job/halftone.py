@@ -224,8 +224,11 @@ def _generate_mask(shape_zyx: tuple[int, int, int],
 
 
 # Wall seconds of a mask build (void and cluster, O(N^2), the same N for every voxel) on the
-# 2-core development machine (benchmarks/bench_preflight.py prints it against the actual).
-MASK_BUILD_SECONDS = 15.0
+# 2-core development machine, its kernel compiled (a first run's compile is the conversion
+# kernels' notice): bench_preflight.py --samples --modes cold, 2026-12-02, the builds beyond
+# set-up in an idle machine's seconds (divided by the slowdown probe, load 5-8): 1.5, 2.3 and
+# 5.5 s (metaimage, vox, demo); 15 s until then, which counted a compile
+MASK_BUILD_SECONDS = 3.0
 
 
 def _mask_path(voxel_mm: tuple[float, float, float], shape: tuple[int, int, int]) -> Path:
