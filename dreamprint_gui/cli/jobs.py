@@ -17,7 +17,8 @@ from dreamprint_gui.cli.options import (
     size_options,
 )
 from dreamprint_gui.cli.output import emit_json
-from dreamprint_gui.cli.progress import fmt_time, step_progress
+from dreamprint_gui.cli.progress import step_progress
+from dreamprint_gui.core.durations import clock_text
 from dreamprint_gui.core.errors import DreamPrintError
 
 
@@ -169,7 +170,7 @@ def convert(source, output, profile, printer, height_mm, size_mm, density_scale,
 def _compensating_line(p) -> None:
     """``--compensate``: the optimiser's iterations (``p.inner``) on stderr."""
     if p.inner.stage == "iteration":
-        click.echo(f"[compensate] {p.inner.message}  elapsed {fmt_time(p.elapsed_s)}", err=True)
+        click.echo(f"[compensate] {p.inner.message}  elapsed {clock_text(p.elapsed_s)}", err=True)
     elif p.inner.stage == "done":
         click.echo(f"[compensate] wrote {p.inner.message}", err=True)
 
@@ -184,7 +185,7 @@ def _compensation_line(comp: dict) -> str:
         line += (f"; training dE2000 mean {b['mean_de2000']:.2f} -> {a['mean_de2000']:.2f}, "
                  f"coverage error {b['coverage_error']:+.3f} -> {a['coverage_error']:+.3f}")
     if isinstance(comp.get("optimise_seconds"), int | float):
-        line += f" (optimised in {fmt_time(comp['optimise_seconds'])})"
+        line += f" (optimised in {clock_text(comp['optimise_seconds'])})"
     return line
 
 
@@ -204,7 +205,7 @@ class _Progress:
         self.first = 0
 
     def _info(self, _item=None) -> str:
-        return f"{self.rate / 1e6:.1f} Mvox/s, {fmt_time(self.eta)} left"
+        return f"{self.rate / 1e6:.1f} Mvox/s, {clock_text(self.eta)} left"
 
     def update(self, p) -> None:
         if self.quiet:

@@ -1,27 +1,17 @@
-"""Progress and time on the command line's stderr: :func:`fmt_time` (``m:ss`` / ``h:mm:ss``),
+"""Progress on the command line's stderr (durations in words by :mod:`..core.durations`):
 :func:`progress_bar` (a colour table build's progress, every 10 % or 2 s) and
 :func:`step_progress` (the steps of the slow commands) and :func:`notice` (a first-use build's
 announcement and heartbeat, e.g. ``gamut.get_tables(notify=notice)``)."""
 
 from __future__ import annotations
 
-import math
-
 import click
 
 from dreamprint_gui.core import progress as _core
+from dreamprint_gui.core.durations import seconds_text
 from dreamprint_gui.core.progress import percent_reporter
 
-__all__ = ["fmt_time", "progress_bar", "step_progress", "notice"]
-
-
-def fmt_time(s: float | None) -> str:
-    if s is None or not math.isfinite(s):
-        return "--:--"
-    s = int(round(s))
-    if s >= 3600:
-        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
-    return f"{s // 60}:{s % 60:02d}"
+__all__ = ["progress_bar", "step_progress", "notice"]
 
 
 def progress_bar(what: str = ""):
@@ -54,7 +44,7 @@ def step_progress(label: str, quiet: bool = False):
             if now - last[0] >= _core.HEARTBEAT_S:
                 last[0] = now
                 steps = f"{done}/{total}, " if total > 1 else ""
-                click.echo(f"{label}: {steps}{detail} ({now - t0[0]:.0f} s)", err=True)
+                click.echo(f"{label}: {steps}{detail} ({seconds_text(now - t0[0])})", err=True)
             return
         last[0] = now
         if done == 0:
@@ -63,8 +53,8 @@ def step_progress(label: str, quiet: bool = False):
             return
         el = now - t0[0]
         left = el / done * (total - done) if done else float("nan")
-        tail = f", about {left:.0f} s left" if done < total else ", done"
-        click.echo(f"{label}: {done}/{total} ({el:.0f} s{tail})", err=True)
+        tail = f", about {seconds_text(left)} left" if done < total else ", done"
+        click.echo(f"{label}: {done}/{total} ({seconds_text(el)}{tail})", err=True)
 
     return report
 

@@ -18,8 +18,8 @@ from dreamprint_gui.cli.options import (
     size_options,
 )
 from dreamprint_gui.cli.output import emit_json
-from dreamprint_gui.cli.progress import fmt_time
 from dreamprint_gui.core import progress as core_progress
+from dreamprint_gui.core.durations import clock_text
 from dreamprint_gui.core.errors import DreamPrintError
 
 # Fixed choices (tests/cli check them against the engine's METHODS and HALFTONE_METHODS; the
@@ -60,7 +60,7 @@ def _drive(gen, prefix: str = "", quiet: bool = False):
             if p.stage in ("done", "preparing") or quiet:  # a bad input stays one line
                 continue
             if p.stage == "iteration":
-                click.echo(f"{prefix}{p.message}  elapsed {fmt_time(p.elapsed_s)}", err=True)
+                click.echo(f"{prefix}{p.message}  elapsed {clock_text(p.elapsed_s)}", err=True)
                 continue
             # a log (no terminal) gets the bar's line every HEARTBEAT_S while a stage runs
             if tty or now - last_line >= core_progress.HEARTBEAT_S or p.done == p.total:
@@ -68,7 +68,7 @@ def _drive(gen, prefix: str = "", quiet: bool = False):
                 frac = p.done / p.total if p.total else 0.0
                 bar = "#" * int(frac * 30) + "-" * (30 - int(frac * 30))
                 line = (f"{prefix}{_STAGES.get(p.stage, p.stage):22s} [{bar}] {p.done}/{p.total}"
-                        f"  elapsed {fmt_time(p.elapsed_s)}")
+                        f"  elapsed {clock_text(p.elapsed_s)}")
                 click.echo(("\r" + line) if tty else line, err=True, nl=not tty)
     except JobCancelled:
         raise DreamPrintError("cancelled; nothing was written") from None

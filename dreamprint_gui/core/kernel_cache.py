@@ -19,6 +19,7 @@ from pathlib import Path
 from types import ModuleType
 
 from dreamprint_gui.core import progress as core_progress
+from dreamprint_gui.core.durations import about_text
 
 __all__ = ["uncached", "compile_notice", "while_compiling"]
 
@@ -44,8 +45,7 @@ def uncached(module: ModuleType) -> bool:
 def compile_notice(what: str, why: str, seconds: float) -> str:
     """``compiling the colour kernels: first run after an install or upgrade, about 16 s;
     cached after``: the line said before a first-use compile."""
-    about = f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
-    return f"{what}: {why}, about {about}; cached after"
+    return f"{what}: {why}, {about_text(seconds)}; cached after"
 
 
 @contextmanager

@@ -11,6 +11,8 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
+from dreamprint_gui.core.durations import about_text, seconds_text
+
 __all__ = ["HEARTBEAT_S", "percent_reporter", "every_heartbeat", "heartbeat", "eta_text"]
 
 # a step under way says how it goes at most this often, and at least this often when its work
@@ -81,8 +83,8 @@ def eta_text(elapsed_s: float, expected_s: float | None) -> str:
     """``"12 s"``, or ``"12 s, about 8 s left"`` when the step is expected to take
     ``expected_s`` seconds in all (e.g. the mean of the passes before it, scaled by their
     samples); ``"12 s, any moment now"`` once that is passed."""
+    el = seconds_text(elapsed_s)
     if expected_s is None or not expected_s > 0:
-        return f"{elapsed_s:.0f} s"
+        return el
     left = expected_s - elapsed_s
-    return (f"{elapsed_s:.0f} s, about {left:.0f} s left" if left >= 0.5
-            else f"{elapsed_s:.0f} s, any moment now")
+    return f"{el}, {about_text(left)} left" if left >= 1 else f"{el}, any moment now"

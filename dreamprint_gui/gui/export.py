@@ -46,12 +46,12 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from dreamprint_gui.core.durations import clock_words
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gui.export_data import (
     SCHEDULERS,
     check_scheduler_address,
     convert_settings,
-    format_duration,
     manifest_summary,
     preflight_html,
     printer_file_name,
@@ -530,15 +530,15 @@ class ExportDialog(QDialog):
                     if p.stage == "converting" and getattr(c, "layers_total", 0)
                     else f"{'compensating appearance' if p.stage == 'compensating' else p.stage}"
                          f"{': ' + p.message if p.message else ''}")
-            self.remaining.setText(f"{what}; elapsed {format_duration(p.elapsed_s)}; "
-                                   f"remaining {format_duration(p.eta_s)}")
+            self.remaining.setText(f"{what}; elapsed {clock_words(p.elapsed_s)}; "
+                                   f"remaining {clock_words(p.eta_s)}")
             return
         if p.layers_total:
             self.progress.setValue(int(1000 * p.layers_done / p.layers_total))
         if p.stage == "converting" and p.layers_total:
             self.remaining.setText(
                 f"layer {p.layers_done} of {p.layers_total}; elapsed "
-                f"{format_duration(p.elapsed_s)}; remaining {format_duration(p.eta_s)}")
+                f"{clock_words(p.elapsed_s)}; remaining {clock_words(p.eta_s)}")
         else:
             self.remaining.setText(p.message or p.stage)
 

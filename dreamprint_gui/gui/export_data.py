@@ -7,21 +7,21 @@ same object ``dreamprint convert`` builds; the Preview's too), :func:`same_job` 
 of one is the pre-flight of the other), :data:`SCHEDULERS` and :func:`check_scheduler_address`
 (where the slabs run: this computer's threads or processes, or a ``dask.distributed`` cluster
 by address), :func:`manifest_summary`, :func:`compensation_row`, :func:`time_text`,
-:func:`format_duration` (the finished job's summary as HTML), :func:`preflight_html` and
+:func:`preflight_html` and
 :func:`printer_file_name`.
 """
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
+from dreamprint_gui.core.durations import measured_text
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gui.names import background_name, gui_wording, printer_name
 
 __all__ = ["SCHEDULERS", "check_scheduler_address", "convert_settings", "same_job",
-           "format_duration", "time_text", "manifest_summary", "compensation_row",
+           "time_text", "manifest_summary", "compensation_row",
            "preflight_html", "printer_file_name"]
 
 
@@ -97,15 +97,6 @@ def same_job(a, b) -> bool:
     return replace(a, **where) == replace(b, **where)
 
 
-def format_duration(seconds: float | None) -> str:
-    if seconds is None or not math.isfinite(seconds):
-        return "estimating ..."
-    seconds = max(0, int(round(seconds)))
-    h, rem = divmod(seconds, 3600)
-    m, s = divmod(rem, 60)
-    return f"{h} h {m:02d} min" if h else (f"{m} min {s:02d} s" if m else f"{s} s")
-
-
 def _manifest_printer_name(printer: dict) -> str:
     from dreamprint_gui.core.printer import PRINTER_NAMES
 
@@ -117,19 +108,13 @@ def _num(v, fmt: str = ",.0f") -> str:
     return format(v, fmt) if isinstance(v, int | float) else str(v)
 
 
-def _seconds(x: float) -> str:
-    """A measured duration: tenths of a second below a minute (a small job's "0 s" says
-    nothing), else minutes and seconds."""
-    return f"{x:.1f} s" if x < 59.95 else format_duration(x)
-
-
 def time_text(timings: dict, elapsed_s: float | None = None) -> str:
     """The job's time as measured: ``elapsed_s`` (the dialog's clock, from Export to the
     finished job) when given, else the manifest's total; then where it went."""
     total = timings.get("total")
-    head = (f"{_seconds(elapsed_s)} from Export to the finished job" if elapsed_s is not None
-            else (f"{_seconds(total)}" if isinstance(total, int | float) else "-"))
-    parts = [f"{what} {_seconds(timings[key])}" for key, what in (
+    head = (f"{measured_text(elapsed_s)} from Export to the finished job" if elapsed_s is not None
+            else (f"{measured_text(total)}" if isinstance(total, int | float) else "-"))
+    parts = [f"{what} {measured_text(timings[key])}" for key, what in (
         ("prepare", "preparing"), ("preflight", "of which pre-flight"),
         ("convert", "converting")) if isinstance(timings.get(key), int | float)
         and (key != "preflight" or timings[key] >= 0.05)]
@@ -231,7 +216,7 @@ def compensation_row(comp: dict | None) -> str:
             f"{a['mean_de2000']:.2f}, coverage error {b['coverage_error']:+.3f} -> "
             f"{a['coverage_error']:+.3f}" if "mean_de2000" in b and "mean_de2000" in a else "")
     sec = comp.get("optimise_seconds")
-    took = f"; optimised in {_seconds(sec)}" if isinstance(sec, int | float) else ""
+    took = f"; optimised in {measured_text(sec)}" if isinstance(sec, int | float) else ""
     return (f"<tr><td><b>Compensation</b></td><td>{escape(Path(comp['path']).name)}"
             f"{figs}{took}</td></tr>")
 

@@ -36,6 +36,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from dreamprint_gui.core.durations import clock_words
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
 __all__ = ["ProofPage", "to_pixmap", "ScaledImage", "ColourBar", "compensation_text"]
@@ -347,14 +348,11 @@ class ProofPage(QWidget):
             self.task.cancel()
 
     def _on_progress(self, p) -> None:
-        from dreamprint_gui.gui.export_data import format_duration
-
         if hasattr(p, "fraction"):  # a compensation: one bar over all its phases
             self.progress.setRange(0, 1000)
             self.progress.setValue(round(1000 * p.fraction))
-            left = "estimating ..." if p.eta_s is None else format_duration(p.eta_s)
             self.status.setText(f"{p.stage}: {p.message}\nelapsed "
-                                f"{format_duration(p.elapsed_s)}; time left {left}")
+                                f"{clock_words(p.elapsed_s)}; time left {clock_words(p.eta_s)}")
             return
         if p.total:
             self.progress.setRange(0, p.total)

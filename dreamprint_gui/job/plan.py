@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from dreamprint_gui.core.durations import about_text
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.kernel_cache import compile_notice
 from dreamprint_gui.core.print_size import check_print_size
@@ -172,7 +173,7 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
     if est is not None:
         obj, how = resolve_choice(profile, objective, intent)
         notify(f"building colour tables ({obj}, {how}, {size}^3) for this profile and "
-               f"{layer_mm * 1000:g} um layers: first use, about {_seconds(est)}; cached after")
+               f"{layer_mm * 1000:g} um layers: first use, {about_text(est)}; cached after")
         progress = percent_reporter(lambda pct: notify(f"building colour tables: {pct:3d} %"))
 
     # a build's kernels not yet compiled: announced and their compile's heartbeat relayed
@@ -183,9 +184,6 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
 # A source file at least this large is announced before it is read (reading takes seconds).
 OPENING_NOTICE_BYTES = 50_000_000
 
-
-def _seconds(s: float) -> str:
-    return f"{s:.0f} s" if s < 90 else f"{s / 60:.1f} min"
 
 
 @dataclass
@@ -396,7 +394,7 @@ def prepare_job(settings: ConvertSettings,
         if est is not None:
             vx, vy, vz = (1000 * v for v in printer.voxel_mm)
             notify(f"building the blue-noise mask for {vx:g} x {vy:g} x {vz:g} um voxels: "
-                   f"first use, about {_seconds(est)}; cached after")
+                   f"first use, {about_text(est)}; cached after")
     ht = _job_halftoner(s, printer, thr)
     oriented = source
     source, content = apply_content(source, s.content, thr)

@@ -58,6 +58,7 @@ from typing import Any
 
 import numpy as np
 
+from dreamprint_gui.core.durations import about_text, seconds_text
 from dreamprint_gui.core.files import cache_folder
 from dreamprint_gui.core.profile import INKS, load_profile
 from dreamprint_gui.core.threads import DaemonCall
@@ -162,16 +163,16 @@ class Preflight:
         before it started (:mod:`.prepare_time`) and, once done, as it took."""
         est = (self.prepare_estimate or {}).get("seconds", 0.0)
         if max(est, self.prepared_seconds) < 1:
-            return _about_seconds(self.seconds)
+            return about_text(self.seconds)
         what = "the source, the colour tables, first-use builds"
         if not est:
-            how = f"preparing took {_human_seconds(self.prepared_seconds)}: {what}"
+            how = f"preparing took {seconds_text(self.prepared_seconds)}: {what}"
         else:
-            how = f"preparing estimated {_human_seconds(est)} before it started: {what}"
+            how = f"preparing estimated {seconds_text(est)} before it started: {what}"
             if self.prepared_seconds > 0:
-                how += f"; it took {_human_seconds(self.prepared_seconds)}"
-        return (f"{_about_seconds(self.seconds)} to convert, about "
-                f"{_human_seconds(self.seconds + (est or self.prepared_seconds))} in all "
+                how += f"; it took {seconds_text(self.prepared_seconds)}"
+        return (f"{about_text(self.seconds)} to convert, "
+                f"{about_text(self.seconds + (est or self.prepared_seconds))} in all "
                 f"({how})")
 
     def summary_lines(self) -> list[str]:
@@ -187,7 +188,7 @@ class Preflight:
             *_placement_lines(self.placement),
             f"materials (estimated from {self.sampled_voxels:,} voxels): {fr}",
             f"disk: about {_human_bytes(self.disk_bytes)}; conversion: "
-            f"{_about_seconds(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
+            f"{about_text(self.seconds)} at {self.rate_voxels_per_s / 1e6:.1f} Mvox/s "
             f"({self.rate_source})",
         ]
         if max(self.prepared_seconds, (self.prepare_estimate or {}).get("seconds", 0)) >= 1:
@@ -231,18 +232,6 @@ def _human_bytes(n: float) -> str:
         n /= 1000
     return f"{n:.1f} TB"  # pragma: no cover
 
-
-def _about_seconds(s: float) -> str:
-    """``"about 7 s"``, ``"about 2.5 min"``, or ``"under 1 s"`` (never "about under 1 s")."""
-    return "under 1 s" if s < 1 else f"about {_human_seconds(s)}"
-
-
-def _human_seconds(s: float) -> str:
-    if s < 60:
-        return f"{s:.0f} s" if s >= 1 else "under 1 s"
-    if s < 3600:
-        return f"{s / 60:.1f} min"
-    return f"{s / 3600:.1f} h"
 
 
 # ----------------------------------------------------------------------------- rate

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from dreamprint_gui.core.durations import about_text
 from dreamprint_gui.core.kernel_cache import uncached
 from dreamprint_gui.core.printer import load_printer
 from dreamprint_gui.core.profile import load_profile
@@ -154,14 +155,14 @@ class PrepareEstimate:
 
     def describe(self) -> str:
         """One line: the whole estimate, then its parts."""
-        parts = [f"the source{self.source_text} about {_secs(self.source_s)}"]
+        parts = [f"the source{self.source_text} {about_text(self.source_s)}"]
         if self.slowdown >= 1.5:
             parts.append(f"the machine {self.slowdown:.1f} x slower than idle now")
         if self.tables_cold:
             parts.append(f"the colour tables: a first build for this profile, printer layer "
-                         f"and intent, about {_secs(self.tables_s)}")
-        parts += [f"{what}: first use, about {_secs(s)}" for what, s in self.builds.items()]
-        return f"preparing: about {_secs(self.total_s)} (" + "; ".join(parts) + ")"
+                         f"and intent, {about_text(self.tables_s)}")
+        parts += [f"{what}: first use, {about_text(s)}" for what, s in self.builds.items()]
+        return f"preparing: {about_text(self.total_s)} (" + "; ".join(parts) + ")"
 
     def to_json(self) -> dict[str, Any]:
         return {"seconds": self.total_s, "source_s": self.source_s, "tables_s": self.tables_s,
@@ -222,11 +223,8 @@ def opening_notice(spec: str, at_least_s: float = 2.0) -> str | None:
     name = os.path.basename(str(spec).rstrip("/")) or str(spec)
     size = source_bytes(str(spec))
     return (f"opening {name}{f' ({size / 1e6:.0f} MB)' if size else ''}: about "
-            f"{_secs(est * slow)} (reading it, its up axis, its occupied bounds) ...")
+            f"{about_text(est * slow)} (reading it, its up axis, its occupied bounds) ...")
 
-
-def _secs(s: float) -> str:
-    return f"{s:.0f} s" if s >= 10 else (f"{s:.1f} s" if s < 90 else f"{s / 60:.1f} min")
 
 
 def estimate_preparation(settings: Any) -> PrepareEstimate:

@@ -312,10 +312,3 @@ def test_solid_forced_on_a_dense_fog_takes_the_solid_rule():
     occupied = d[0] >= ctx.halftoner.threshold
     assert occupied.any() and np.array_equal(lab != CL, occupied)
 
-
-def test_time_estimate_wording():
-    from dreamprint_gui.job.preflight import _about_seconds
-
-    assert _about_seconds(0.4) == "under 1 s"  # not "about under 1 s"
-    assert _about_seconds(12.2) == "about 12 s"
-    assert _about_seconds(150) == "about 2.5 min"

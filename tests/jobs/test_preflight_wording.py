@@ -62,7 +62,7 @@ def test_a_slow_preparation_is_in_the_time_said():
     pf = _pf(0.4)
     pf.prepared_seconds = 61.0
     line = pf.short_line()
-    assert "under 1 s to convert, about 1.0 min in all (preparing took 1.0 min" in line  # GUI
+    assert "under 1 s to convert, about 61 s in all (preparing took 61 s" in line  # GUI
     assert any(x.startswith("time: under 1 s to convert") for x in pf.summary_lines())
     assert pf.to_json()["prepared_seconds"] == 61.0
     pf.prepared_seconds = 0.2                      # a prepared context: as before

@@ -115,7 +115,7 @@ def test_the_pre_flight_states_the_estimate_made_before_and_what_it_took():
     pf.prepare_estimate = {"seconds": 65.0}
     pf.prepared_seconds = 58.0
     line = pf.short_line()
-    assert ("under 1 s to convert, about 1.1 min in all (preparing estimated 1.1 min before it "
+    assert ("under 1 s to convert, about 65 s in all (preparing estimated 65 s before it "
             "started: the source, the colour tables, first-use builds; it took 58 s)") in line
     assert pf.to_json()["prepare_estimate"] == {"seconds": 65.0}
 
