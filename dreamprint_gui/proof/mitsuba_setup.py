@@ -11,10 +11,11 @@ scalar`` (or ``prefer="scalar"``) takes ``scalar_rgb``: one path at a time per t
 Dr.Jit's pool (all cores), the same integrator and scene (the same images in expectation, other
 random streams), no LLVM and nothing compiled. Measured at the proof's settings (256 px, 64 spp,
 one view; ``benchmarks/bench_proof.py --variant``, ``docs/proof-measurements.md`` 2026-12-02)
-the scalar variant is not faster: 3-10 % more CPU seconds per view on the demo, the knight and
+the scalar variant is not faster: 4-42 % more CPU seconds per view on the demo, the knight and
 the smoke, although an LLVM wavefront waits for its longest lane; it is faster on small images
-(128 px: the wavefront's tail is a fixed cost per render), and it compiles nothing where the
-LLVM variant compiles a scene's kernels once (tens of seconds, then kept in ``~/.drjit``).
+(128 px, where the LLVM variant's cost per render that does not grow with the image weighs
+more), and it compiles nothing where the LLVM variant compiles a scene's kernels once (tens of
+seconds, then kept in ``~/.drjit``).
 Nothing in the product differentiates a render (compensation iterates proofs,
 ``proof/compensate.py``): the ``_ad_`` of ``llvm_ad_rgb`` is not what it is chosen for.
 
