@@ -6,7 +6,12 @@ after Mitsuba's JIT warm-up) and the proof's noise floor: the print rendered as 
 (two halves of the samples at seeds s, s + 1, ``print_render.render_print_halves``), mean and
 p95 per-pixel dE2000 and S-CIELAB dE2000 (at the proof's viewing distance) of the floor from
 the halves (``compare.noise_floor_from_halves``), and the wall and CPU seconds (all threads,
-Mitsuba's too) of the view's print. Targets: floor <= 0.5 mean S-CIELAB dE2000, <= 60 s per
+Mitsuba's too) of the view's print; the warm-up (1 spp) and each row say how many Dr.Jit kernels
+they compiled and the seconds of LLVM that took (the LLVM variant compiles a scene's kernels
+once, kept in ``~/.drjit``; a row's seconds are the render's own when it compiled none).
+``--variant llvm|scalar``: Mitsuba's ``llvm_ad_rgb`` or ``scalar_rgb`` (default: the proof's,
+``proof.mitsuba_setup``); a process renders with one (Mitsuba's variant is process-wide), so
+compare them in separate runs, interleaved. Targets: floor <= 0.5 mean S-CIELAB dE2000, <= 60 s per
 view on CPU. ``--floor-check``: also the floor as defined until 2026-12 (two full renders at
 other seeds, figures between them), beside it. ``--reference-spp N``: the view rendered once at
 N spp; each row prints its figures against the source (dE2000 and S-CIELAB overall, inside the
@@ -27,7 +32,7 @@ voxels): prints dE2000 between the two print images (mean, 95th percentile over 
                                      [--thick-spp 0[,48]] [--samplers independent[,...]]
     python benchmarks/bench_proof.py --height-mm 20 --resolution 128 --spp 64 --floor-check \
         --reference-spp 1024 [--bands 12,6]
-    python benchmarks/bench_proof.py --variant scalar   # Mitsuba's scalar_rgb (no libLLVM)
+    python benchmarks/bench_proof.py --variant llvm|scalar   # llvm_ad_rgb or scalar_rgb
     python benchmarks/bench_proof.py --block-error
 """
 
@@ -68,6 +73,12 @@ def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None
     T = optical_depth(st, lo, medium.cell_mm, view, res, sub=3)
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
     extra = [(0, r) for r in thick_tiles(T @ y_w, THICK_T)]
+    import drjit as dr
+
+    # Dr.Jit's kernel history (LLVM variant; empty with the scalar one): the LLVM compile of
+    # kernels not found in its caches, apart from the render's own seconds
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()
     t0, c0 = time.perf_counter(), time.process_time()
     per_pass = pass_spp(bands.xyz_weights, spp) if faint else spp
     if halves:
@@ -84,6 +95,11 @@ def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None
     # CPU seconds of all this process's threads (Mitsuba's too): on a shared machine the wall
     # time says more about the other processes than about the render
     info["cpu_s"] = time.process_time() - c0
+    hist = [h for h in dr.kernel_history() if h["type"] == dr.KernelType.JIT]
+    fresh = [h for h in hist if not h.get("cache_hit")]
+    info["compiled"] = len(fresh)
+    info["compile_s"] = sum(h.get("backend_time", 0.0) for h in fresh) / 1e3
+    dr.set_flag(dr.JitFlag.KernelHistory, False)
     return [print_xyz(bands, im[0], T, False) for im in imgs], 1.0 - T @ y_w, t, info
 
 
@@ -120,7 +136,11 @@ def speed(args) -> None:
     from dreamprint_gui.proof.spectral import spectral_bands
 
     _, _, note = load_mitsuba(args.variant)
-    print(note)
+    import drjit as dr
+
+    # both variants render on Dr.Jit's thread pool (nanothread): the scalar one a path per
+    # thread, the LLVM one a wavefront per thread; CPU s / wall s of a row says how busy it is
+    print(f"{note}; Dr.Jit thread pool {dr.thread_count()} threads")
     spps = [int(x) for x in (args.spp or str(DEFAULT_SPP)).split(",")]
     samplers = (args.samplers or DEFAULT_SAMPLER).split(",")
     rrs = [None] if args.rr_depths is None else [int(x) for x in args.rr_depths.split(",")]
@@ -168,8 +188,13 @@ def speed(args) -> None:
           f"{'s/view':>7s} {'CPU s':>6s} "
           f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}  spp per pass")
     for sampler, rr, brick in [(a, b, c) for a in samplers for b in rrs for c in bricks]:
-        # JIT warm-up
-        _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr, brick=brick)
+        # JIT warm-up (the LLVM variant traces and compiles, or finds in ~/.drjit, the
+        # passes' kernels here; the rows below run them)
+        _, _, t_w, info_w = _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr,
+                                       brick=brick)
+        print(f"warm-up (1 spp): {t_w:.1f} s, {info_w['cpu_s']:.1f} CPU s, "
+              f"{info_w['compiled']} kernels compiled ({info_w['compile_s']:.1f} s of LLVM)",
+              flush=True)
         for spp, thick, faint, nb in [(a, b, c, d) for a in spps for b in thicks for c in faints
                                       for d in bands_n]:
             bnd = bands if nb == bands.n else spectral_bands(lab.profile, nb)
@@ -180,7 +205,9 @@ def speed(args) -> None:
                   f"{thick:5d} {t:7.1f} "
                   f"{info['cpu_s']:6.1f} {f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
-                  f"{f['p95_scielab_de2000']:6.2f}  {info['pass_spp']}", flush=True)
+                  f"{f['p95_scielab_de2000']:6.2f}  {info['pass_spp']}"
+                  f"  ({info['compiled']} kernels compiled, {info['compile_s']:.1f} s)",
+                  flush=True)
             if args.floor_check:
                 (x, y), _, t_old, info_old = _print_xyz(med, bnd, view, args.resolution, spp,
                                                         (5, 6), sampler, rr, thick, faint,
@@ -262,9 +289,9 @@ def main() -> None:
     ap.add_argument("--reference-spp", type=int, default=0, help="render the view once at "
                     "this spp (every pass) and print each row's figures minus its (bias)")
     ap.add_argument("--block-error", action="store_true")
-    ap.add_argument("--variant", choices=("llvm", "scalar"), default="llvm",
-                    help="Mitsuba's LLVM variant (default, when a libLLVM is found) or the "
-                         "scalar fallback")
+    ap.add_argument("--variant", choices=("llvm", "scalar"), default=None,
+                    help="Mitsuba's variant: scalar_rgb or llvm_ad_rgb (default: the proof's, "
+                         "proof.mitsuba_setup)")
     args = ap.parse_args()
     if args.block_error:
         block_error(args)

@@ -201,7 +201,7 @@ def proof(source, output, method, overwrite, compensation, chart, reflectance, g
                               "RECIPES.csv")
     _check_source(source)
     report = _drive(run_proof(_settings(source, output, method, kw, overwrite, compensation)))
-    if report["renderer"]["variant"].startswith("scalar"):
+    if report["renderer"].get("fallback"):     # LLVM asked for, not found: what to install
         click.echo(f"dreamprint: note: {report['renderer']['note']}", err=True)
     if kw["as_json"]:
         emit_json(report)

@@ -63,7 +63,7 @@ from dreamprint_gui.proof.km_to_rte import describe_conversion
 from dreamprint_gui.proof.medium import medium_coefficients
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics, resolve_optics
-from dreamprint_gui.proof.print_render import INTEGRATOR
+from dreamprint_gui.proof.print_render import BLOCK_PX, INTEGRATOR
 from dreamprint_gui.proof.spectral import SpectralBands, spectral_bands
 from dreamprint_gui.proof.staging import staged_folder
 
@@ -158,7 +158,8 @@ def chart_scene(mi, sigma_t3: NDArray, albedo3: NDArray, optics: Optics, geometr
     phase = ({"type": "isotropic"} if optics.g == 0 else {"type": "hg", "g": float(optics.g)})
     d: dict = {"type": "scene",
                "integrator": {"type": INTEGRATOR, "max_depth": int(max_depth),
-                              "rr_depth": int(max_depth), "hide_emitters": False},
+                              "rr_depth": int(max_depth), "hide_emitters": False,
+                              "block_size": BLOCK_PX},
                "backing": {"type": "rectangle",
                            "to_world": T().translate([-t - 1e-3, 0.0, 0.0])
                            @ T().rotate([0, 1, 0], 90) @ T().scale([2 * w, 2 * h, 1.0]),

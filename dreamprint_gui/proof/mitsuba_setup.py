@@ -1,14 +1,32 @@
-"""Load Mitsuba 3 with a CPU LLVM variant when the machine has a usable libLLVM.
+"""Load Mitsuba 3 with the variant the proof renders with: which one, and why.
 
-Defines :func:`load_mitsuba` (import ``mitsuba``, select a variant, say which and why) and
-:func:`find_libllvm` (which LLVM shared library Dr.Jit's LLVM backend is given).
+Defines :func:`load_mitsuba` (import ``mitsuba``, select a variant, say which and why),
+:func:`requested_variant` (the variant asked for: the caller's, else ``$DREAMPRINT_MITSUBA``,
+else :data:`DEFAULT_VARIANT`) and :func:`find_libllvm` (which LLVM shared library Dr.Jit's
+LLVM backend is given). Every Mitsuba render of the product (print proof, chart proof, thick
+patches) asks this module, so one place decides.
 
-Mitsuba's LLVM variants (JIT-compiled, vectorised, multi-core) load LLVM's C API from a shared
-library at run time; Dr.Jit takes its path from ``DRJIT_LIBLLVM_PATH``, set here before the
-import when the operator has not set it. Measured (``../shared/MEASURED.md``, Dr.Jit 1.5):
-LLVM 17, 18, 19 and 23 render; Debian 12's LLVM 14 and 15 abort the process while compiling
-("LLVM ERROR: Cannot select ... fminimum"), so a library whose version is known to be older
-than :data:`MIN_LLVM` is never given to Dr.Jit. Looked for, in this order:
+The default is ``llvm_ad_rgb`` (JIT-compiled, vectorised, multi-core); ``DREAMPRINT_MITSUBA=
+scalar`` (or ``prefer="scalar"``) takes ``scalar_rgb``: one path at a time per thread of
+Dr.Jit's pool (all cores), the same integrator and scene (the same images in expectation, other
+random streams), no LLVM and nothing compiled. Measured at the proof's settings (256 px, 64 spp,
+one view; ``benchmarks/bench_proof.py --variant``, ``docs/proof-measurements.md`` 2026-12-02)
+the scalar variant is not faster: 4-42 % more CPU seconds per view on the demo, the knight and
+the smoke, although an LLVM wavefront waits for its longest lane; it is faster on small images
+(128 px, where the LLVM variant's cost per render that does not grow with the image weighs
+more), and it compiles nothing where the LLVM variant compiles a scene's kernels once (tens of
+seconds, then kept in ``~/.drjit``).
+Two closed-form tests of the print render miss by about 2 % (low) with the scalar variant at
+their seed (``docs/proof-measurements.md``): not settled, so it stays the fallback.
+Nothing in the product differentiates a render (compensation iterates proofs,
+``proof/compensate.py``): the ``_ad_`` of ``llvm_ad_rgb`` is not what it is chosen for.
+
+The LLVM variant loads LLVM's C API from a shared library at run time; Dr.Jit
+takes its path from ``DRJIT_LIBLLVM_PATH``, set here before the import when the operator has
+not set it. Measured (``../shared/MEASURED.md``, Dr.Jit 1.5): LLVM 17, 18, 19 and 23 render;
+Debian 12's LLVM 14 and 15 abort the process while compiling ("LLVM ERROR: Cannot select ...
+fminimum"), so a library whose version is known to be older than :data:`MIN_LLVM` is never
+given to Dr.Jit. Looked for, in this order:
 
 1. ``DRJIT_LIBLLVM_PATH`` (the operator's choice, used as given);
 2. the desktop bundle's own copy (under ``llvm/`` in a PyInstaller bundle, ``packaging/``);
@@ -19,9 +37,7 @@ than :data:`MIN_LLVM` is never given to Dr.Jit. Looked for, in this order:
    macOS (``/opt/homebrew/opt/llvm``, ``/usr/local/opt/llvm``, ``llvm@N``) and MacPorts, the
    LLVM Windows installer's ``LLVM-C.dll`` (``%ProgramFiles%\\LLVM\\bin``, or on ``PATH``).
 
-Without one the scalar variant renders the same images (same integrator, same scene) one path
-at a time per thread; on the proof's scenes it was measured no slower (``benchmarks/bench_proof.py
---variant scalar``, README "Print proof"); the note says which variant and what to install.
+Without one the scalar variant renders, and the note says why and what to install.
 """
 
 from __future__ import annotations
@@ -36,7 +52,9 @@ from typing import Any
 
 from dreamprint_gui.core.errors import DreamPrintError
 
-__all__ = ["load_mitsuba", "find_libllvm", "libllvm_candidates", "MIN_LLVM", "INSTALL_HINT"]
+__all__ = ["load_mitsuba", "requested_variant", "find_libllvm", "libllvm_candidates",
+           "MIN_LLVM", "INSTALL_HINT", "DEFAULT_VARIANT", "VARIANTS", "VARIANT_ENV",
+           "fell_back"]
 
 MIN_LLVM = 17
 """Oldest LLVM major version measured to render with Dr.Jit 1.5 (17.0.6; 14 and 15 abort)."""
@@ -44,6 +62,12 @@ MIN_LLVM = 17
 INSTALL_HINT = ("pip install karellen-llvm-core on Linux x86_64, Debian's libllvm19, "
                 "`brew install llvm` on macOS, the LLVM Windows installer (LLVM-C.dll) on "
                 "Windows, or set DRJIT_LIBLLVM_PATH")
+VARIANTS = {"scalar": "scalar_rgb", "llvm": "llvm_ad_rgb"}
+"""The variants the proof renders with, by the name an operator gives."""
+DEFAULT_VARIANT = "llvm"
+"""The proof's variant unless asked otherwise: at the proof's settings the scalar one is not
+faster (module docstring; ``docs/proof-measurements.md``)."""
+VARIANT_ENV = "DREAMPRINT_MITSUBA"
 _WHEEL = "karellen-llvm-core"
 _LOCK = threading.Lock()
 _STATE: dict[str, Any] = {}
@@ -147,18 +171,30 @@ def find_libllvm() -> tuple[str | None, str]:
     return None, "no LLVM library found"
 
 
-def load_mitsuba(prefer: str = "llvm") -> tuple[Any, str, str]:
+def requested_variant(prefer: str | None = None) -> str:
+    """The variant asked for, ``"scalar"`` or ``"llvm"`` (:data:`VARIANTS`): ``prefer``, else
+    ``$DREAMPRINT_MITSUBA``, else :data:`DEFAULT_VARIANT`. One line naming the setting when it
+    is neither."""
+    name = prefer if prefer is not None else os.environ.get(VARIANT_ENV) or DEFAULT_VARIANT
+    if name not in VARIANTS:
+        where = "the variant" if prefer is not None else VARIANT_ENV
+        raise DreamPrintError(f"{where} must be {' or '.join(VARIANTS)}, not '{name}'")
+    return name
+
+
+def load_mitsuba(prefer: str | None = None) -> tuple[Any, str, str]:
     """Import Mitsuba and select a variant; returns ``(mitsuba module, variant, note)``.
 
-    ``prefer="llvm"`` takes ``llvm_ad_rgb`` when :func:`find_libllvm` finds a library and
-    Dr.Jit's LLVM backend starts with it (else ``scalar_rgb``, with a note saying why and what
-    to install); ``prefer="scalar"`` always takes ``scalar_rgb``. The first variant chosen in a
-    process stays (Mitsuba's variant is process-wide).
+    The variant asked for (:func:`requested_variant`): ``"scalar"`` takes ``scalar_rgb``;
+    ``"llvm"`` takes ``llvm_ad_rgb`` when :func:`find_libllvm` finds a library and Dr.Jit's
+    LLVM backend starts with it, else ``scalar_rgb`` with a note saying why and what to
+    install. The first variant chosen in a process stays (Mitsuba's variant is process-wide).
     """
     with _LOCK:
         if "mi" in _STATE:
             return _STATE["mi"], _STATE["variant"], _STATE["note"]
-        llvm, why = find_libllvm() if prefer == "llvm" else (None, "")
+        asked = requested_variant(prefer)
+        llvm, why = find_libllvm() if asked == "llvm" else (None, "")
         try:
             import drjit as dr
             import mitsuba as mi
@@ -174,11 +210,18 @@ def load_mitsuba(prefer: str = "llvm") -> tuple[Any, str, str]:
                 note = (f"Mitsuba {mi.__version__} scalar_rgb: Dr.Jit could not start its LLVM "
                         f"backend with {llvm} ({why}). For the LLVM variant install: "
                         f"{INSTALL_HINT}")
-        elif prefer == "llvm":
+        elif asked == "llvm":
             note = (f"Mitsuba {mi.__version__} scalar_rgb: {why}. For the LLVM variant "
                     f"install: {INSTALL_HINT}")
         else:
-            note = f"Mitsuba {mi.__version__} scalar_rgb"
+            note = (f"Mitsuba {mi.__version__} scalar_rgb ({VARIANT_ENV}=scalar), "
+                    f"{dr.thread_count()} threads")
         mi.set_variant(variant)
-        _STATE.update(mi=mi, variant=variant, note=note)
+        _STATE.update(mi=mi, variant=variant, note=note, requested=VARIANTS[asked])
         return mi, variant, note
+
+
+def fell_back() -> bool:
+    """Whether the loaded variant is not the one asked for (LLVM asked, no usable libLLVM):
+    the note then says what to install."""
+    return "mi" in _STATE and _STATE["variant"] != _STATE["requested"]

@@ -46,10 +46,10 @@ from numpy.typing import NDArray
 from dreamprint_gui.job.plan import JobCancelled
 from dreamprint_gui.proof.bricks import optically_deep, partition, uniform
 from dreamprint_gui.proof.cameras import View
-from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
+from dreamprint_gui.proof.mitsuba_setup import fell_back, load_mitsuba
 from dreamprint_gui.proof.optics import Optics
 
-__all__ = ["render_print", "render_print_seeds", "render_print_halves", "half_spp",
+__all__ = ["render_print", "render_print_seeds", "render_print_halves", "half_spp", "BLOCK_PX",
            "hides_direct", "thick_tiles", "pass_spp", "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER",
            "SAMPLERS"]
 
@@ -64,6 +64,10 @@ DEFAULT_RR_DEPTH = 5          # Mitsuba's: Russian roulette from the 5th bounce 
 SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
 FAINT_PASS = 0.25     # a pass weighing less than this x the largest in colour gets spp / 4
 TILE_PX = 32
+# the scalar variant's image blocks (pixels a side), one thread each: fixed, so that a render
+# does not depend on the number of threads (Mitsuba's automatic size halves the blocks until
+# every thread has one, and each pixel's random stream is seeded from its block's index)
+BLOCK_PX = 16
 BRICK_GAP = 1.5e-4
 FLOOR_REFLECTANCE = 0.5
 
@@ -120,7 +124,8 @@ def scene_dict(mi, sigma_t3: NDArray, albedo3: NDArray, lo: NDArray, hi: NDArray
     d: dict = {"type": "scene",
                "integrator": {"type": INTEGRATOR, "max_depth": int(max_depth),
                               "rr_depth": int(DEFAULT_RR_DEPTH if rr_depth is None else rr_depth),
-                              "hide_emitters": hides_direct(floor, optics)},
+                              "hide_emitters": hides_direct(floor, optics),
+                              "block_size": BLOCK_PX},
                "environment": {"type": "constant", "radiance": {"type": "rgb",
                                                                 "value": [1.0, 1.0, 1.0]}}}
     # Bricks, each its own box and medium: delta tracking then steps by the brick's own
@@ -276,7 +281,7 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                 if progress is not None:
                     progress(done, total)
     info = {"renderer": "mitsuba", "version": mi.__version__, "variant": variant, "note": note,
-            "integrator": INTEGRATOR, "max_depth": int(max_depth),
+            "fallback": fell_back(), "integrator": INTEGRATOR, "max_depth": int(max_depth),
             "spp": max(pass_spp_), "pass_spp": pass_spp_,
             "sampler": sampler, "passes": passes,
             "extra_spp": int(extra_spp) if extra else 0,

@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 from dreamprint_gui.core.files import cache_folder
 from dreamprint_gui.proof.mitsuba_setup import load_mitsuba
 from dreamprint_gui.proof.optics import Optics
-from dreamprint_gui.proof.print_render import INTEGRATOR
+from dreamprint_gui.proof.print_render import BLOCK_PX, INTEGRATOR
 
 __all__ = ["ThickCurve", "thick_curve", "chandrasekhar_h", "closed_form_curve",
            "render_curve", "CURVE_ALBEDOS", "GEOMETRY_MU"]
@@ -159,7 +159,8 @@ def render_curve(optics: Optics, geometry: str, albedos: ArrayLike = CURVE_ALBED
         a3 = padded[3 * p:3 * p + 3]
         d: dict = {"type": "scene",
                    "integrator": {"type": INTEGRATOR, "max_depth": int(max_depth),
-                                  "rr_depth": int(max_depth), "hide_emitters": False},
+                                  "rr_depth": int(max_depth), "hide_emitters": False,
+                                  "block_size": BLOCK_PX},
                    "patch": {"type": "cube",
                              "to_world": T().translate([-THICK_MM / 2, 0.0, 0.0])
                              @ T().scale([THICK_MM / 2, WIDTH_MM / 2, WIDTH_MM / 2]),

@@ -1,7 +1,7 @@
 """A clean install: ``pip install`` of the package into a fresh virtual environment that cannot
 see the system's site-packages, then ``dreamprint inspect`` on one file of every volume format
 the README lists, a small ``convert`` and a small ``proof`` (Mitsuba's LLVM variant from pip's
-libLLVM where the platform has the wheel).
+libLLVM where the platform has the wheel, and its scalar variant).
 
 Marked ``clean_install`` (``pytest -m clean_install`` runs only these, ``-m "not
 clean_install"`` skips them). The package is installed from a copy of what a source
@@ -214,15 +214,23 @@ def test_convert_the_openvdb_sample(clean_env, tmp_path):
     _convert(clean_env, clean_env[2]["openvdb"], tmp_path)
 
 
-def test_proof_renders_from_pip_alone(clean_env, tmp_path):
-    """The print proof renders; where pip provides a libLLVM (Linux x86_64), with Mitsuba's
-    LLVM variant on it."""
-    r = _run(clean_env, "proof", clean_env[2]["vox"], "-o", tmp_path / "p", "--height-mm", "3",
-             "--views", "1", "--resolution", "24", "--spp", "2", "--json")
+@pytest.mark.parametrize("variant", ["", "scalar"])
+def test_proof_renders_from_pip_alone(clean_env, tmp_path, variant):
+    """The print proof renders; by default, where pip provides a libLLVM (Linux x86_64), with
+    Mitsuba's LLVM variant on it; asked for (DREAMPRINT_MITSUBA=scalar), with the scalar
+    one."""
+    exe, env, *_ = clean_env
+    env = {**env, "DREAMPRINT_MITSUBA": variant}       # "": the default
+    r = subprocess.run([str(exe), "proof", str(clean_env[2]["vox"]), "-o", str(tmp_path / "p"),
+                        "--height-mm", "3", "--views", "1", "--resolution", "24", "--spp", "2",
+                        "--json"], capture_output=True, text=True, env=env, cwd=clean_env[4],
+                       timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]
     proof = json.loads((tmp_path / "p" / "proof.json").read_text())
     renderer = proof["renderer"]
-    if sys.platform.startswith("linux") and platform.machine() == "x86_64":
+    if variant == "scalar":
+        assert renderer["variant"] == "scalar_rgb" and not renderer["fallback"], renderer
+    elif sys.platform.startswith("linux") and platform.machine() == "x86_64":
         assert renderer["variant"] == "llvm_ad_rgb", renderer
         assert "karellen-llvm-core wheel" in renderer["note"], renderer
 
