@@ -50,6 +50,7 @@ def test_the_source_is_estimated_from_its_kind_and_size(tmp_path):
 def test_cold_tables_are_a_first_build_warm_ones_a_load(tmp_path, monkeypatch):
     s = ConvertSettings(source="demo", height_mm=10.0, table_size=17)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))      # empty table and mask caches
+    monkeypatch.delenv("DREAMPRINT_CACHE", raising=False)     # (which it would replace)
     monkeypatch.setattr(prepare_time, "machine_slowdown", lambda: 1.0)    # an idle machine
     cold = estimate_preparation(s)
     printer = load_printer(None)

@@ -81,11 +81,21 @@ def _digests(job):
             for p in sorted((job / "slices").iterdir())}
 
 
-def _reference(folder, height):
-    out = folder / "SYNC"
-    assert main(["convert", "demo", "-o", str(out), "--height-mm", height, *JOB,
-                 "--scheduler", "sync", "-q"]) == 0
-    return _digests(out)
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The slices' digests of a ``--scheduler sync`` conversion at a height: one conversion per
+    height in this module (the tests at the same height compare with the same slices)."""
+    made = {}
+
+    def digests(height):
+        if height not in made:
+            out = tmp_path_factory.mktemp("sync") / "SYNC"
+            assert main(["convert", "demo", "-o", str(out), "--height-mm", height, *JOB,
+                         "--scheduler", "sync", "-q"]) == 0
+            made[height] = _digests(out)
+        return made[height]
+
+    return digests
 
 
 def _convert(out, height, address, *extra):
@@ -108,10 +118,10 @@ def _wait_done(proc, folder, share, nz, timeout=180):
     raise AssertionError("the job did not progress in time")
 
 
-def test_a_worker_killed_mid_job_gives_the_slices_of_a_local_run(cluster, tmp_path):
+def test_a_worker_killed_mid_job_gives_the_slices_of_a_local_run(cluster, reference, tmp_path):
     height, nz = "8", 297
     c = cluster(2)
-    ref = _reference(tmp_path, height)
+    ref = reference(height)
     out = tmp_path / "JOB"
     proc = _convert(out, height, c.address)
     done = _wait_done(proc, tmp_path, 0.3, nz)
@@ -135,10 +145,10 @@ def test_a_worker_killed_mid_job_gives_the_slices_of_a_local_run(cluster, tmp_pa
     assert json.loads((out / "manifest.json").read_text())["execution"]["workers"] == 2
 
 
-def test_a_lost_scheduler_stops_in_one_line_and_resume_finishes(cluster, tmp_path):
+def test_a_lost_scheduler_stops_in_one_line_and_resume_finishes(cluster, reference, tmp_path):
     height, nz = "8", 297
     c = cluster(1)
-    ref = _reference(tmp_path, height)
+    ref = reference(height)
     out = tmp_path / "JOB"
     proc = _convert(out, height, c.address, "-q")
     _wait_done(proc, tmp_path, 0.2, nz)
@@ -180,12 +190,12 @@ def test_workers_that_cannot_do_the_job_are_refused_in_one_line(tmp_path, view, 
     assert "tcp://10.0.0.2:4000" in str(e.value) and "\n" not in str(e.value)
 
 
-def test_the_client_killed_then_resume_on_the_cluster(cluster, tmp_path):
+def test_the_client_killed_then_resume_on_the_cluster(cluster, reference, tmp_path):
     """kill -9 of the converting client at half the job; the workers may still finish the
     slabs they were running; --resume against the same cluster gives the local slices."""
     height, nz = "6", 223
     c = cluster(2)
-    ref = _reference(tmp_path, height)
+    ref = reference(height)
     out = tmp_path / "JOB"
     proc = _convert(out, height, c.address, "-q")
     _wait_done(proc, tmp_path, 0.5, nz)

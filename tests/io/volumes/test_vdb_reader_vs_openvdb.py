@@ -172,16 +172,20 @@ def _mine(g: V.VdbGrid, bg):
         li, vi = np.nonzero(m)
         xyz = g.leaf_origins[li] + pos[vi]
         rows.append(np.concatenate([xyz, xyz, vals[li, vi]], 1))
-    tiles = [(np.asarray(o), V.UPPER, np.asarray(v, np.float64), a) for o, v, a in g.root_tiles]
-    for nodes, side, dim in ((g.upper, V.LOWER, 32), (g.lower, V.LEAF, 16)):
-        for nd in nodes:
-            for s in np.nonzero(~nd.child)[0]:
-                loc = np.array([s // (dim * dim), (s // dim) % dim, s % dim]) * side
-                tiles.append((np.asarray(nd.origin) + loc, side,
-                              nd.values[s].astype(np.float64), nd.active[s]))
-    for o, side, v, a in tiles:
+    for o, v, a in g.root_tiles:
+        v = np.asarray(v, np.float64)
         if a or np.any(v != bg):
-            (on if a else off).append(np.concatenate([o, o + side - 1, v])[None])
+            (on if a else off).append(np.concatenate([o, np.asarray(o) + V.UPPER - 1, v])[None])
+    for nodes, side, dim in ((g.upper, V.LOWER, 32), (g.lower, V.LEAF, 16)):
+        for nd in nodes:                         # the node's tiles: every slot without a child
+            s = np.nonzero(~nd.child)[0]
+            loc = np.stack([s // (dim * dim), (s // dim) % dim, s % dim], 1) * side
+            o = np.asarray(nd.origin) + loc
+            v = nd.values[s].astype(np.float64).reshape(s.size, nc)
+            a = np.asarray(nd.active[s], bool)
+            rows = np.concatenate([o, o + side - 1, v], 1)
+            on.append(rows[a])
+            off.append(rows[~a & np.any(v != bg, axis=1)])
     return [np.concatenate(r).reshape(-1, 6 + nc) if r else np.zeros((0, 6 + nc))
             for r in (on, off)]
 
