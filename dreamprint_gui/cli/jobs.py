@@ -18,6 +18,7 @@ from dreamprint_gui.cli.options import (
 )
 from dreamprint_gui.cli.output import emit_json
 from dreamprint_gui.cli.progress import step_progress
+from dreamprint_gui.core import progress as core_progress
 from dreamprint_gui.core.durations import clock_text
 from dreamprint_gui.core.errors import DreamPrintError
 
@@ -191,7 +192,8 @@ def _compensation_line(comp: dict) -> str:
 
 class _Progress:
     """The conversion's progress on stderr: a click progress bar on a terminal (layers, percent,
-    Mvox/s, time left), else a line every 10 s; it moves as each slab finishes."""
+    Mvox/s, time left), else a line once ``core.progress.HEARTBEAT_S`` passed since the last
+    (was 10 s); it moves as each slab finishes."""
 
     def __init__(self, tty: bool, quiet: bool) -> None:
         self.tty = tty
@@ -225,7 +227,8 @@ class _Progress:
             self.done = p.layers_done
             return
         now = time.monotonic()
-        if p.layers_done and (now - self.last > 10 or p.layers_done == p.layers_total):
+        if p.layers_done and (now - self.last >= core_progress.HEARTBEAT_S
+                              or p.layers_done == p.layers_total):
             self.last = now
             click.echo(f"converting: {p.layers_done}/{p.layers_total} layers "
                        f"({100 * p.layers_done / p.layers_total:.0f} %), {self._info()}",

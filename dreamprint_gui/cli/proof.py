@@ -29,7 +29,8 @@ HALFTONE_CHOICES = ("blue-noise", "random")
 BACKGROUND_CHOICES = ("clear", "empty")
 
 _STAGES = {"preparing": "preparing", "labels": "labels", "source": "source render",
-           "print": "print render (Mitsuba)", "compare": "comparing", "writing": "writing"}
+           "print": "print render (Mitsuba)", "compare": "comparing",
+           "gamut floor": "gamut floor", "writing": "writing"}
 
 
 def _drive(gen, prefix: str = "", quiet: bool = False):
@@ -43,21 +44,27 @@ def _drive(gen, prefix: str = "", quiet: bool = False):
     tty = sys.stderr.isatty()
     last_line = 0.0
     stage = None
+    stage_t0 = time.monotonic()
+    shown = False               # the stage's bar is on the terminal's current line
     try:
         while True:
             try:
                 p = next(gen)
             except StopIteration as stop:
-                if tty and stage is not None:
+                if tty and shown:
                     click.echo("", err=True)
                 return stop.value
             now = time.monotonic()
             if p.stage != stage:
-                if tty and stage is not None:
+                if tty and shown:
                     click.echo("", err=True)
-                stage = p.stage
+                stage, stage_t0, shown = p.stage, now, False
                 last_line = 0.0
-            if p.stage in ("done", "preparing") or quiet:  # a bad input stays one line
+            if p.stage == "done" or quiet:
+                continue
+            # preparing: nothing for its first HEARTBEAT_S, so that a bad input (refused while
+            # opening the source) stays one line; then its heartbeat like any stage's
+            if p.stage == "preparing" and now - stage_t0 < core_progress.HEARTBEAT_S:
                 continue
             if p.stage == "iteration":
                 click.echo(f"{prefix}{p.message}  elapsed {clock_text(p.elapsed_s)}", err=True)
@@ -70,6 +77,7 @@ def _drive(gen, prefix: str = "", quiet: bool = False):
                 line = (f"{prefix}{_STAGES.get(p.stage, p.stage):22s} [{bar}] {p.done}/{p.total}"
                         f"  elapsed {clock_text(p.elapsed_s)}")
                 click.echo(("\r" + line) if tty else line, err=True, nl=not tty)
+                shown = tty
     except JobCancelled:
         raise DreamPrintError("cancelled; nothing was written") from None
     finally:

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from dreamprint_gui.core import progress as core_progress
+from dreamprint_gui.core.durations import seconds_text
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.core.threads import DaemonCall
 from dreamprint_gui.job.cluster import (
@@ -228,19 +229,12 @@ def _manifest(ctx: JobContext, totals: dict, timings: dict, started: float) -> d
 def _prepare(settings: ConvertSettings, started: float
              ) -> Generator[ConvertProgress, None, JobContext]:
     """:func:`.plan.prepare_job` in a thread, its notices (first-use builds and their progress)
-    yielded as "preparing" progress while it runs; returns the context or raises its error."""
-    notices: queue.Queue = queue.Queue()
-
-    def work() -> JobContext:
-        try:
-            return prepare_job(settings, notify=notices.put)
-        finally:
-            notices.put(None)
-
-    call = DaemonCall(work, "dreamprint-prepare")
-    while (msg := notices.get()) is not None:
-        yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None, msg)
-    return call.result()
+    yielded as "preparing" progress as they come, and the last one again with the elapsed time
+    once ``core.progress.HEARTBEAT_S`` passed without a line (placing a slow source, loading
+    its tables: 16.6 s silent on the 40 mm demo at load 7); returns the context or raises its
+    error."""
+    return (yield from _relay(lambda notify: prepare_job(settings, notify=notify),
+                              "dreamprint-prepare", started, "preparing", every_notice=True))
 
 
 def _preflight(ctx: JobContext, seed: int, started: float
@@ -249,17 +243,27 @@ def _preflight(ctx: JobContext, seed: int, started: float
     notices) is yielded as "preparing" progress once ``core.progress.HEARTBEAT_S`` passed
     since the last line, with the pre-flight's elapsed time: a quick pre-flight says nothing
     more, a slow source's (a minute on a 7.6e8-voxel demo under load) a line every 2 s."""
+    return (yield from _relay(lambda notify: estimate(ctx, seed=seed, notify=notify),
+                              "dreamprint-preflight", started, "pre-flight",
+                              every_notice=False))
+
+
+def _relay(work, name: str, started: float, step: str, every_notice: bool
+           ) -> Generator[ConvertProgress, None, Any]:
+    """``work(notify)`` in a thread; its notices become "preparing" progress: each as it
+    comes (``every_notice``) or only once ``core.progress.HEARTBEAT_S`` passed since the last
+    line; and while none comes, the step under way (the last notice) with the time since this
+    began, every ``HEARTBEAT_S``. Returns what ``work`` returned or raises its error."""
     notices: queue.Queue = queue.Queue()
 
-    def work() -> Any:
+    def run() -> Any:
         try:
-            return estimate(ctx, seed=seed, notify=notices.put)
+            return work(notices.put)
         finally:
             notices.put(None)
 
-    call = DaemonCall(work, "dreamprint-preflight")
+    call = DaemonCall(run, name)
     t0 = last = time.monotonic()
-    step = "pre-flight"
     while True:
         try:
             msg = notices.get(timeout=0.25)
@@ -267,12 +271,17 @@ def _preflight(ctx: JobContext, seed: int, started: float
             msg = ""
         if msg is None:
             break
-        step = msg or step
         now = time.monotonic()
+        if msg and every_notice:
+            step, last = msg, now
+            yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None,
+                                  msg)
+            continue
+        step = msg or step
         if now - last >= core_progress.HEARTBEAT_S:
             last = now
             yield ConvertProgress("preparing", 0, 0, 0, 0, time.perf_counter() - started, None,
-                                  f"{step} ({now - t0:.0f} s)")
+                                  f"{step.removesuffix(' ...')} ({seconds_text(now - t0)})")
     return call.result()
 
 

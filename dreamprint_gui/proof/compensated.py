@@ -113,7 +113,8 @@ def _optimise_within(p: ProofProgress, state: dict) -> float:
 def _proof_within(p: ProofProgress) -> float:
     if p.stage == "print" and p.total:
         return 0.1 + 0.8 * p.done / p.total
-    return {"preparing": 0.0, "labels": 0.05, "source": 0.08, "compare": 0.95}.get(p.stage, 0.0)
+    return {"preparing": 0.0, "labels": 0.05, "source": 0.08, "compare": 0.95,
+            "gamut floor": 0.97, "writing": 0.99}.get(p.stage, 0.0)
 
 
 def run_compensated_conversion(settings: ConvertSettings, cancel: threading.Event | None = None,

@@ -133,7 +133,8 @@ class ProofSettings(HasSpec):
 
 @dataclass(frozen=True)
 class ProofProgress:
-    stage: str          # "preparing", "labels", "source", "print", "compare", "writing", "done"
+    stage: str          # "preparing", "labels", "source", "print", "compare", "gamut floor",
+    #                     "writing", "done"
     done: int
     total: int
     elapsed_s: float
@@ -205,16 +206,26 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         return cancel is not None and cancel.is_set()
 
     yield ProofProgress("preparing", 0, 1, el(), "opening the source, tables and renderer")
-    lab = _labels(s)
+    # every stage's work runs in a thread (in_thread) so that the generator still says how it
+    # goes every core.progress.HEARTBEAT_S seconds, and progress and cancel reach the caller
+    box: dict[str, Any] = {}
+    prog: dict[str, tuple[int, int]] = {"p": (0, 1)}
+
+    def work_prepare() -> None:
+        try:
+            box["m"] = _labels(s)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
+            box["e"] = exc
+
+    yield from in_thread(work_prepare, "preparing", prog, el, box, cancel)
+    lab = box.pop("m")
     bands = spectral_bands(lab.profile, s.bands)
     size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
     block = block_for_cell(lab.voxel_mm, size, s.max_cells)
     timings["prepare"] = el()
 
-    # labels -> block fractions; the generator is driven from here, the work in a thread so
-    # that progress and cancel reach the caller.
-    box: dict[str, Any] = {}
-    prog: dict[str, tuple[int, int]] = {"p": (0, 1)}
+    # labels -> block fractions
+    prog["p"] = (0, 1)
 
     def work_fractions() -> None:
         try:
@@ -226,7 +237,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
             box["e"] = exc
 
     yield from in_thread(work_fractions, "labels", prog, el, box, cancel)
-    medium = box["m"]
+    medium = box.pop("m")
     timings["labels"] = el() - sum(timings.values())
     lo, hi = medium.box_mm
     views = orbit_views(medium.print_size_mm, s.views)
@@ -234,39 +245,56 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     if optics.surface != "none" and s.background == "empty":
         raise DreamPrintError("--surface needs --background clear (the profile asks for a "
                               f"{optics.surface} surface; give --surface none)")
-    sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics)
 
     yield ProofProgress("source", 0, len(views), el(), "rendering the source")
     t1 = time.perf_counter()
     # the reference: the source as the job's rendering intent maps it (.reference)
     intent = job_intent(lab)
-    raw = sample_source(lab.source, lab.grid, medium.block_xyz, lab.density_scale,
-                        medium.cells_xyz, lo)
-    field = intent_reference(raw, intent, lab.profile)
     src_lin, src_alpha = [], []
     floor_rho = 0.5 if s.floor else None
-    hits = 0
-    for i, v in enumerate(views):
-        if is_cancelled():
-            raise JobCancelled("the proof was cancelled")
-        # the same field on the same camera renders the same image: kept on disk
-        rgb, a, hit = cached_render_source(field, v, s.resolution, floor_rho=floor_rho)
-        hits += hit
-        src_lin.append(rgb)
-        src_alpha.append(a)
-        yield ProofProgress("source", i + 1, len(views), el())
+    prog["p"] = (0, len(views))
+
+    def work_source() -> None:
+        try:
+            # the print's coefficients too: with the source's sampling, the silent part
+            # between the labels and the first view (measured 16.5 s on a cold cache)
+            box["k"] = medium_coefficients(medium.fractions, bands.K, bands.S, optics)
+            raw = sample_source(lab.source, lab.grid, medium.block_xyz, lab.density_scale,
+                                medium.cells_xyz, lo)
+            field = intent_reference(raw, intent, lab.profile)
+            hits = 0
+            for i, v in enumerate(views):
+                if is_cancelled():
+                    raise JobCancelled("the proof was cancelled")
+                # the same field on the same camera renders the same image: kept on disk
+                rgb, a, hit = cached_render_source(field, v, s.resolution, floor_rho=floor_rho)
+                hits += hit
+                src_lin.append(rgb)
+                src_alpha.append(a)
+                prog["p"] = (i + 1, len(views))
+            box["m"] = (raw, hits)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
+            box["e"] = exc
+
+    yield from in_thread(work_source, "source", prog, el, box, cancel)
+    sigma_t, albedo = box.pop("k")
+    raw, hits = box.pop("m")
     timings["source_render"] = time.perf_counter() - t1
 
     t2 = time.perf_counter()
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
-    direct_T = [optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
-                for v in views]
-    extra = [(i, r) for i, T in enumerate(direct_T) for r in thick_tiles(T @ y_w, THICK_T)]
+    direct_T: list[np.ndarray] = []
     box.clear()
     prog["p"] = (0, 1)
 
     def work_print() -> None:
         try:
+            # the direct transmittance and its thick tiles (measured 7.6 s before the first
+            # pass, silent when it ran in the generator)
+            direct_T.extend(optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
+                            for v in views)
+            extra = [(i, r) for i, T in enumerate(direct_T)
+                     for r in thick_tiles(T @ y_w, THICK_T)]
             # two halves of the samples at seeds s, s + 1: their mean is the print, their
             # difference the noise floor (with or without reporting it: the same image)
             box["m"] = render_print_halves(
@@ -318,8 +346,20 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     clear = clear_report(lab.profile, bounds, s.clear_low_bound)
     timings["clear_low_bound"] = time.perf_counter() - t5
     t4 = time.perf_counter()
-    floor_fig = gamut_floor(lab, raw, views, s.resolution, src_lin, src_alpha, obs, spd,
-                            floor_rho)
+    box.clear()
+    prog["p"] = (0, 1)
+
+    def work_floor() -> None:
+        try:
+            box["m"] = gamut_floor(lab, raw, views, s.resolution, src_lin, src_alpha, obs, spd,
+                                   floor_rho)
+            prog["p"] = (1, 1)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
+            box["e"] = exc
+
+    # the tables' prediction rendered (measured 49.8 s silent on a cold cache, load 7)
+    yield from in_thread(work_floor, "gamut floor", prog, el, box, cancel)
+    floor_fig = box.pop("m")
     timings["gamut_floor"] = time.perf_counter() - t4
     timings["total"] = el()
     report = {
@@ -545,10 +585,23 @@ def run_proof(s: ProofSettings, cancel: threading.Event | None = None
     result = yield from render_proof(s, cancel)
     if cancel is not None and cancel.is_set():
         raise JobCancelled("the proof was cancelled")
-    yield ProofProgress("writing", 0, 1, result["report"]["timings_s"]["total"],
-                        "writing images")
+    total = result["report"]["timings_s"]["total"]
+    yield ProofProgress("writing", 0, 1, total, "writing images")
+    t_w = time.perf_counter()
     with staged_folder(out, "proof") as tmp:
-        write_proof(result, tmp)
+        box: dict[str, Any] = {}
+        prog = {"p": (0, 1)}
+
+        def work_write() -> None:
+            try:
+                write_proof(result, tmp)
+                prog["p"] = (1, 1)
+            except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
+                box["e"] = exc
+
+        # the contact sheet and images (measured 14 s silent): a line every HEARTBEAT_S
+        yield from in_thread(work_write, "writing", prog,
+                             lambda: total + time.perf_counter() - t_w, box, cancel)
         if cancel is not None and cancel.is_set():
             raise JobCancelled("the proof was cancelled")
     yield ProofProgress("done", 1, 1, result["report"]["timings_s"]["total"], str(out))

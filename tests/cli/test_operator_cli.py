@@ -98,3 +98,22 @@ def test_evaluate_job_says_how_reading_the_slices_goes(tmp_path, capsys, monkeyp
     assert lines[0].endswith(": 0/1, started") and lines[-1].endswith(", done)")
     assert [ln.split(": ")[-1].split(" (")[0] for ln in lines[1:-1]] == [
         f"{z} of {nz} slices read" for z in range(1, nz)]
+
+
+def test_a_logged_conversion_says_how_it_goes_every_heartbeat(monkeypatch, capsys):
+    """No terminal (a log, a pipe): a converting line once HEARTBEAT_S passed since the last
+    (was every 10 s: 10 s gaps on the 40 mm demo and smoke, issue 46's walk), and the last."""
+    import time
+    from types import SimpleNamespace as NS
+
+    from dreamprint_gui.cli.jobs import _Progress
+    from dreamprint_gui.core import progress
+
+    monkeypatch.setattr(progress, "HEARTBEAT_S", 0.05)
+    bar = _Progress(tty=False, quiet=False)
+    for k in range(1, 5):
+        time.sleep(0.06)
+        bar.update(NS(layers_done=10 * k, layers_total=40, voxels_done=1000 * k,
+                      elapsed_s=0.06 * k, eta_s=0.06 * (4 - k)))
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("converting:")]
+    assert [ln.split()[1] for ln in lines] == ["10/40", "20/40", "30/40", "40/40"]
