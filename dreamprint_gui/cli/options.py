@@ -111,11 +111,17 @@ def print_spec(source: str, kw: dict, compensation: str | None = None):
     option the command does not take keeps the spec's default)."""
     from dataclasses import fields
 
-    from dreamprint_gui.io.volumes.registry import parse_reader_options
+    from dreamprint_gui.io.volumes.registry import default_height_mm, parse_reader_options
     from dreamprint_gui.job.spec import PrintSpec
 
     up, rotate = placement_values(kw.get("up", "auto"), kw.get("rotate", "0"))
     spec = {f.name: kw[f.name] for f in fields(PrintSpec) if f.name in kw}
+    design = default_height_mm(source)
+    if design is not None and kw.get("height_mm") is None and kw.get("size_mm") is None \
+            and "height_mm" in kw:
+        spec["height_mm"] = design
+        click.echo(f"{source}: printed at its design height, {design:g} mm (--height-mm or "
+                   "--size-mm changes it)", err=True)
     spec.update(source=source, up=up, rotate=rotate, size_mm=parse_size(kw.get("size_mm")),
                 source_options=tuple(sorted(parse_reader_options(
                     kw.get("source_options", ())).items())),

@@ -60,6 +60,7 @@ from dreamprint_gui.gui.export_data import (
 from dreamprint_gui.gui.names import BACKGROUNDS, CONTENTS, printer_name
 from dreamprint_gui.gui.settings import AppSettings
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
+from dreamprint_gui.io.volumes.grids.demo import DESIGN_HEIGHT_MM  # the default print height
 
 __all__ = ["ExportDialog", "export_job", "placement_combos"]
 
@@ -156,7 +157,7 @@ class ExportDialog(QDialog):
         group.addButton(self.by_height)
         group.addButton(self.by_box)
         self.height = QDoubleSpinBox(suffix=" mm", decimals=2, minimum=0.1, maximum=500,
-                                     value=float(pp.get("height_mm", 40.0)))
+                                     value=float(pp.get("height_mm", DESIGN_HEIGHT_MM)))
         self.box = [QDoubleSpinBox(suffix=" mm", decimals=1, minimum=0.1, maximum=500, value=v)
                     for v in (100.0, 100.0, 100.0)]
         self.by_height.setChecked(True)

@@ -36,6 +36,7 @@ from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.gui.names import gui_wording
 from dreamprint_gui.gui.settings import AppSettings
 from dreamprint_gui.gui.workers import Task, run_task
+from dreamprint_gui.io.volumes.grids.demo import DESIGN_HEIGHT_MM  # the default print height
 
 __all__ = ["MainWindow", "classify_path", "VOLUME_FILTER", "PROFILE_FILTER"]
 
@@ -127,7 +128,7 @@ class MainWindow(QMainWindow):
         if self.gamut is not None:
             self.gamut.problem.connect(self.note_problem)
         self.preview.set_params(
-            height_mm=self.settings.get("preview/height_mm", 40.0, float),
+            height_mm=self.settings.get("preview/height_mm", DESIGN_HEIGHT_MM, float),
             density_scale=self.settings.get("preview/density_scale", 1.0, float),
             background=self.settings.get("preview/background", "clear", str),
             fit=self.settings.get("preview/fit", "occupied", str))

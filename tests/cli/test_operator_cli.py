@@ -117,3 +117,17 @@ def test_a_logged_conversion_says_how_it_goes_every_heartbeat(monkeypatch, capsy
                       elapsed_s=0.06 * k, eta_s=0.06 * (4 - k)))
     lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("converting:")]
     assert [ln.split()[1] for ln in lines] == ["10/40", "20/40", "30/40", "40/40"]
+
+
+def test_the_demo_prints_at_its_design_height_when_no_size_is_given(capsys):
+    """`dreamprint convert demo -o J` needs no size: the demo's densities are made for its design
+    height, which it then prints at (said on stderr); a file still has to be given one."""
+    from dreamprint_gui.cli.options import print_spec
+    from dreamprint_gui.io.volumes.grids.demo import DESIGN_HEIGHT_MM
+
+    spec = print_spec("demo", {"height_mm": None, "size_mm": None})
+    assert spec.height_mm == DESIGN_HEIGHT_MM and spec.size_mm is None
+    assert f"design height, {DESIGN_HEIGHT_MM:g} mm" in capsys.readouterr().err
+    assert print_spec("demo", {"height_mm": 12.0, "size_mm": None}).height_mm == 12.0
+    assert print_spec("demo", {"height_mm": None, "size_mm": "10,10,10"}).height_mm is None
+    assert print_spec("knight.vox", {"height_mm": None, "size_mm": None}).height_mm is None

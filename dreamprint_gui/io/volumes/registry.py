@@ -13,13 +13,13 @@ from pathlib import Path
 
 from dreamprint_gui.core.errors import DreamPrintError
 from dreamprint_gui.io.volumes.base import VolumeSource
-from dreamprint_gui.io.volumes.grids.demo import DemoCloud
+from dreamprint_gui.io.volumes.grids.demo import DESIGN_HEIGHT_MM, DemoCloud
 from dreamprint_gui.io.volumes.ingp.exports import is_ingp_volume_dir, is_ingp_volume_name
 from dreamprint_gui.io.volumes.splats.formats import is_sog
 
 __all__ = ["FORMATS", "sniff_format", "inspect_file", "inspect_source", "open_source",
            "reader_options", "OPTION_ALIASES", "parse_reader_options", "format_reader_options",
-           "interpretation_choices"]
+           "interpretation_choices", "default_height_mm"]
 
 
 # format key -> (module, under io.volumes, extensions)
@@ -82,6 +82,12 @@ def inspect_file(path_or_name: str | os.PathLike) -> dict:
     """The ``inspect`` description of a file, without choosing grids or options (a file whose
     density grid is empty or missing can still be inspected)."""
     return inspect_source(path_or_name)[0]
+
+
+def default_height_mm(path_or_name: str | os.PathLike) -> float | None:
+    """The height a source prints at when no size is given: the built-in demo's design height
+    (its densities are set for it), else None (a file's size must be asked for)."""
+    return DESIGN_HEIGHT_MM if str(path_or_name) == "demo" else None
 
 
 def inspect_source(path_or_name: str | os.PathLike) -> tuple[dict, VolumeSource | None]:
