@@ -223,11 +223,12 @@ def compensation_row(comp: dict | None) -> str:
 
 def preflight_html(pf) -> str:
     """The engine's pre-flight summary (``Preflight.summary_lines``) as the dialog shows it:
-    the figures, then the warnings in bold, with command-line options named as the controls."""
+    the figures, then the warnings in bold, command-line options named as the controls in
+    both."""
     from html import escape
 
     lines = [ln for ln in pf.summary_lines() if not ln.startswith("warning: ")]
-    body = "".join(f"<li>{escape(ln)}</li>" for ln in lines)
+    body = "".join(f"<li>{escape(gui_wording(ln))}</li>" for ln in lines)
     warn = "".join(f"<li><b>{escape(gui_wording(w.message))}</b></li>" for w in pf.warnings)
     return (f"<ul style='margin-left: -20px'>{body}</ul>"
             + (f"<p><b>Warnings</b></p><ul style='margin-left: -20px'>{warn}</ul>" if warn

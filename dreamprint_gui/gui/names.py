@@ -76,6 +76,11 @@ FITS = (
 )
 
 
+# ``--fit MODE`` named as the Size of control's choice (before the bare ``--fit``: the longest
+# flag first)
+_OPTIONS = {**{f"--fit {key}": f"Size of: {name}" for key, name, _ in FITS}, **_OPTIONS}
+
+
 def background_name(background_id: str) -> str:
     for key, name, _ in BACKGROUNDS:
         if key == background_id:

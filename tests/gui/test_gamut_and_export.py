@@ -340,6 +340,7 @@ def test_export_shows_the_preflight_before_export(qtbot, tmp_path, table_size):
         assert text.count(gui_wording(w.message)) == 1, w.message
         assert "--" not in gui_wording(w.message)
     assert ("No warnings" in text) == (not pf.warnings)
+    assert "--" not in text  # the figures' lines too ("the Up control changes it")
     # the same figures as the engine gives for these settings (what `convert` prints)
     ref = preflight(dlg.settings_for_job())
     assert ref.grid_shape == pf.grid_shape and ref.fractions == pf.fractions
