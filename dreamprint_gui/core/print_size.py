@@ -12,7 +12,11 @@ from typing import Any
 
 from dreamprint_gui.core.errors import DreamPrintError
 
-__all__ = ["check_print_size"]
+__all__ = ["check_print_size", "DEMO_HEIGHT_MM"]
+
+DEMO_HEIGHT_MM = 40.0
+"""The built-in demo's design height (its densities are set for it): what it prints at when no
+size is given, and the GUI's default height."""
 
 
 def check_print_size(height_mm: float | None, size_mm: Any, required: bool = True) -> None:

@@ -48,6 +48,7 @@ from PySide6.QtWidgets import (
 
 from dreamprint_gui.core.durations import clock_words
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.print_size import DEMO_HEIGHT_MM  # the default height
 from dreamprint_gui.gui.export_data import (
     SCHEDULERS,
     check_scheduler_address,
@@ -60,7 +61,6 @@ from dreamprint_gui.gui.export_data import (
 from dreamprint_gui.gui.names import BACKGROUNDS, CONTENTS, printer_name
 from dreamprint_gui.gui.settings import AppSettings
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
-from dreamprint_gui.io.volumes.grids.demo import DESIGN_HEIGHT_MM  # the default print height
 
 __all__ = ["ExportDialog", "export_job", "placement_combos"]
 
@@ -157,7 +157,7 @@ class ExportDialog(QDialog):
         group.addButton(self.by_height)
         group.addButton(self.by_box)
         self.height = QDoubleSpinBox(suffix=" mm", decimals=2, minimum=0.1, maximum=500,
-                                     value=float(pp.get("height_mm", DESIGN_HEIGHT_MM)))
+                                     value=float(pp.get("height_mm", DEMO_HEIGHT_MM)))
         self.box = [QDoubleSpinBox(suffix=" mm", decimals=1, minimum=0.1, maximum=500, value=v)
                     for v in (100.0, 100.0, 100.0)]
         self.by_height.setChecked(True)

@@ -33,10 +33,10 @@ from PySide6.QtWidgets import (
 )
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.print_size import DEMO_HEIGHT_MM  # the default height
 from dreamprint_gui.gui.names import gui_wording
 from dreamprint_gui.gui.settings import AppSettings
 from dreamprint_gui.gui.workers import Task, run_task
-from dreamprint_gui.io.volumes.grids.demo import DESIGN_HEIGHT_MM  # the default print height
 
 __all__ = ["MainWindow", "classify_path", "VOLUME_FILTER", "PROFILE_FILTER"]
 
@@ -128,7 +128,7 @@ class MainWindow(QMainWindow):
         if self.gamut is not None:
             self.gamut.problem.connect(self.note_problem)
         self.preview.set_params(
-            height_mm=self.settings.get("preview/height_mm", DESIGN_HEIGHT_MM, float),
+            height_mm=self.settings.get("preview/height_mm", DEMO_HEIGHT_MM, float),
             density_scale=self.settings.get("preview/density_scale", 1.0, float),
             background=self.settings.get("preview/background", "clear", str),
             fit=self.settings.get("preview/fit", "occupied", str))

@@ -34,6 +34,7 @@ import functools
 import numpy as np
 
 from dreamprint_gui.core.errors import DreamPrintError
+from dreamprint_gui.core.print_size import DEMO_HEIGHT_MM
 from dreamprint_gui.io.volumes.dense import DenseSource, DenseVolume
 from dreamprint_gui.io.volumes.sampling import rasterise_gaussians
 from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud
@@ -41,7 +42,7 @@ from dreamprint_gui.io.volumes.splats.cloud import GaussianCloud
 __all__ = ["DemoCloud", "demo_fields", "demo_colours", "occupied_height", "PALETTE",
            "PRINTABLE_WHITE", "DESIGN_HEIGHT_MM"]
 
-DESIGN_HEIGHT_MM = 40.0
+DESIGN_HEIGHT_MM = DEMO_HEIGHT_MM
 
 # The hue circle the demo runs round: the printed colour (sRGB) of the fully saturated sRGB hues
 # at 30-degree steps (red, orange, yellow, ..., rose) as the built-in profile's 100^3 de2000
