@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dreamprint_gui.core.durations import seconds_text
 from dreamprint_gui.core.kernel_cache import compile_notice, uncached, while_compiling
 from dreamprint_gui.core.profile import INKS, InkProfile
 from dreamprint_gui.gamut import optimise
@@ -356,7 +357,7 @@ def get_tables(profile: InkProfile, objective: str | None = None, size: int = DE
     est = kernels_estimate() if notify is not None else None
     if est is not None:
         notify(compile_notice(COMPILE_WHAT, "first run after an install or upgrade", est))
-        compiling = while_compiling(lambda el: notify(f"{COMPILE_WHAT}: {el:.0f} s"))
+        compiling = while_compiling(lambda el: notify(f"{COMPILE_WHAT}: {seconds_text(el)}"))
     with compiling:
         tables = build_tables(profile, objective, size, progress, intent)
     try:

@@ -429,10 +429,8 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         prog["p"] = (0, 1)
 
         def work() -> None:
-            try:
-                box["r"] = fn(lambda d, t: prog.__setitem__("p", (d, t)))
-            except BaseException as exc:  # noqa: BLE001 - re-raised by in_thread
-                box["e"] = exc
+            box["r"] = fn(lambda d, t: prog.__setitem__("p", (d, t)))
+
         yield from in_thread(work, stage, prog, el, box, cancel)
         return box["r"]
 

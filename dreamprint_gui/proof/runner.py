@@ -212,10 +212,7 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     prog: dict[str, tuple[int, int]] = {"p": (0, 1)}
 
     def work_prepare() -> None:
-        try:
-            box["m"] = _labels(s)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
-            box["e"] = exc
+        box["m"] = _labels(s)
 
     yield from in_thread(work_prepare, "preparing", prog, el, box, cancel)
     lab = box.pop("m")
@@ -228,13 +225,10 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     prog["p"] = (0, 1)
 
     def work_fractions() -> None:
-        try:
-            box["m"] = block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block,
-                                       s.layers_per_block,
-                                       progress=lambda d, t: prog.__setitem__("p", (d, t)),
-                                       cancelled=is_cancelled)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
-            box["e"] = exc
+        box["m"] = block_fractions(lab.layer, lab.shape_xyz, lab.voxel_mm, block,
+                                   s.layers_per_block,
+                                   progress=lambda d, t: prog.__setitem__("p", (d, t)),
+                                   cancelled=is_cancelled)
 
     yield from in_thread(work_fractions, "labels", prog, el, box, cancel)
     medium = box.pop("m")
@@ -255,26 +249,23 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     prog["p"] = (0, len(views))
 
     def work_source() -> None:
-        try:
-            # the print's coefficients too: with the source's sampling, the silent part
-            # between the labels and the first view (measured 16.5 s on a cold cache)
-            box["k"] = medium_coefficients(medium.fractions, bands.K, bands.S, optics)
-            raw = sample_source(lab.source, lab.grid, medium.block_xyz, lab.density_scale,
-                                medium.cells_xyz, lo)
-            field = intent_reference(raw, intent, lab.profile)
-            hits = 0
-            for i, v in enumerate(views):
-                if is_cancelled():
-                    raise JobCancelled("the proof was cancelled")
-                # the same field on the same camera renders the same image: kept on disk
-                rgb, a, hit = cached_render_source(field, v, s.resolution, floor_rho=floor_rho)
-                hits += hit
-                src_lin.append(rgb)
-                src_alpha.append(a)
-                prog["p"] = (i + 1, len(views))
-            box["m"] = (raw, hits)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
-            box["e"] = exc
+        # the print's coefficients too: with the source's sampling, the silent part
+        # between the labels and the first view (measured 16.5 s on a cold cache)
+        box["k"] = medium_coefficients(medium.fractions, bands.K, bands.S, optics)
+        raw = sample_source(lab.source, lab.grid, medium.block_xyz, lab.density_scale,
+                            medium.cells_xyz, lo)
+        field = intent_reference(raw, intent, lab.profile)
+        hits = 0
+        for i, v in enumerate(views):
+            if is_cancelled():
+                raise JobCancelled("the proof was cancelled")
+            # the same field on the same camera renders the same image: kept on disk
+            rgb, a, hit = cached_render_source(field, v, s.resolution, floor_rho=floor_rho)
+            hits += hit
+            src_lin.append(rgb)
+            src_alpha.append(a)
+            prog["p"] = (i + 1, len(views))
+        box["m"] = (raw, hits)
 
     yield from in_thread(work_source, "source", prog, el, box, cancel)
     sigma_t, albedo = box.pop("k")
@@ -288,23 +279,20 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     prog["p"] = (0, 1)
 
     def work_print() -> None:
-        try:
-            # the direct transmittance and its thick tiles (measured 7.6 s before the first
-            # pass, silent when it ran in the generator)
-            direct_T.extend(optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
-                            for v in views)
-            extra = [(i, r) for i, T in enumerate(direct_T)
-                     for r in thick_tiles(T @ y_w, THICK_T)]
-            # two halves of the samples at seeds s, s + 1: their mean is the print, their
-            # difference the noise floor (with or without reporting it: the same image)
-            box["m"] = render_print_halves(
-                sigma_t, albedo, lo, hi, views, s.resolution,
-                pass_spp(bands.xyz_weights, s.spp), s.seed, s.max_depth,
-                s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
-                cancelled=is_cancelled, sampler=s.sampler, optics=optics, extra=extra,
-                extra_spp=s.thick_spp)
-        except BaseException as exc:  # noqa: BLE001
-            box["e"] = exc
+        # the direct transmittance and its thick tiles (measured 7.6 s before the first
+        # pass, silent when it ran in the generator)
+        direct_T.extend(optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
+                        for v in views)
+        extra = [(i, r) for i, T in enumerate(direct_T)
+                 for r in thick_tiles(T @ y_w, THICK_T)]
+        # two halves of the samples at seeds s, s + 1: their mean is the print, their
+        # difference the noise floor (with or without reporting it: the same image)
+        box["m"] = render_print_halves(
+            sigma_t, albedo, lo, hi, views, s.resolution,
+            pass_spp(bands.xyz_weights, s.spp), s.seed, s.max_depth,
+            s.key_light, s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
+            cancelled=is_cancelled, sampler=s.sampler, optics=optics, extra=extra,
+            extra_spp=s.thick_spp)
 
     yield from in_thread(work_print, "print", prog, el, box, cancel)
     prn_bands, halves, info = box["m"]
@@ -350,12 +338,9 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     prog["p"] = (0, 1)
 
     def work_floor() -> None:
-        try:
-            box["m"] = gamut_floor(lab, raw, views, s.resolution, src_lin, src_alpha, obs, spd,
-                                   floor_rho)
-            prog["p"] = (1, 1)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
-            box["e"] = exc
+        box["m"] = gamut_floor(lab, raw, views, s.resolution, src_lin, src_alpha, obs, spd,
+                               floor_rho)
+        prog["p"] = (1, 1)
 
     # the tables' prediction rendered (measured 49.8 s silent on a cold cache, load 7)
     yield from in_thread(work_floor, "gamut floor", prog, el, box, cancel)
@@ -426,15 +411,12 @@ def _at_clear_low_bound(s: ProofSettings, lab, medium, optics, views, src_lin: l
     prog: dict[str, tuple[int, int]] = {"p": (0, 1)}
 
     def work() -> None:
-        try:
-            box["m"] = render_print_seeds(
-                sigma_t, albedo, lo, hi, views, s.resolution,
-                pass_spp(bands.xyz_weights, s.spp), (s.seed,), s.max_depth, s.key_light,
-                s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
-                cancelled=lambda: cancel is not None and cancel.is_set(), sampler=s.sampler,
-                optics=optics, extra=extra, extra_spp=s.thick_spp)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
-            box["e"] = exc
+        box["m"] = render_print_seeds(
+            sigma_t, albedo, lo, hi, views, s.resolution,
+            pass_spp(bands.xyz_weights, s.spp), (s.seed,), s.max_depth, s.key_light,
+            s.floor, progress=lambda d, t: prog.__setitem__("p", (d, t)),
+            cancelled=lambda: cancel is not None and cancel.is_set(), sampler=s.sampler,
+            optics=optics, extra=extra, extra_spp=s.thick_spp)
 
     yield ProofProgress("print", 0, 1, el(), "rendering the print with the Clear at its low "
                         "bound")
@@ -515,10 +497,17 @@ def in_thread(fn, stage, prog, el, box, cancel):
     """Run ``fn`` in a thread and yield :class:`ProofProgress` of ``stage`` whenever
     ``prog["p"]`` (done, total) changes, and again (same counts, the elapsed time) once
     ``core.progress.HEARTBEAT_S`` seconds passed without a change: one Mitsuba render of the
-    print, about 20 s, leaves the GIL to this generator while it runs. An error ``fn`` put in
-    ``box["e"]`` is raised here, and a consumer that stops (cancel, close) sets ``cancel`` and
-    waits for the thread."""
-    th = threading.Thread(target=fn, name=f"dreamprint-proof-{stage}", daemon=True)
+    print, about 20 s, leaves the GIL to this generator while it runs. An error ``fn`` raises
+    is kept in ``box["e"]`` and raised here, and a consumer that stops (cancel, close) sets
+    ``cancel`` and waits for the thread."""
+
+    def run() -> None:
+        try:
+            fn()
+        except BaseException as exc:  # noqa: BLE001 - re-raised below, in the generator
+            box["e"] = exc
+
+    th = threading.Thread(target=run, name=f"dreamprint-proof-{stage}", daemon=True)
     th.start()
     last = None
     said = time.monotonic()
@@ -593,11 +582,8 @@ def run_proof(s: ProofSettings, cancel: threading.Event | None = None
         prog = {"p": (0, 1)}
 
         def work_write() -> None:
-            try:
-                write_proof(result, tmp)
-                prog["p"] = (1, 1)
-            except BaseException as exc:  # noqa: BLE001 - re-raised in the generator
-                box["e"] = exc
+            write_proof(result, tmp)
+            prog["p"] = (1, 1)
 
         # the contact sheet and images (measured 14 s silent): a line every HEARTBEAT_S
         yield from in_thread(work_write, "writing", prog,
