@@ -123,16 +123,19 @@ def samples(height: float, printer: str | None, modes: list[str], kinds: list[st
                       f"{ratios[1]:5.2f} {est_a:7.1f} {act_a:6.1f} {ratios[2]:5.2f} "
                       f"{cpu:6.1f}", flush=True)
                 # the parts, each divided by the estimate's slowdown probe (an idle machine's
-                # seconds, what SOURCE_MODEL, TABLE_LOAD_SECONDS and SETUP_SECONDS hold)
+                # seconds, what SOURCE_MODEL, TABLE_LOAD_SECONDS and SETUP_SECONDS hold; the
+                # tables by the every-core probe, what BUILD_SECONDS_100 holds)
                 pe, parts = pf["prepare_estimate"], m["timings_s"].get("prepare_parts", {})
                 slow = pe.get("slowdown", 1.0)
+                par = pe.get("parallel_slowdown", slow)   # the tables' (every core's)
                 rest = act_p - parts.get("source", 0.0) - parts.get("tables", 0.0)
-                print(f"{'':14s}   slowdown {slow:.2f}; preparing: idle s est "
-                      f"{est_p / slow:.2f}, CPU s {pf.get('prepared_cpu_seconds', 0):.2f}, "
+                print(f"{'':14s}   slowdown {slow:.2f}, every core {par:.2f}; preparing: "
+                      f"idle s est {est_p / slow:.2f}, "
+                      f"CPU s {pf.get('prepared_cpu_seconds', 0):.2f}, "
                       f"ratio {pf.get('prepared_cpu_seconds', 0) / max(est_p / slow, 1e-9):.2f}; "
                       f"idle s est/act: source "
                       f"{pe['source_s'] / slow:.2f}/{parts.get('source', 0) / slow:.2f}, "
-                      f"tables {pe['tables_s'] / slow:.2f}/{parts.get('tables', 0) / slow:.2f}, "
+                      f"tables {pe['tables_s'] / par:.2f}/{parts.get('tables', 0) / par:.2f}, "
                       f"set-up+builds {(est_p - pe['source_s'] - pe['tables_s']) / slow:.2f}/"
                       f"{rest / slow:.2f}", flush=True)
     finally:

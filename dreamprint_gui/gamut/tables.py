@@ -287,12 +287,14 @@ def _load(path: Path, key_profile: str, objective: str, size: int,
                         build_seconds=float(meta["build_seconds"]), cached=True)
 
 
-# Wall seconds of a 100^3 build on the 2-core development machine (benchmarks/bench_gamut.py,
-# docs/physics.md: de2000 35 CPU s, srgb 19; cielab solves like srgb), for the announcement of
-# a first-use build; scaled by the node count. de2000: bench_preflight.py --samples --modes
-# cold (2026-12-02, load 5-8) measured 27.0, 41.1 and 43.6 idle machine's seconds (divided by
-# the slowdown probe); 30 until then
-BUILD_SECONDS_100 = {"de2000": 36.0, "cielab": 17.0, "srgb": 17.0}
+# Wall seconds of a 100^3 build on the idle 2-core development machine, both cores busy (its
+# solve is a prange kernel; the job's estimate scales it by prepare_time.parallel_slowdown),
+# for the announcement of a first-use build; scaled by the node count. de2000:
+# bench_preflight.py --samples --modes cold on a quiet machine (2026-12-02, load 1) 17.6, 21.1
+# and 22.0 s for 40-43 CPU s; srgb 19 CPU s (benchmarks/bench_gamut.py), cielab solves like it.
+# Until then 36 s, an idle machine's seconds measured under load: a two-thread kernel there
+# shares what one core gets
+BUILD_SECONDS_100 = {"de2000": 20.0, "cielab": 10.0, "srgb": 10.0}
 # Seconds numba takes to compile the table solve's kernel (.optimise) before a first build
 # after an install or upgrade (its cache is keyed on the sources): 15.9 CPU s of one thread
 # (53 s wall at load 7.9; `dreamprint gamut` with empty caches, numba's compile events,

@@ -58,7 +58,7 @@ from dreamprint_gui.gui.export_data import (
     printer_file_name,
     same_job,
 )
-from dreamprint_gui.gui.names import BACKGROUNDS, CONTENTS, printer_name
+from dreamprint_gui.gui.names import BACKGROUNDS, CONTENTS, INTENTS, printer_name
 from dreamprint_gui.gui.settings import AppSettings
 from dreamprint_gui.gui.workers import Task, generator_job, run_task
 
@@ -189,10 +189,10 @@ class ExportDialog(QDialog):
         self.halftone.setCurrentIndex(max(0, self.halftone.findData(
             self.settings.get("export/halftone", "blue-noise", str))))
         self.intent = QComboBox()  # rendering intent (ConvertSettings.intent; "" = profile's)
-        self.intent.addItem("the profile's (colorimetric unless it says otherwise)", "")
-        self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
-        self.intent.addItem("relative (source white to printable white)", "relative")
-        self.intent.addItem("perceptual (compress sRGB into the gamut)", "perceptual")
+        self.intent.addItem("The profile's (colorimetric unless it says otherwise)", "")
+        for key, name, tip in INTENTS:
+            self.intent.addItem(name, key)
+            self.intent.setItemData(self.intent.count() - 1, tip, Qt.ItemDataRole.ToolTipRole)
         self.intent.setCurrentIndex(max(0, self.intent.findData(
             self.settings.get("export/intent", "", str))))
         self.seed = QSpinBox(minimum=0, maximum=2**31 - 1,

@@ -56,6 +56,7 @@ from PySide6.QtWidgets import (
 from dreamprint_gui.core.profile import INKS
 from dreamprint_gui.gui.gamut_data import pick_colour, printable_gamut_mesh, srgb_gamut_mesh
 from dreamprint_gui.gui.icc_export import IccExportBox, IccRequest
+from dreamprint_gui.gui.names import INTENTS
 from dreamprint_gui.gui.volume_view import ViewHost
 from dreamprint_gui.gui.workers import Task, run_task
 
@@ -249,8 +250,9 @@ class GamutPage(QWidget):
         self.pages.addTab(solids, "CIELAB gamut")
         self.pages.addTab(chart, "Hexagon chart")
         self.intent = QComboBox()
-        self.intent.addItem("colorimetric (nearest printable colour)", "colorimetric")
-        self.intent.addItem("perceptual (sRGB compressed into the gamut)", "perceptual")
+        for key, name, tip in INTENTS:
+            self.intent.addItem(name, key)
+            self.intent.setItemData(self.intent.count() - 1, tip, Qt.ItemDataRole.ToolTipRole)
         self.intent.setToolTip("Rendering intent: how colours outside the printable gamut "
                                "are mapped; the picker and the chart show its mapping")
         self.intent.currentIndexChanged.connect(self._intent_changed)
@@ -351,7 +353,7 @@ class GamutPage(QWidget):
         self._intent_changed()
 
     def set_intent(self, intent: str) -> None:
-        """Show the mapping of rendering intent ``intent`` ("colorimetric" or "perceptual")."""
+        """Show the mapping of rendering intent ``intent`` (an id of :data:`.names.INTENTS`)."""
         self.intent.setCurrentIndex(self.intent.findData(intent))
 
     def _intent_changed(self) -> None:

@@ -2,7 +2,7 @@
 
 Defines :data:`BACKGROUNDS` (``--background`` ids -> names), :data:`CONTENTS` (``--content``),
 :data:`SAMPLINGS` (``--sampling`` of voxel models), :data:`LEVEL_SETS` (``--option
-level_set=``), :func:`background_name` and
+level_set=``), :data:`INTENTS` (``--intent``), :func:`background_name` and
 :func:`printer_name` (a printer's human name, ``PrinterProfile.display_name``, for the id
 ``j850-paper``). The ids stay in the files (manifest, settings); only the screen uses these
 names, the same on every page.
@@ -10,7 +10,7 @@ names, the same on every page.
 
 from __future__ import annotations
 
-__all__ = ["BACKGROUNDS", "CONTENTS", "SAMPLINGS", "LEVEL_SETS", "background_name",
+__all__ = ["BACKGROUNDS", "CONTENTS", "SAMPLINGS", "LEVEL_SETS", "INTENTS", "background_name",
            "printer_name", "gui_wording"]
 
 # The command line's options as the GUI's controls are labelled (engine messages name options;
@@ -76,9 +76,20 @@ FITS = (
 )
 
 
-# ``--fit MODE`` named as the Size of control's choice (before the bare ``--fit``: the longest
-# flag first)
-_OPTIONS = {**{f"--fit {key}": f"Size of: {name}" for key, name, _ in FITS}, **_OPTIONS}
+# ``--intent`` ids (gamut.mapping.INTENTS) as the Rendering intent controls offer them
+INTENTS = (
+    ("colorimetric", "Colorimetric", "Each colour as the nearest printable colour"),
+    ("relative", "Relative", "The source white mapped to the printable white, the rest "
+     "colorimetric (ICC media-relative)"),
+    ("perceptual", "Perceptual", "sRGB compressed into the printable gamut"),
+)
+
+
+# ``--fit MODE`` and ``--intent I`` named as their control's choice (before the bare flags: the
+# longest flag first)
+_OPTIONS = {**{f"--fit {key}": f"Size of: {name}" for key, name, _ in FITS},
+            **{f"--intent {key}": f"Rendering intent: {name}" for key, name, _ in INTENTS},
+            **_OPTIONS}
 
 
 def background_name(background_id: str) -> str:

@@ -53,7 +53,12 @@ from dreamprint_gui.job.correction import (
     rendering_key,
 )
 from dreamprint_gui.job.halftone import HALFTONE_METHODS, Halftoner, mask_build_estimate
-from dreamprint_gui.job.prepare_time import compile_estimate, source_bytes
+from dreamprint_gui.job.prepare_time import (
+    compile_estimate,
+    machine_slowdown,
+    parallel_slowdown,
+    source_bytes,
+)
 from dreamprint_gui.job.spec import HasSpec
 from dreamprint_gui.job.write import JobCancelled
 from dreamprint_gui.physics.density import scalar_sigma
@@ -171,6 +176,7 @@ def _tables_for(profile_spec, layer_mm: float, objective, size: int, intent=None
     progress = None
     est = build_estimate(profile, objective, size, intent) if notify is not None else None
     if est is not None:
+        est *= parallel_slowdown()         # the machine now, as the pre-flight's estimate
         obj, how = resolve_choice(profile, objective, intent)
         notify(f"building colour tables ({obj}, {how}, {size}^3) for this profile and "
                f"{layer_mm * 1000:g} um layers: first use, {about_text(est)}; cached after")
@@ -392,6 +398,7 @@ def prepare_job(settings: ConvertSettings,
     if notify is not None and s.halftone == "blue-noise":
         est = mask_build_estimate(printer.voxel_mm)
         if est is not None:
+            est *= machine_slowdown()
             vx, vy, vz = (1000 * v for v in printer.voxel_mm)
             notify(f"building the blue-noise mask for {vx:g} x {vy:g} x {vz:g} um voxels: "
                    f"first use, {about_text(est)}; cached after")

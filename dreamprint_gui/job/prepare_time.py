@@ -20,7 +20,9 @@ states it beside the conversion's own estimate. The model, written once here:
   so it sees the load itself).
 * **Colour tables**: cached for this profile, printer layer, objective, intent and size:
   :data:`TABLE_LOAD_SECONDS` (the cache is opened lazily); not cached: a first build,
-  :func:`..gamut.tables.build_estimate`.
+  :func:`..gamut.tables.build_estimate` (an idle machine's wall seconds with every core busy),
+  times :func:`parallel_slowdown` (the build's kernels keep every core busy: on an idle 2-core
+  machine it takes half its CPU seconds, under load it shares what one core would get).
 * **Setting up**: :data:`SETUP_SECONDS` (the compiled kernels loaded, the mask, the content).
 * **First-use builds**: the blue-noise mask for this voxel
   (:func:`.halftone.mask_build_estimate`), the compiled kernels of the job and of the source's
@@ -53,7 +55,8 @@ __all__ = ["SOURCE_MODEL", "TABLE_LOAD_SECONDS", "SETUP_SECONDS", "COMPILE_SECON
            "PROBE_SORT_CPU_S",
            "COMPILE_READER_SECONDS", "PrepareEstimate", "estimate_preparation", "source_bytes",
            "source_seconds",
-           "compile_estimate", "machine_slowdown", "opening_notice"]
+           "compile_estimate", "machine_slowdown", "parallel_slowdown", "PROBE_HASH_CPU_S",
+           "opening_notice"]
 
 # Per kind (extension), (fixed seconds, seconds per MB) of opening and placing a source, in CPU
 # seconds of one thread (an idle machine's wall seconds: reading and placing run on one core),
@@ -145,7 +148,8 @@ class PrepareEstimate:
     tables_cold: bool                  # no cached tables: a first build
     builds: dict[str, float] = field(default_factory=dict)   # first-use builds, seconds
     source_text: str = ""
-    slowdown: float = 1.0              # machine_slowdown() when estimated: every part scaled
+    slowdown: float = 1.0              # machine_slowdown() when estimated: one thread's parts
+    parallel_slowdown: float = 1.0     # parallel_slowdown(): the table build's (every core)
 
     setup_s: float = 0.0               # SETUP_SECONDS, scaled
 
@@ -167,7 +171,7 @@ class PrepareEstimate:
     def to_json(self) -> dict[str, Any]:
         return {"seconds": self.total_s, "source_s": self.source_s, "tables_s": self.tables_s,
                 "tables_cold": self.tables_cold, "builds_s": dict(self.builds),
-                "slowdown": self.slowdown}
+                "slowdown": self.slowdown, "parallel_slowdown": self.parallel_slowdown}
 
 
 def _reader_module(spec: str) -> ModuleType | None:
@@ -209,6 +213,43 @@ def machine_slowdown(cpu_seconds: float = 0.1) -> float:
     return max(1.0, wall / cpu) * max(1.0, cpu / n / PROBE_SORT_CPU_S)
 
 
+_HASH_BLOCK = np.random.default_rng(1).bytes(1 << 18)
+# CPU seconds of one SHA-256 of _HASH_BLOCK (256 KiB) on the development machine at its quickest:
+# 0.150 ms (the least of 12 runs of 100, 2026-12-02, load 4-5; hashlib releases the GIL, so
+# threads hashing at once run on as many cores as they get)
+PROBE_HASH_CPU_S = 1.5e-4
+
+
+def parallel_slowdown(cpu_seconds: float = 0.05, threads: int | None = None) -> float:
+    """How much slower than the model's idle machine a step that keeps every core busy (a
+    ``prange`` kernel: the colour tables' build) runs now: ``threads`` (default: the cores this
+    process may use) threads each hash :data:`_HASH_BLOCK` the same number of times, about
+    ``cpu_seconds`` of an idle core's work each, and the wall time until the last one is done is
+    divided by that work (at least 1). One thread's :func:`machine_slowdown` cannot tell this:
+    on an idle 2-core machine a step's two threads run at once, under load they share what one
+    core would get (2026-12-02 at load 4-5: one thread 3.1-4.3 x slower than idle, two threads
+    together 5.4-8.4 x; idle, the 100^3 de2000 build took 17.6-22.0 s wall for 40 CPU s)."""
+    import hashlib
+    import threading
+
+    if threads is None:
+        threads = (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                   else os.cpu_count() or 1)
+    reps = max(1, round(cpu_seconds / PROBE_HASH_CPU_S))
+
+    def work() -> None:
+        for _ in range(reps):
+            hashlib.sha256(_HASH_BLOCK).digest()
+
+    pool = [threading.Thread(target=work, daemon=True) for _ in range(max(1, threads))]
+    t0 = time.perf_counter()
+    for t in pool:
+        t.start()
+    for t in pool:
+        t.join()
+    return max(1.0, (time.perf_counter() - t0) / (reps * PROBE_HASH_CPU_S))
+
+
 def opening_notice(spec: str, at_least_s: float = 2.0) -> str | None:
     """``opening NAME (N MB): about T (reading it, its up axis, its occupied bounds) ...``
     when opening and placing ``spec`` is estimated at ``at_least_s`` or more now
@@ -246,8 +287,10 @@ def estimate_preparation(settings: Any) -> PrepareEstimate:
     size = source_bytes(str(s.source))
     text = "" if str(s.source) == "demo" else f" ({size / 1e6:.1f} MB)"
     slow = machine_slowdown()
-    tables = cold if cold is not None else TABLE_LOAD_SECONDS
+    # a first build runs on every core (its prange kernels); loading a cached one on one
+    par = parallel_slowdown() if cold is not None else slow
+    tables = par * cold if cold is not None else slow * TABLE_LOAD_SECONDS
     return PrepareEstimate(source_s=slow * source_seconds(str(s.source)),
-                           tables_s=slow * tables, tables_cold=cold is not None,
+                           tables_s=tables, tables_cold=cold is not None,
                            builds={k: slow * v for k, v in builds.items()}, source_text=text,
-                           slowdown=slow, setup_s=slow * SETUP_SECONDS)
+                           slowdown=slow, parallel_slowdown=par, setup_s=slow * SETUP_SECONDS)

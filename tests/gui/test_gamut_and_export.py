@@ -57,6 +57,10 @@ def test_gamut_page(qtbot, gl_display, job_profile, table_size):
                 actor.GetZAxisLabelText()) == ("a*", "b*", "L*")
     _picker_matches_the_cli(qtbot, page, job_profile, table_size)
 
+    # the page offers every intent the command line has (gamut.mapping.INTENTS)
+    from dreamprint_gui.gamut.mapping import INTENTS
+
+    assert [page.intent.itemData(i) for i in range(page.intent.count())] == list(INTENTS)
     # the perceptual intent: the chart and the picker show its mapping (source -> printed)
     page.set_colour((0.0, 0.0, 1.0))  # sRGB blue, far outside the printable gamut
     clipped = page.last_pick
@@ -132,6 +136,18 @@ def test_export_dialog_passes_the_rendering_intent(qtbot, tmp_path, table_size):
     assert dlg.settings_for_job().intent == "perceptual"
     dlg.intent.setCurrentIndex(dlg.intent.findData("relative"))
     assert dlg.settings_for_job().intent == "relative"
+    from dreamprint_gui.gamut.mapping import INTENTS
+
+    assert [dlg.intent.itemData(i) for i in range(1, dlg.intent.count())] == list(INTENTS)
+
+
+def test_intent_advice_names_the_control_and_its_choice():
+    from dreamprint_gui.gui.names import gui_wording
+
+    # the pre-flight's out-of-gamut advice, as the export dialog shows it
+    said = gui_wording("they print as the nearest printable colour; --intent relative maps the "
+                       "source white to the printable white")
+    assert "Rendering intent: Relative maps the source white" in said and "--" not in said
 
 
 def test_export_runs_with_progress_and_summary(qtbot, tmp_path, table_size):

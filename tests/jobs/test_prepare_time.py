@@ -52,6 +52,7 @@ def test_cold_tables_are_a_first_build_warm_ones_a_load(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))      # empty table and mask caches
     monkeypatch.delenv("DREAMPRINT_CACHE", raising=False)     # (which it would replace)
     monkeypatch.setattr(prepare_time, "machine_slowdown", lambda: 1.0)    # an idle machine
+    monkeypatch.setattr(prepare_time, "parallel_slowdown", lambda: 1.0)
     cold = estimate_preparation(s)
     printer = load_printer(None)
     profile = load_profile(None).with_settings(layer_thickness_mm=printer.layer_thickness_mm)
@@ -73,6 +74,13 @@ def test_cold_tables_are_a_first_build_warm_ones_a_load(tmp_path, monkeypatch):
     busy = estimate_preparation(s)
     assert busy.total_s == pytest.approx(3.0 * warm.total_s)
     assert "; the machine 3.0 x slower than idle now" in busy.describe()
+    # a first build keeps every core busy: scaled by the every-core probe, the rest by one
+    # thread's
+    monkeypatch.setattr(prepare_time, "build_estimate", lambda *a, **k: 20.0)
+    monkeypatch.setattr(prepare_time, "parallel_slowdown", lambda: 5.0)
+    shared = estimate_preparation(s)
+    assert shared.tables_s == pytest.approx(100.0) and shared.parallel_slowdown == 5.0
+    assert shared.source_s == pytest.approx(3.0 * SOURCE_MODEL["demo"][0])
 
 
 def test_the_slowdown_is_the_share_of_a_core_this_thread_gets():
@@ -100,6 +108,31 @@ def test_the_slowdown_is_the_share_of_a_core_this_thread_gets():
         stop.set()
         os.sched_setaffinity(0, keep)
     assert shared > 1.4
+
+
+def test_the_every_core_probe_sees_threads_sharing_a_core(monkeypatch):
+    """Two probe threads held to one CPU take twice the work's time: the every-core probe says
+    about 2 x against a model machine whose hash costs what it costs here."""
+    import hashlib
+    import os
+
+    if not hasattr(os, "sched_setaffinity"):
+        pytest.skip("no CPU affinity on this platform")
+    per = []
+    for _ in range(3):
+        c0 = time.thread_time()
+        for _ in range(40):
+            hashlib.sha256(prepare_time._HASH_BLOCK).digest()
+        per.append((time.thread_time() - c0) / 40)
+    monkeypatch.setattr(prepare_time, "PROBE_HASH_CPU_S", min(per))
+    assert prepare_time.parallel_slowdown(0.02) >= 1.0
+    keep = os.sched_getaffinity(0)
+    try:
+        os.sched_setaffinity(0, {min(keep)})
+        shared = prepare_time.parallel_slowdown(0.05, threads=2)
+    finally:
+        os.sched_setaffinity(0, keep)
+    assert shared > 1.6
 
 
 def _pf() -> Preflight:
