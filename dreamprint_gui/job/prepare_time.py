@@ -64,8 +64,8 @@ __all__ = ["SOURCE_MODEL", "TABLE_LOAD_SECONDS", "SETUP_SECONDS", "COMPILE_SECON
 # 50 MB: 0.32 / 0.65 / 1.56 s; INRIA .ply 2.25 / 68 MB: 0.24 / 3.2-4.5 s; .spz 16 MB (1e6
 # Gaussians): 3.8 s; .mhd 0.13 / 67 MB (raw): 0.60 / 1.05 s; .nrrd, .vti, .vtk 0.3 MB:
 # 0.48-0.54 s; .vox 0.01 s (and 0.33-1.11 s more than the other kinds once placed, 2026-12-02
-# at load 6-10: counted here); .ingp 22 MB: 0.84 s; the demo 0.5-1.0 s. Radiance grids and folders
-# were not measured (their family's figures).
+# at load 6-10: counted here); .ingp 22 MB: 0.84 s; the demo 0.5-1.0 s (0.55 and 0.67 quiet).
+# Radiance grids and folders were not measured (their family's figures).
 SOURCE_MODEL: dict[str, tuple[float, float]] = {
     ".vdb": (0.3, 0.025), ".nvdb": (0.3, 0.025),
     ".ply": (0.15, 0.05), ".splat": (0.15, 0.1), ".ksplat": (0.15, 0.1),
@@ -76,15 +76,16 @@ SOURCE_MODEL: dict[str, tuple[float, float]] = {
     ".vox": (0.5, 0.05),    # its kernels' loading: 0.3-1.1 s beyond SETUP_SECONDS (4 runs)
     ".ingp": (0.3, 0.025), ".msgpack": (0.3, 0.025),
     "folder": (0.3, 0.03),
-    "demo": (0.7, 0.0),
+    "demo": (0.55, 0.0),
 }
 _DEFAULT_MODEL = (0.5, 0.05)
-# Loading cached 100^3 tables (a lazily read .npz: the arrays are read as they are used)
-TABLE_LOAD_SECONDS = 0.1
+# Loading cached 100^3 tables (a lazily read .npz: the arrays are read as they are used;
+# bench_preflight.py --samples, warm, quiet machine 2026-12-02: 0.03-0.05 s)
+TABLE_LOAD_SECONDS = 0.05
 # Setting the job up once the source is placed: the compiled kernels loaded from numba's cache,
-# the blue-noise mask, the content's threshold (bench_preflight.py --samples: 0.5 s beyond the
-# source's and the tables' on the .vox and the INRIA sample)
-SETUP_SECONDS = 0.5
+# the blue-noise mask, the content's threshold (bench_preflight.py --samples, warm: 0.30-0.33 s
+# beyond the source's and the tables' on a quiet machine, 0.2-0.6 s under load, 2026-12-02)
+SETUP_SECONDS = 0.35
 # Seconds numba takes to compile, on the 2-core development machine (bench_preflight --samples
 # after a source change: 16-38 s under load 15): the job's kernels, and a reader's own.
 COMPILE_SECONDS = 30.0
