@@ -363,3 +363,43 @@ def test_the_print_is_the_mean_of_two_independent_halves():
     assert info["pass_spp"] == [8, 2] and info["spp"] == 8
     assert info["halves"] == {"seeds": [5, 6], "pass_spp": [4, 1], "extra_spp": 0}
     assert pr.half_spp(7) == 4 and pr.half_spp([64, 16, 1]) == [32, 8, 1]
+
+
+def _stripes_exact(omega_a: float, omega_b: float) -> tuple[float, float]:
+    from dreamprint_gui.proof.thick_patch import chandrasekhar_h
+
+    h = chandrasekhar_h([omega_a, omega_b], [1.0])[:, 0]
+    return tuple(1 - np.sqrt(1 - np.array([omega_a, omega_b])) * h)
+
+
+def test_the_proof_keeps_the_halftone_structure_of_the_print():
+    """A halftone at the pixel's scale must reach the proof's figures as printed, not blurred
+    (a denoiser, or any filter across pixels, smooths it as if it were noise): a deep block
+    of one-cell stripes of two materials (isotropic scattering, albedo 0.9 and 0.2, 40 mean
+    free paths per cell, so little light crosses a stripe: the bright one reads about 0.015
+    low), seen face-on with one pixel per stripe. Each stripe's radiance is the semi-infinite
+    closed form of its own albedo, 1 - sqrt(1 - omega) H(1) (Chandrasekhar 1960): 0.415 and
+    0.035. The proof's print (render_print_halves, the mean of its two halves) matches both
+    within 0.03; the same image blurred by a 3-pixel filter (1/4, 1/2, 1/4) across the
+    stripes misses both by about 0.18, so the test fails for any such smoothing."""
+    from dreamprint_gui.proof.cameras import View
+
+    n, cell, (wa, wb) = 16, 1.0, (0.9, 0.2)
+    st = np.full((n, n, n, 3), 40.0, np.float32)
+    al = np.full_like(st, wa)
+    al[:, 1::2] = wb                        # stripes along y: the image's columns
+    lo = -np.full(3, n * cell / 2)
+    view = View(0.0, 0.0, n * cell / 2, 4 * n * cell)    # face-on, one pixel per stripe
+    mean, _, _ = pr.render_print_halves(st, al, lo, -lo, [view], n, 64, seed=2)
+    img = mean[0, 4:-4, 2:-2]               # away from the block's edges
+    exact = np.array(_stripes_exact(wa, wb))
+
+    def stripes(im):
+        # the image's columns alternate between the two materials (which one comes first
+        # depends on the camera's handedness: the brighter one is the albedo 0.9)
+        even, odd = im[:, 0::2].mean(), im[:, 1::2].mean()
+        return np.array(sorted((even, odd), reverse=True))
+
+    np.testing.assert_allclose(stripes(img), exact, atol=0.03)
+    blurred = 0.5 * img[:, 1:-1] + 0.25 * (img[:, :-2] + img[:, 2:])
+    assert np.abs(stripes(blurred) - exact).min() > 0.1
