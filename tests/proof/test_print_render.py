@@ -403,3 +403,32 @@ def test_the_proof_keeps_the_halftone_structure_of_the_print():
     np.testing.assert_allclose(stripes(img), exact, atol=0.03)
     blurred = 0.5 * img[:, 1:-1] + 0.25 * (img[:, :-2] + img[:, 2:])
     assert np.abs(stripes(blurred) - exact).min() > 0.1
+
+
+def test_bands_per_pass_rgb_and_mono():
+    """'rgb': three consecutive bands a pass, the last pass repeating its last band; 'mono':
+    one band a pass in all three channels. The faint-pass rule weighs each pass's own bands."""
+    assert pr.pass_bands(6) == [(0, 1, 2), (3, 4, 5)]
+    assert pr.pass_bands(7) == [(0, 1, 2), (3, 4, 5), (6, 6, 6)]
+    assert pr.pass_bands(3, "mono") == [(0, 0, 0), (1, 1, 1), (2, 2, 2)]
+    with pytest.raises(ValueError, match="layout"):
+        pr.pass_bands(3, "cmy")
+    b = spectral_bands(default_profile(), 12)
+    mono = pr.pass_spp(b.xyz_weights, 32, layout="mono")
+    assert len(mono) == 12 and set(mono) == {32, 8}
+    assert mono[-3:] == [8, 8, 8]          # 670-730 nm weigh little in colour
+
+
+def test_mono_passes_render_the_same_print_as_rgb_passes():
+    """The same White fog (6 bands) rendered three bands a pass and one band a pass: two
+    estimates of the same band radiance, so each band's mean over the image agrees within
+    the renders' noise (four standard errors, from two seeds of each)."""
+    st, al, lo, views = _white_fog(6)
+    (a, a2), info = pr.render_print_seeds(st, al, lo, -lo, views, RES, 32, (1, 2))
+    (m, m2), info_m = pr.render_print_seeds(st, al, lo, -lo, views, RES, 32, (1, 2),
+                                            layout="mono")
+    assert info["passes"] == 2 and info_m["passes"] == 6 and info_m["layout"] == "mono"
+    # the noise of an image mean: from two seeds of each layout
+    err = np.hypot((a - a2)[0].std(axis=(0, 1)), (m - m2)[0].std(axis=(0, 1))) / RES
+    diff = ((a + a2) - (m + m2))[0].mean(axis=(0, 1)) / 2
+    assert np.all(np.abs(diff) < 4 * err + 1e-4), (diff, err)
