@@ -24,6 +24,17 @@ thick (``runner.THICK_T``);
 ``--bricks adaptive,16,32``: the medium cut by the cost model (``proof.bricks``, the proof's) or
 into cubes of so many cells; ``--source FILE --height-mm H``: another source than the demo.
 
+``--layouts rgb,mono``: the bands a Mitsuba pass carries (``print_render.pass_bands``): three
+a pass (the proof's) or one band in all three channels (12 passes, no spectral MIS between
+bands).
+
+``--contract``: issue 49's target as whole processes in one run: ``dreamprint convert SOURCE
+--height-mm H`` twice (the first may compile Numba's kernels; the second is the warm figure)
+and ``dreamprint proof SOURCE --height-mm H`` at its defaults (``--proof-args "..."`` adds
+options), each a fresh process; prints wall and CPU seconds (``getrusage`` of the children),
+the proof's stages (``proof.json`` ``timings_s``), its noise floor and the ratio proof / warm
+convert (target <= 6).
+
 ``--block-error``: a small job (demo, 3 mm) whose print is rendered from the full-resolution
 labels (one cell per printer voxel) and from blocks of the default 40 mm job's size (4 x 11 x 22
 voxels): prints dE2000 between the two print images (mean, 95th percentile over the object).
@@ -34,6 +45,7 @@ voxels): prints dE2000 between the two print images (mean, 95th percentile over 
         --reference-spp 1024 [--bands 12,6]
     python benchmarks/bench_proof.py --variant llvm|scalar   # llvm_ad_rgb or scalar_rgb
     python benchmarks/bench_proof.py --block-error
+    python benchmarks/bench_proof.py --contract [--height-mm 40] [--proof-args "--spp 32"]
 """
 
 from __future__ import annotations
