@@ -16,7 +16,9 @@ view on CPU. ``--floor-check``: also the floor as defined until 2026-12 (two ful
 other seeds, figures between them), beside it. ``--reference-spp N``: the view rendered once at
 N spp; each row prints its figures against the source (dE2000 and S-CIELAB overall, inside the
 source, in the block body; coverage error) minus the reference's: the bias of the proof's
-figures at its spp. ``--bands 12,6``: fewer spectral bands (the bias then includes theirs).
+figures at its spp. ``--reference-file F.npz``: the reference read from F when it is of the
+same print, view and spp, else rendered and saved there. ``--bands 12,6``: fewer spectral
+bands (the bias then includes theirs).
 ``--spp 16,64 --thick-spp 0,48 --samplers independent,multijitter`` sweeps (the measurement
 behind the defaults); ``--thick-spp``: more samples on the tiles where the print is optically
 thick (``runner.THICK_T``);
@@ -189,11 +191,28 @@ def speed(args) -> None:
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
     ref = None
     if args.reference_spp:
-        (ref,), alpha, t, info = _print_xyz(med, bands, view, args.resolution,
-                                            args.reference_spp, (99,), faint=False)
+        # what the reference is of: a saved one serves only the same print, view and render
+        key = repr((args.source, args.height_mm, args.resolution, args.reference_spp, bands.n,
+                    med.cells_xyz, tuple(np.round(med.box_mm[0], 4)), view,
+                    float(med.fractions.sum())))
+        saved = args.reference_file and os.path.exists(args.reference_file)
+        if saved:
+            z = np.load(args.reference_file)
+            if str(z["key"]) != key:
+                raise SystemExit(f"{args.reference_file}: a reference of another print or "
+                                 f"render ({z['key']}), not of {key}")
+            ref, alpha, t, cpu = z["xyz"], z["alpha"], float(z["wall_s"]), float(z["cpu_s"])
+        else:
+            (ref,), alpha, t, info = _print_xyz(med, bands, view, args.resolution,
+                                                args.reference_spp, (99,), faint=False)
+            cpu = info["cpu_s"]
+            if args.reference_file:
+                np.savez_compressed(args.reference_file, xyz=ref, alpha=alpha, key=key,
+                                    wall_s=t, cpu_s=cpu)
         ref_fig = _figures(src_xyz, src_alpha, ref, alpha, bands.observer, spd)
-        print(f"reference: {args.reference_spp} spp in every pass, seed 99: {t:.1f} s, "
-              f"{info['cpu_s']:.1f} CPU s; figures "
+        print(f"reference: {args.reference_spp} spp in every pass, seed 99"
+              f"{' (read from ' + args.reference_file + ')' if saved else ''}: {t:.1f} s, "
+              f"{cpu:.1f} CPU s; figures "
               + ", ".join(f"{k} {v:.3f}" for k, v in ref_fig.items()), flush=True)
     print("s/view, CPU s: one proof's print of the view (both halves); floor: from the halves "
           "(proof.json's); old floor: two full renders at seeds 5, 6 (--floor-check), "
@@ -375,6 +394,10 @@ def main() -> None:
                     "defined until 2026-12: two full renders at seeds 5, 6, figures between them")
     ap.add_argument("--reference-spp", type=int, default=0, help="render the view once at "
                     "this spp (every pass) and print each row's figures minus its (bias)")
+    ap.add_argument("--reference-file", default=None, help="with --reference-spp: read the "
+                    "reference render from this .npz when it holds the same print, view and "
+                    "spp, else render it and save it there (a 1024-spp reference at 128 px "
+                    "costs 230-550 CPU s)")
     ap.add_argument("--block-error", action="store_true")
     ap.add_argument("--variant", choices=("llvm", "scalar"), default=None,
                     help="Mitsuba's variant: scalar_rgb or llvm_ad_rgb (default: the proof's, "
