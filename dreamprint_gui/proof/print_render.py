@@ -31,7 +31,10 @@ Scene (units mm, the print centred on the origin, z up):
   (:mod:`.cameras`), box pixel filter.
 
 Mitsuba's RGB variant transports three channels independently (spectral MIS for distance
-sampling); the channels carry three spectral bands at a time, so 12 bands take 4 renders.
+sampling); the channels carry three spectral bands at a time, so 12 bands take 4 renders
+(:func:`pass_bands`; its ``"mono"`` layout, one band in all three channels, takes spectral MIS
+out of the path and lowers the noise at a given spp by a third, but costs as much per pass:
+the same noise per CPU second, ``docs/proof-measurements.md``).
 A pass whose bands weigh little in colour (650-730 nm: its noise hardly reaches XYZ) is
 rendered at a quarter of the samples (:func:`pass_spp`).
 """
