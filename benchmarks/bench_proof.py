@@ -16,13 +16,26 @@ view on CPU. ``--floor-check``: also the floor as defined until 2026-12 (two ful
 other seeds, figures between them), beside it. ``--reference-spp N``: the view rendered once at
 N spp; each row prints its figures against the source (dE2000 and S-CIELAB overall, inside the
 source, in the block body; coverage error) minus the reference's: the bias of the proof's
-figures at its spp. ``--bands 12,6``: fewer spectral bands (the bias then includes theirs).
+figures at its spp. ``--reference-file F.npz``: the reference read from F when it is of the
+same print, view and spp, else rendered and saved there. ``--bands 12,6``: fewer spectral
+bands (the bias then includes theirs).
 ``--spp 16,64 --thick-spp 0,48 --samplers independent,multijitter`` sweeps (the measurement
 behind the defaults); ``--thick-spp``: more samples on the tiles where the print is optically
 thick (``runner.THICK_T``);
 ``--faint-pass both``: the faint last pass at a quarter of the spp and at all of it;
 ``--bricks adaptive,16,32``: the medium cut by the cost model (``proof.bricks``, the proof's) or
 into cubes of so many cells; ``--source FILE --height-mm H``: another source than the demo.
+
+``--layouts rgb,mono``: the bands a Mitsuba pass carries (``print_render.pass_bands``): three
+a pass (the proof's) or one band in all three channels (12 passes, no spectral MIS between
+bands).
+
+``--contract``: issue 49's target as whole processes in one run: ``dreamprint convert SOURCE
+--height-mm H`` twice (the first may compile Numba's kernels; the second is the warm figure)
+and ``dreamprint proof SOURCE --height-mm H`` at its defaults (``--proof-args "..."`` adds
+options), each a fresh process; prints wall and CPU seconds (``getrusage`` of the children),
+the proof's stages (``proof.json`` ``timings_s``), its noise floor and the ratio proof / warm
+convert (target <= 6).
 
 ``--block-error``: a small job (demo, 3 mm) whose print is rendered from the full-resolution
 labels (one cell per printer voxel) and from blocks of the default 40 mm job's size (4 x 11 x 22
@@ -34,6 +47,7 @@ voxels): prints dE2000 between the two print images (mean, 95th percentile over 
         --reference-spp 1024 [--bands 12,6]
     python benchmarks/bench_proof.py --variant llvm|scalar   # llvm_ad_rgb or scalar_rgb
     python benchmarks/bench_proof.py --block-error
+    python benchmarks/bench_proof.py --contract [--height-mm 40] [--proof-args "--spp 32"]
 """
 
 from __future__ import annotations
@@ -52,7 +66,7 @@ def _medium(lab, block, layers_per_block):
 
 
 def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None,
-               thick_spp=0, faint=True, brick=None, halves=False):
+               thick_spp=0, faint=True, brick=None, halves=False, layout="rgb"):
     """The print of one view rendered at each of ``seeds``: (XYZ per seed, coverage, wall s,
     render info with ``cpu_s``), the thick tiles rendered ``thick_spp`` more. ``halves``: the
     proof's render instead (``render_print_halves`` at ``seeds[0]``): XYZ of (the mean, half a,
@@ -80,17 +94,18 @@ def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     dr.kernel_history()
     t0, c0 = time.perf_counter(), time.process_time()
-    per_pass = pass_spp(bands.xyz_weights, spp) if faint else spp
+    per_pass = (pass_spp(bands.xyz_weights, spp, layout=layout) if faint
+                else spp)
     if halves:
         mean, (a, b), info = render_print_halves(
             st, al, lo, hi, [view], res, per_pass, seeds[0], sampler=sampler or DEFAULT_SAMPLER,
-            extra=extra, extra_spp=thick_spp, brick=brick, rr_depth=rr_depth)
+            extra=extra, extra_spp=thick_spp, brick=brick, rr_depth=rr_depth, layout=layout)
         imgs = [mean, a, b]
     else:
         imgs, info = render_print_seeds(st, al, lo, hi, [view], res, per_pass, tuple(seeds),
                                         sampler=sampler or DEFAULT_SAMPLER, rr_depth=rr_depth,
                                         extra=extra, extra_spp=thick_spp,
-                                        brick=brick)
+                                        brick=brick, layout=layout)
     t = time.perf_counter() - t0
     # CPU seconds of all this process's threads (Mitsuba's too): on a shared machine the wall
     # time says more about the other processes than about the render
@@ -149,6 +164,7 @@ def speed(args) -> None:
     bricks = [None if x == "adaptive" else int(x)
               for x in (args.bricks or "adaptive").split(",")]
     bands_n = [int(x) for x in (args.bands or "12").split(",")]
+    layouts = (args.layouts or "rgb").split(",")
     s = ProofSettings(source=args.source, height_mm=args.height_mm, resolution=args.resolution)
     print(f"{args.source} at {args.height_mm} mm, {args.resolution} x {args.resolution}, "
           f"spp {spps}, samplers {samplers}, {os.cpu_count()} cores, load average "
@@ -175,23 +191,42 @@ def speed(args) -> None:
     print(f"S-CIELAB at {s.viewing_distance_mm:.0f} mm: {spd:.1f} pixels per degree")
     ref = None
     if args.reference_spp:
-        (ref,), alpha, t, info = _print_xyz(med, bands, view, args.resolution,
-                                            args.reference_spp, (99,), faint=False)
+        # what the reference is of: a saved one serves only the same print, view and render
+        key = repr((args.source, args.height_mm, args.resolution, args.reference_spp, bands.n,
+                    med.cells_xyz, tuple(np.round(med.box_mm[0], 4)), view,
+                    float(med.fractions.sum())))
+        saved = args.reference_file and os.path.exists(args.reference_file)
+        if saved:
+            z = np.load(args.reference_file)
+            if str(z["key"]) != key:
+                raise SystemExit(f"{args.reference_file}: a reference of another print or "
+                                 f"render ({z['key']}), not of {key}")
+            ref, alpha, t, cpu = z["xyz"], z["alpha"], float(z["wall_s"]), float(z["cpu_s"])
+        else:
+            (ref,), alpha, t, info = _print_xyz(med, bands, view, args.resolution,
+                                                args.reference_spp, (99,), faint=False)
+            cpu = info["cpu_s"]
+            if args.reference_file:
+                np.savez_compressed(args.reference_file, xyz=ref, alpha=alpha, key=key,
+                                    wall_s=t, cpu_s=cpu)
         ref_fig = _figures(src_xyz, src_alpha, ref, alpha, bands.observer, spd)
-        print(f"reference: {args.reference_spp} spp in every pass, seed 99: {t:.1f} s, "
-              f"{info['cpu_s']:.1f} CPU s; figures "
+        print(f"reference: {args.reference_spp} spp in every pass, seed 99"
+              f"{' (read from ' + args.reference_file + ')' if saved else ''}: {t:.1f} s, "
+              f"{cpu:.1f} CPU s; figures "
               + ", ".join(f"{k} {v:.3f}" for k, v in ref_fig.items()), flush=True)
     print("s/view, CPU s: one proof's print of the view (both halves); floor: from the halves "
           "(proof.json's); old floor: two full renders at seeds 5, 6 (--floor-check), "
           "s/render one of them; bias: the proof's figures minus the reference's")
-    print(f"{'sampler':12s} {'bricks':>8s} {'bands':>5s} {'spp':>5s} {'thick':>5s} "
+    print(f"{'sampler':12s} {'layout':>6s} {'bricks':>8s} {'bands':>5s} {'spp':>5s} "
+          f"{'thick':>5s} "
           f"{'s/view':>7s} {'CPU s':>6s} "
           f"{'floor dE00 mean':>16s} {'p95':>6s} {'S-CIELAB mean':>14s} {'p95':>6s}  spp per pass")
-    for sampler, rr, brick in [(a, b, c) for a in samplers for b in rrs for c in bricks]:
+    for sampler, rr, brick, layout in [(a, b, c, d) for a in samplers for b in rrs
+                                       for c in bricks for d in layouts]:
         # JIT warm-up (the LLVM variant traces and compiles, or finds in ~/.drjit, the
         # passes' kernels here; the rows below run them)
         _, _, t_w, info_w = _print_xyz(med, bands, view, args.resolution, 1, (0,), sampler, rr,
-                                       brick=brick)
+                                       brick=brick, layout=layout)
         print(f"warm-up (1 spp): {t_w:.1f} s, {info_w['cpu_s']:.1f} CPU s, "
               f"{info_w['compiled']} kernels compiled ({info_w['compile_s']:.1f} s of LLVM)",
               flush=True)
@@ -199,9 +234,10 @@ def speed(args) -> None:
                                       for d in bands_n]:
             bnd = bands if nb == bands.n else spectral_bands(lab.profile, nb)
             (m, a, b), alpha, t, info = _print_xyz(med, bnd, view, args.resolution, spp, (1,),
-                                                   sampler, rr, thick, faint, brick, halves=True)
+                                                   sampler, rr, thick, faint, brick, halves=True,
+                                                   layout=layout)
             f = noise_floor_from_halves(a, b, alpha, bnd.observer, spd)
-            print(f"{sampler:12s} {str(info['bricks']):>8s} {nb:5d} {spp:5d} "
+            print(f"{sampler:12s} {layout:>6s} {str(info['bricks']):>8s} {nb:5d} {spp:5d} "
                   f"{thick:5d} {t:7.1f} "
                   f"{info['cpu_s']:6.1f} {f['mean_de2000']:16.2f} "
                   f"{f['p95_de2000']:6.2f} {f['mean_scielab_de2000']:14.2f} "
@@ -211,7 +247,7 @@ def speed(args) -> None:
             if args.floor_check:
                 (x, y), _, t_old, info_old = _print_xyz(med, bnd, view, args.resolution, spp,
                                                         (5, 6), sampler, rr, thick, faint,
-                                                        brick)
+                                                        brick, layout=layout)
                 g = noise_floor(x, y, alpha, bnd.observer, spd)
                 print(f"{'':12s} old floor (two full renders): dE00 mean {g['mean_de2000']:.2f}"
                       f" p95 {g['p95_de2000']:.2f}, S-CIELAB mean "
@@ -226,6 +262,73 @@ def speed(args) -> None:
     print(f"({info['variant']}, {info['passes']} Mitsuba passes per half; thick tiles "
           f"(direct transmittance < {THICK_T}) {share:.0%} of the frame; "
           f"load average now {os.getloadavg()[0]:.1f})")
+
+
+def _process(argv: list[str]) -> tuple[float, float, int]:
+    """Run ``python -m dreamprint_gui.cli ARGV`` as a fresh process: (wall s, CPU s of the
+    process and its threads and children, exit status)."""
+    import resource
+    import subprocess
+    import sys
+
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "dreamprint_gui.cli", *argv],
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+    if done.returncode:
+        print(f"  dreamprint {' '.join(argv)}: exit {done.returncode}: "
+              f"{done.stderr.strip()[-400:]}")
+    return wall, cpu, done.returncode
+
+
+def contract(args) -> None:
+    """Issue 49's target as whole processes: ``dreamprint convert SOURCE --height-mm H`` (twice:
+    the first may compile Numba's kernels, the second is the warm figure) and ``dreamprint
+    proof SOURCE --height-mm H`` at its defaults (plus ``--proof-args``), each a fresh process
+    in this run; the proof's wall and CPU seconds over the warm convert's (target <= 6), its
+    noise floor (target <= 0.5 mean S-CIELAB) and its stages (``proof.json`` ``timings_s``)."""
+    import json
+    import shlex
+    import tempfile
+    from pathlib import Path
+
+    h = f"{args.height_mm:g}"
+    extra = shlex.split(args.proof_args or "")
+    print(f"{args.source} at {h} mm; load average {os.getloadavg()} at the start; "
+          f"{os.cpu_count()} cores (shared machine: CPU s say more than wall s)", flush=True)
+    with tempfile.TemporaryDirectory(prefix="dp-contract-") as tmp:
+        conv = []
+        for k in range(2):
+            w, c, rc = _process(["convert", args.source, "--height-mm", h, "-o",
+                                 str(Path(tmp) / f"job{k}"), "--json"])
+            conv.append((w, c))
+            print(f"convert run {k + 1}: {w:.1f} s wall, {c:.1f} CPU s "
+                  f"(load {os.getloadavg()[0]:.1f})", flush=True)
+        out = Path(tmp) / "proof"
+        w, c, rc = _process(["proof", args.source, "--height-mm", h, "-o", str(out), "--json",
+                             *extra])
+        print(f"proof {' '.join(extra) or '(defaults)'}: {w:.1f} s wall, {c:.1f} CPU s "
+              f"(load {os.getloadavg()[0]:.1f})", flush=True)
+        if rc:
+            return
+        rep = json.loads((out / "proof.json").read_text())
+    cw, cc = conv[-1]
+    t = rep["timings_s"]
+    nf = rep.get("noise_floor") or {}
+    ren = rep["renderer"]
+    print("proof stages (s wall): " + ", ".join(f"{k} {v:.1f}" for k, v in t.items())
+          + f"; process start and writing {w - t['total']:.1f}")
+    print(f"renderer: {ren.get('variant')}, spp per pass {ren.get('pass_spp')}, "
+          f"layout {ren.get('layout', 'rgb')}, {rep['settings']['views']} views at "
+          f"{rep['settings']['resolution']} px")
+    print(f"RATIO proof / warm convert: {w / cw:.1f} x wall, {c / cc:.1f} x CPU s (target <= 6); "
+          f"noise floor {nf.get('mean_scielab_de2000', float('nan')):.2f} mean S-CIELAB "
+          f"(target <= 0.5), inside the source "
+          f"{nf.get('inside_source_mean_scielab_de2000', float('nan')):.2f}; "
+          f"load average now {os.getloadavg()}")
 
 
 def block_error(args) -> None:
@@ -284,16 +387,29 @@ def main() -> None:
                     "(default: the proof's)")
     ap.add_argument("--bands", default=None, help="spectral bands, comma-separated (default "
                     "12, the proof's)")
+    ap.add_argument("--layouts", default=None, help="bands per Mitsuba pass: 'rgb' (three "
+                    "bands a pass) or 'mono' (one band a pass in all three channels), "
+                    "comma-separated (print_render.pass_bands; default: the proof's)")
     ap.add_argument("--floor-check", action="store_true", help="also the floor as it was "
                     "defined until 2026-12: two full renders at seeds 5, 6, figures between them")
     ap.add_argument("--reference-spp", type=int, default=0, help="render the view once at "
                     "this spp (every pass) and print each row's figures minus its (bias)")
+    ap.add_argument("--reference-file", default=None, help="with --reference-spp: read the "
+                    "reference render from this .npz when it holds the same print, view and "
+                    "spp, else render it and save it there (a 1024-spp reference at 128 px "
+                    "costs 230-550 CPU s)")
     ap.add_argument("--block-error", action="store_true")
     ap.add_argument("--variant", choices=("llvm", "scalar"), default=None,
                     help="Mitsuba's variant: scalar_rgb or llvm_ad_rgb (default: the proof's, "
                          "proof.mitsuba_setup)")
+    ap.add_argument("--contract", action="store_true", help="issue 49's target: convert "
+                    "and proof of --source at --height-mm as fresh processes, the ratio")
+    ap.add_argument("--proof-args", default=None, help="with --contract: more options for "
+                    "the proof (one string)")
     args = ap.parse_args()
-    if args.block_error:
+    if args.contract:
+        contract(args)
+    elif args.block_error:
         block_error(args)
     else:
         speed(args)

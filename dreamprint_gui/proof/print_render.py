@@ -31,7 +31,10 @@ Scene (units mm, the print centred on the origin, z up):
   (:mod:`.cameras`), box pixel filter.
 
 Mitsuba's RGB variant transports three channels independently (spectral MIS for distance
-sampling); the channels carry three spectral bands at a time, so 12 bands take 4 renders.
+sampling); the channels carry three spectral bands at a time, so 12 bands take 4 renders
+(:func:`pass_bands`; its ``"mono"`` layout, one band in all three channels, takes spectral MIS
+out of the path and lowers the noise at a given spp by a third, but costs as much per pass:
+the same noise per CPU second, ``docs/proof-measurements.md``).
 A pass whose bands weigh little in colour (650-730 nm: its noise hardly reaches XYZ) is
 rendered at a quarter of the samples (:func:`pass_spp`).
 """
@@ -50,8 +53,8 @@ from dreamprint_gui.proof.mitsuba_setup import fell_back, load_mitsuba
 from dreamprint_gui.proof.optics import Optics
 
 __all__ = ["render_print", "render_print_seeds", "render_print_halves", "half_spp", "BLOCK_PX",
-           "hides_direct", "thick_tiles", "pass_spp", "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER",
-           "SAMPLERS"]
+           "hides_direct", "thick_tiles", "pass_spp", "pass_bands", "LAYOUTS",
+           "DEFAULT_MAX_DEPTH", "DEFAULT_SAMPLER", "SAMPLERS"]
 
 DEFAULT_MAX_DEPTH = 512
 # volpathmis, not volpath: the three channels of a pass are three bands whose sigma_t differ
@@ -62,6 +65,7 @@ INTEGRATOR = "volpathmis"
 DEFAULT_SAMPLER = "independent"
 DEFAULT_RR_DEPTH = 5          # Mitsuba's: Russian roulette from the 5th bounce on
 SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
+LAYOUTS = ("rgb", "mono")
 FAINT_PASS = 0.25     # a pass weighing less than this x the largest in colour gets spp / 4
 TILE_PX = 32
 # the scalar variant's image blocks (pixels a side), one thread each: fixed, so that a render
@@ -220,7 +224,8 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                        rr_depth: int | None = None,
                        extra: list[tuple[int, tuple[int, int, int, int]]] = (),
                        extra_spp: int = 0,
-                       brick: int | None = None) -> tuple[list[NDArray], dict]:
+                       brick: int | None = None,
+                       layout: str = "rgb") -> tuple[list[NDArray], dict]:
     """:func:`render_print` at each of ``seeds`` (one scene per pass serves them all): the
     proof and its noise floor's second render. Returns the images per seed and the info.
     ``spp``: samples per pixel of every pass, or one count per pass (:func:`pass_spp`).
@@ -232,25 +237,25 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
 
     mi, variant, note = load_mitsuba()
     nb_ = sigma_t.shape[-1]
-    passes = -(-nb_ // 3)
-    pad = passes * 3 - nb_
-    if pad:
-        zeros = np.zeros(sigma_t.shape[:-1] + (pad,), np.float32)
-        sigma_t = np.concatenate([sigma_t, zeros], axis=-1)
-        albedo = np.concatenate([albedo, zeros], axis=-1)
+    groups = pass_bands(nb_, layout)
+    passes = len(groups)
     pass_spp_ = [int(spp)] * passes if np.ndim(spp) == 0 else [int(n) for n in spp]
     if len(pass_spp_) != passes or min(pass_spp_) < 1:
         raise ValueError(f"spp: one count >= 1 per pass ({passes}), got {spp}")
-    outs = [np.empty((len(views), resolution, resolution, passes * 3), np.float32)
-            for _ in seeds]
+    outs = [np.empty((len(views), resolution, resolution, nb_), np.float32) for _ in seeds]
     extra = list(extra) if extra_spp > 0 else []
     total = passes * (len(views) + len(extra)) * len(seeds)
     done = 0
-    for p in range(passes):
-        ch = slice(3 * p, 3 * p + 3)
+    for p, group in enumerate(groups):
+        # the pass's channels (three bands, or one band thrice) and where each band lands:
+        # its first channel
+        ch = list(group)
+        bands_ = sorted(set(ch))
+        first = [ch.index(b) for b in bands_]
+        st_p = np.ascontiguousarray(sigma_t[..., ch], np.float32)
+        al_p = np.ascontiguousarray(albedo[..., ch], np.float32)
         scene = mi.load_dict(scene_dict(
-            mi, np.ascontiguousarray(sigma_t[..., ch], np.float32),
-            np.ascontiguousarray(albedo[..., ch], np.float32), lo, hi, views, resolution,
+            mi, st_p, al_p, lo, hi, views, resolution,
             pass_spp_[p],
             max_depth, key_light, floor, brick=brick, sampler=sampler, optics=optics,
             rr_depth=rr_depth, crops=extra))
@@ -262,7 +267,7 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                     raise JobCancelled("the proof was cancelled")
                 img = mi.render(scene, sensor=sensors[f"view_{i:02d}"], spp=pass_spp_[p],
                                 seed=int(seed) * 7919 + 101 * i + p)
-                out[i, :, :, ch] = np.asarray(img, np.float32)[..., :3]
+                out[i][:, :, bands_] = np.asarray(img, np.float32)[..., first]
                 done += 1
                 if progress is not None:
                     progress(done, total)
@@ -273,9 +278,9 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
                 img = mi.render(scene, sensor=sensors[f"view_{i:02d}_crop_{j:03d}"],
                                 spp=int(extra_spp),
                                 seed=int(seed) * 7919 + 101 * i + p + 1000003 * (j + 1))
-                part = out[i, y0:y0 + h, x0:x0 + w, ch]
-                out[i, y0:y0 + h, x0:x0 + w, ch] = (
-                    pass_spp_[p] * part + extra_spp * np.asarray(img, np.float32)[..., :3]
+                part = out[i][y0:y0 + h, x0:x0 + w, bands_]
+                out[i][y0:y0 + h, x0:x0 + w, bands_] = (
+                    pass_spp_[p] * part + extra_spp * np.asarray(img, np.float32)[..., first]
                 ) / (pass_spp_[p] + extra_spp)
                 done += 1
                 if progress is not None:
@@ -289,7 +294,8 @@ def render_print_seeds(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDArr
             "rr_depth": int(DEFAULT_RR_DEPTH if rr_depth is None else rr_depth),
             "bricks": "adaptive" if brick is None else int(brick),
             **(optics or Optics()).describe()}
-    return [out[..., :nb_] for out in outs], info
+    info["layout"] = layout
+    return outs, info
 
 
 def half_spp(spp: int | Sequence[int]) -> int | list[int]:
@@ -309,7 +315,7 @@ def render_print_halves(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDAr
                         sampler: str = DEFAULT_SAMPLER, optics: Optics | None = None,
                         extra: list[tuple[int, tuple[int, int, int, int]]] = (),
                         extra_spp: int = 0, brick: int | None = None,
-                        rr_depth: int | None = None
+                        rr_depth: int | None = None, layout: str = "rgb"
                         ) -> tuple[NDArray, tuple[NDArray, NDArray], dict]:
     """The proof's print render: two independent halves of the samples, Mitsuba seeds ``seed``
     and ``seed + 1`` at :func:`half_spp` of ``spp`` (per pass) and of ``extra_spp`` each, and
@@ -329,7 +335,7 @@ def render_print_halves(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDAr
                                       (int(seed), int(seed) + 1), max_depth, key_light, floor,
                                       progress, cancelled, sampler, optics, rr_depth,
                                       extra=extra,
-                                      extra_spp=half_extra, brick=brick)
+                                      extra_spp=half_extra, brick=brick, layout=layout)
     info["halves"] = {"seeds": [int(seed), int(seed) + 1], "pass_spp": info["pass_spp"],
                       "extra_spp": info["extra_spp"]}
     info["pass_spp"] = [2 * n for n in info["pass_spp"]]
@@ -338,7 +344,24 @@ def render_print_halves(sigma_t: NDArray, albedo: NDArray, lo: NDArray, hi: NDAr
     return (a.astype(np.float64) + b) / 2.0, (a, b), info
 
 
-def pass_spp(xyz_weights: NDArray, spp: int, faint: float = FAINT_PASS) -> list[int]:
+def pass_bands(n_bands: int, layout: str = "rgb") -> list[tuple[int, int, int]]:
+    """The bands each Mitsuba pass carries in its three channels: ``"rgb"``, three
+    consecutive bands a pass (the last pass repeats its last band when ``n_bands`` is not a
+    multiple of 3); ``"mono"``, one band a pass in all three channels (``n_bands`` passes)."""
+    n = int(n_bands)
+    if layout == "mono":
+        return [(b, b, b) for b in range(n)]
+    if layout != "rgb":
+        raise ValueError(f"layout must be one of {LAYOUTS}, not {layout!r}")
+    out = []
+    for b0 in range(0, n, 3):
+        g = list(range(b0, min(b0 + 3, n)))
+        out.append(tuple(g + [g[-1]] * (3 - len(g))))
+    return out
+
+
+def pass_spp(xyz_weights: NDArray, spp: int, faint: float = FAINT_PASS,
+             layout: str = "rgb") -> list[int]:
     """Samples per pixel of each pass (three bands each, ``xyz_weights`` (n_bands, 3) the
     bands' CIE XYZ weights, :mod:`.spectral`): ``spp``, but a quarter of it (at least 1) in a
     pass whose colour weight (the norm of its bands' XYZ weights) is below ``faint`` times the
@@ -347,8 +370,8 @@ def pass_spp(xyz_weights: NDArray, spp: int, faint: float = FAINT_PASS) -> list[
     S-CIELAB noise floor at 16 spp (docs/physics.md), while its samples cost as much as the
     others'."""
     w = np.asarray(xyz_weights, np.float64)
-    passes = -(-w.shape[0] // 3)
-    norm = np.array([np.linalg.norm(w[3 * p:3 * p + 3]) for p in range(passes)])
+    norm = np.array([np.linalg.norm(w[sorted(set(g))])
+                     for g in pass_bands(w.shape[0], layout)])
     return [int(spp) if n >= faint * norm.max() else max(1, int(spp) // 4) for n in norm]
 
 

@@ -363,3 +363,75 @@ def test_the_print_is_the_mean_of_two_independent_halves():
     assert info["pass_spp"] == [8, 2] and info["spp"] == 8
     assert info["halves"] == {"seeds": [5, 6], "pass_spp": [4, 1], "extra_spp": 0}
     assert pr.half_spp(7) == 4 and pr.half_spp([64, 16, 1]) == [32, 8, 1]
+
+
+def _stripes_exact(omega_a: float, omega_b: float) -> tuple[float, float]:
+    from dreamprint_gui.proof.thick_patch import chandrasekhar_h
+
+    h = chandrasekhar_h([omega_a, omega_b], [1.0])[:, 0]
+    return tuple(1 - np.sqrt(1 - np.array([omega_a, omega_b])) * h)
+
+
+def test_the_proof_keeps_the_halftone_structure_of_the_print():
+    """A halftone at the pixel's scale must reach the proof's figures as printed, not blurred
+    (a denoiser, or any filter across pixels, smooths it as if it were noise): a deep block
+    of one-cell stripes of two materials (isotropic scattering, albedo 0.9 and 0.2, 40 mean
+    free paths per cell, so little light crosses a stripe: the bright one reads about 0.015
+    low, half of it Mitsuba's ray offset, which grows with the coordinates: a uniform block of
+    this size reads 0.008 low), seen face-on with one pixel per stripe. Each stripe's radiance
+    is the semi-infinite closed form of its own albedo, 1 - sqrt(1 - omega) H(1) (Chandrasekhar
+    1960): 0.415 and 0.035. The proof's print (render_print_halves, the mean of its two
+    halves) matches both within 0.03; the same image blurred by a 3-pixel filter (1/4, 1/2,
+    1/4) across the stripes misses both by about 0.18, so the test fails for any such
+    smoothing (Intel Open Image Denoise without a guide, on 64 such stripes: the bright ones
+    0.201 at 4 spp, 0.330 at 16; docs/proof-measurements.md)."""
+    from dreamprint_gui.proof.cameras import View
+
+    n, cell, (wa, wb) = 16, 1.0, (0.9, 0.2)
+    st = np.full((n, n, n, 3), 40.0, np.float32)
+    al = np.full_like(st, wa)
+    al[:, 1::2] = wb                        # stripes along y: the image's columns
+    lo = -np.full(3, n * cell / 2)
+    view = View(0.0, 0.0, n * cell / 2, 4 * n * cell)    # face-on, one pixel per stripe
+    mean, _, _ = pr.render_print_halves(st, al, lo, -lo, [view], n, 64, seed=2)
+    img = mean[0, 4:-4, 2:-2]               # away from the block's edges
+    exact = np.array(_stripes_exact(wa, wb))
+
+    def stripes(im):
+        # the image's columns alternate between the two materials (which one comes first
+        # depends on the camera's handedness: the brighter one is the albedo 0.9)
+        even, odd = im[:, 0::2].mean(), im[:, 1::2].mean()
+        return np.array(sorted((even, odd), reverse=True))
+
+    np.testing.assert_allclose(stripes(img), exact, atol=0.03)
+    blurred = 0.5 * img[:, 1:-1] + 0.25 * (img[:, :-2] + img[:, 2:])
+    assert np.abs(stripes(blurred) - exact).min() > 0.1
+
+
+def test_bands_per_pass_rgb_and_mono():
+    """'rgb': three consecutive bands a pass, the last pass repeating its last band; 'mono':
+    one band a pass in all three channels. The faint-pass rule weighs each pass's own bands."""
+    assert pr.pass_bands(6) == [(0, 1, 2), (3, 4, 5)]
+    assert pr.pass_bands(7) == [(0, 1, 2), (3, 4, 5), (6, 6, 6)]
+    assert pr.pass_bands(3, "mono") == [(0, 0, 0), (1, 1, 1), (2, 2, 2)]
+    with pytest.raises(ValueError, match="layout"):
+        pr.pass_bands(3, "cmy")
+    b = spectral_bands(default_profile(), 12)
+    mono = pr.pass_spp(b.xyz_weights, 32, layout="mono")
+    assert len(mono) == 12 and set(mono) == {32, 8}
+    assert mono[-3:] == [8, 8, 8]          # 670-730 nm weigh little in colour
+
+
+def test_mono_passes_render_the_same_print_as_rgb_passes():
+    """The same White fog (6 bands) rendered three bands a pass and one band a pass: two
+    estimates of the same band radiance, so each band's mean over the image agrees within
+    the renders' noise (four standard errors, from two seeds of each)."""
+    st, al, lo, views = _white_fog(6)
+    (a, a2), info = pr.render_print_seeds(st, al, lo, -lo, views, RES, 32, (1, 2))
+    (m, m2), info_m = pr.render_print_seeds(st, al, lo, -lo, views, RES, 32, (1, 2),
+                                            layout="mono")
+    assert info["passes"] == 2 and info_m["passes"] == 6 and info_m["layout"] == "mono"
+    # the noise of an image mean: from two seeds of each layout
+    err = np.hypot((a - a2)[0].std(axis=(0, 1)), (m - m2)[0].std(axis=(0, 1))) / RES
+    diff = ((a + a2) - (m + m2))[0].mean(axis=(0, 1)) / 2
+    assert np.all(np.abs(diff) < 4 * err + 1e-4), (diff, err)
