@@ -54,7 +54,10 @@ case "$what" in
   test)
     .venv/bin/ruff check .
     .venv/bin/lint-imports   # the package's layers (pyproject.toml [tool.importlinter])
-    exec .venv/bin/python -m pytest -q "$@"
+    # Two worker processes (pytest-xdist; the suite's heavy steps are mostly single-threaded),
+    # each test file whole on one of them (its module fixtures built once). `-n 0` after
+    # `test` runs it in one process; `pytest tests/...` by hand runs in one process too.
+    exec .venv/bin/python -m pytest -q -n 2 --dist loadfile "$@"
     ;;
   *)
     echo "usage: ./quickstart.sh app|test" >&2; exit 2 ;;

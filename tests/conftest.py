@@ -52,3 +52,15 @@ def openvdb_python() -> str:
         pytest.skip("no Python with pyopenvdb here (apt-get install python3-openvdb): the "
                     "OpenVDB cross-check and the files it writes are unavailable")
     return py
+
+
+@pytest.fixture
+def idle_machine(monkeypatch):
+    """The machine taken as idle by the pre-flight's estimates (``job.prepare_time.
+    machine_slowdown`` = 1): a command's ``opening NAME: about T ...`` notice, said when
+    opening a source is estimated at 2 s or more *now*, then depends on the source alone, not
+    on the load (a shared 2-core machine at load 15 announced 0 MB files on stderr, where
+    tests read the one line of an error)."""
+    from dreamprint_gui.job import prepare_time
+
+    monkeypatch.setattr(prepare_time, "machine_slowdown", lambda *a, **k: 1.0)

@@ -264,7 +264,7 @@ def opening_notice(spec: str, at_least_s: float = 2.0) -> str | None:
         return None
     name = os.path.basename(str(spec).rstrip("/")) or str(spec)
     size = source_bytes(str(spec))
-    return (f"opening {name}{f' ({size / 1e6:.0f} MB)' if size else ''}: about "
+    return (f"opening {name}{f' ({size / 1e6:.0f} MB)' if size else ''}: "
             f"{about_text(est * slow)} (reading it, its up axis, its occupied bounds) ...")
 
 

@@ -156,6 +156,10 @@ def clean_env(tmp_path_factory, shared_data):
     env = {k: v for k, v in os.environ.items()
            if k not in ("PYTHONPATH", "DRJIT_LIBLLVM_PATH", "VIRTUAL_ENV", "PYTHONHOME")}
     env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    # numba's cache of this install's kernels, kept with the install: the installed sources'
+    # paths are new every session, so nothing in the user's cache would ever serve them again
+    # (the package honours a NUMBA_CACHE_DIR it is given, dreamprint_gui/__init__.py)
+    env["NUMBA_CACHE_DIR"] = str(base / "numba-cache")
     return venv / "bin" / "dreamprint", env, files, seconds, base
 
 

@@ -7,6 +7,11 @@ import numpy as np
 import pytest
 
 
+@pytest.fixture(autouse=True)
+def _idle(idle_machine):
+    """What ``dreamprint inspect`` says on stderr about a file does not depend on the load."""
+
+
 def _box_expectation(grid, lo, hi, value):
     """Closed form for a box of constant ``value`` over [lo, hi] (source units): value at the
     printer voxel centres inside the box, 0 outside, as a (z, y, x) array."""
