@@ -13,8 +13,8 @@ since the wall time depends on it.
 
     PYTHONPATH=. python benchmarks/bench_compensate.py [--height-mm 20] [--iterations 4]
         [--resolution 64] [--spp 32] [--views 3] [--backgrounds clear,empty] [--only knight]
-        [--seed 0] [--step 1.0] [--judge-spp 256] [--judge-cells 128] [--judge-layers 0]
-        [--intent relative] [--fine-cells 0]
+        [--seed 0] [--step 1.0] [--judge-spp 256[,1024]] [--judge-views 4] [--judge-cells 128]
+        [--judge-layers 0] [--intent relative] [--fine-cells 0]
 
 Every figure is the proof's headline, inside the source (``compare.headline``; all object
 pixels and the share where the source is empty on a second line), against the source as the
@@ -146,9 +146,8 @@ def floor_only(a) -> None:
 
 
 def main() -> None:
-    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
-    from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS, ProofSettings, render_proof
+    from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--height-mm", type=float, default=20.0)
@@ -164,8 +163,12 @@ def main() -> None:
     ap.add_argument("--fine-cells", type=int, default=None,
                     help="The fine field's cells (proof/fine_field.py; 0: the coarse field "
                          "alone; default: the optimiser's).")
-    ap.add_argument("--judge-spp", type=int, default=256,
-                    help="Samples per pixel of the held-out proofs.")
+    ap.add_argument("--judge-spp", default="256",
+                    help="Samples per pixel of the held-out proofs; several (128,512): the "
+                         "same correction judged at each, a row per figure (is a change "
+                         "hidden by the judge's own noise?).")
+    ap.add_argument("--judge-views", type=int, default=4,
+                    help="Held-out cameras (elevation 20 degrees).")
     ap.add_argument("--judge-cells", type=int, default=128,
                     help="Medium cells on the longest axis of the held-out proofs.")
     ap.add_argument("--judge-layers", type=int, default=0,
@@ -205,63 +208,80 @@ def main() -> None:
                                                         {"fine_cells": a.fine_cells}))
             rep = drive(run_compensate(cs))
             t_opt = time.perf_counter() - t0
-            res = {}
-            noise = {}
-            floor = None
-            for method, comp in (("paper", None), ("compensated", corr)):
-                ps = ProofSettings(source=src, height_mm=a.height_mm, views=4,
-                                   resolution=a.resolution, spp=a.judge_spp, seed=a.seed,
-                                   background=bg, max_cells=a.judge_cells,
-                                   layers_per_block=a.judge_layers, compensation=comp,
-                                   intent=a.intent)
-                rep_m = drive(render_proof(ps))["report"]
-                res[method] = rep_m["overall"]
-                floor = rep_m["gamut_floor"] or floor
-                noise[method] = rep_m["noise_floor"]
-            os.unlink(corr)
-            load1 = open("/proc/loadavg").read().split()[:3]
-            p, c = res["paper"], res["compensated"]
-            hp, hc, hf = headline(p), headline(c), headline(floor)
-            row = {"source": name, "background": bg, "intent": a.intent, "paper": p,
-                   "compensated": c, "gamut_floor": floor, "noise_floor": noise,
-                   "headline": {"paper": hp, "compensated": hc, "gamut_floor": hf},
-                   "reduction_de_mean": 1 - hc["mean_de2000"] / hp["mean_de2000"],
-                   "reduction_scielab_mean": 1 - hc["mean_scielab_de2000"]
-                   / hp["mean_scielab_de2000"],
-                   "optimise_s": round(t_opt, 1), "training": rep["figures"],
-                   "optimiser_method": rep["method"],
-                   "cpu_s": round(time.process_time() - cpu0, 1),
-                   "load_before": load0, "load_after": load1}
-            rows.append(row)
-            nf = noise["paper"]
-            print(f"{name:7s} {bg:6s} {hp['where']}: paper dE {hp['mean_de2000']:5.2f}/"
-                  f"{hp['p95_de2000']:5.2f} S-CIELAB {hp['mean_scielab_de2000']:5.2f} "
-                  f"cov {hp['coverage_error']:+.3f} | compensated dE {hc['mean_de2000']:5.2f}/"
-                  f"{hc['p95_de2000']:5.2f} S-CIELAB {hc['mean_scielab_de2000']:5.2f} "
-                  f"cov {hc['coverage_error']:+.3f} | "
-                  f"{-100 * row['reduction_de_mean']:+.0f}% dE, "
-                  f"{-100 * row['reduction_scielab_mean']:+.0f}% S-CIELAB | floor dE "
-                  f"{hf['mean_de2000']:5.2f} S-CIELAB {hf['mean_scielab_de2000']:5.2f} | "
-                  "render noise dE "
-                  f"{nf.get('inside_source_mean_de2000', nf['mean_de2000']):4.2f} S-CIELAB "
-                  f"{nf.get('inside_source_mean_scielab_de2000', nf['mean_scielab_de2000']):4.2f}"
-                  f" | optimise {t_opt:.0f} s, all {row['cpu_s']:.0f} CPU s "
-                  f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)
-            if p["empty_source_fraction"] >= EMPTY_NOTE_MIN:
-                print(f"{'':14s} all object pixels: dE {p['mean_de2000']:5.2f} -> "
-                      f"{c['mean_de2000']:5.2f}, S-CIELAB {p['mean_scielab_de2000']:5.2f} -> "
-                      f"{c['mean_scielab_de2000']:5.2f}, cov {p['coverage_error']:+.3f} -> "
-                      f"{c['coverage_error']:+.3f}; where the source is empty "
-                      f"({100 * p['empty_source_fraction']:.0f} % of them): shares of dE "
-                      f"{p['empty_source_de2000']:5.2f} / {c['empty_source_de2000']:5.2f}, "
-                      f"S-CIELAB {p['empty_source_scielab_de2000']:5.2f} / "
-                      f"{c['empty_source_scielab_de2000']:5.2f}, cov "
-                      f"{p['empty_source_coverage_error']:+.3f} / "
-                      f"{c['empty_source_coverage_error']:+.3f} (paper / compensated)",
-                      flush=True)
+            try:
+                for spp in (int(v) for v in str(a.judge_spp).split(",")):
+                    rows.append(judge(a, name, bg, src, corr, spp, rep, t_opt, cpu0, load0))
+                    cpu0 = time.process_time()
+                    load0 = open("/proc/loadavg").read().split()[:3]
+            finally:
+                os.unlink(corr)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as fh:
             json.dump(rows, fh, indent=2)
+
+
+def judge(a, name: str, bg: str, src: str, corr: str, spp: int, rep: dict, t_opt: float,
+          cpu0: float, load0: list) -> dict:
+    """Both held-out proofs (the paper's method, the compensated job) at ``spp`` samples per
+    pixel; prints the row and returns it. ``cpu0``: the row's CPU clock at its start (the first
+    row carries the optimisation's CPU time)."""
+    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline
+    from dreamprint_gui.proof.runner import ProofSettings, render_proof
+
+    res = {}
+    noise = {}
+    floor = None
+    for method, comp in (("paper", None), ("compensated", corr)):
+        ps = ProofSettings(source=src, height_mm=a.height_mm, views=a.judge_views,
+                           resolution=a.resolution, spp=spp, seed=a.seed,
+                           background=bg, max_cells=a.judge_cells,
+                           layers_per_block=a.judge_layers, compensation=comp,
+                           intent=a.intent)
+        rep_m = drive(render_proof(ps))["report"]
+        res[method] = rep_m["overall"]
+        floor = rep_m["gamut_floor"] or floor
+        noise[method] = rep_m["noise_floor"]
+    load1 = open("/proc/loadavg").read().split()[:3]
+    p, c = res["paper"], res["compensated"]
+    hp, hc, hf = headline(p), headline(c), headline(floor)
+    row = {"source": name, "background": bg, "intent": a.intent, "paper": p,
+           "compensated": c, "gamut_floor": floor, "noise_floor": noise,
+           "headline": {"paper": hp, "compensated": hc, "gamut_floor": hf},
+           "reduction_de_mean": 1 - hc["mean_de2000"] / hp["mean_de2000"],
+           "reduction_scielab_mean": 1 - hc["mean_scielab_de2000"]
+           / hp["mean_scielab_de2000"],
+           "judge_spp": spp, "judge_views": a.judge_views,
+           "optimise_s": round(t_opt, 1), "training": rep["figures"],
+           "optimiser_method": rep["method"],
+           "cpu_s": round(time.process_time() - cpu0, 1),
+           "load_before": load0, "load_after": load1}
+    nf = noise["paper"]
+    print(f"{name:7s} {bg:6s} {hp['where']}: paper dE {hp['mean_de2000']:5.2f}/"
+          f"{hp['p95_de2000']:5.2f} S-CIELAB {hp['mean_scielab_de2000']:5.2f} "
+          f"cov {hp['coverage_error']:+.3f} | compensated dE {hc['mean_de2000']:5.2f}/"
+          f"{hc['p95_de2000']:5.2f} S-CIELAB {hc['mean_scielab_de2000']:5.2f} "
+          f"cov {hc['coverage_error']:+.3f} | "
+          f"{-100 * row['reduction_de_mean']:+.0f}% dE, "
+          f"{-100 * row['reduction_scielab_mean']:+.0f}% S-CIELAB | floor dE "
+          f"{hf['mean_de2000']:5.2f} S-CIELAB {hf['mean_scielab_de2000']:5.2f} | "
+          "render noise dE "
+          f"{nf.get('inside_source_mean_de2000', nf['mean_de2000']):4.2f} S-CIELAB "
+          f"{nf.get('inside_source_mean_scielab_de2000', nf['mean_scielab_de2000']):4.2f}"
+          f" | optimise {t_opt:.0f} s, all {row['cpu_s']:.0f} CPU s "
+          f"(load {' '.join(load0)} -> {' '.join(load1)})", flush=True)
+    if p["empty_source_fraction"] >= EMPTY_NOTE_MIN:
+        print(f"{'':14s} all object pixels: dE {p['mean_de2000']:5.2f} -> "
+              f"{c['mean_de2000']:5.2f}, S-CIELAB {p['mean_scielab_de2000']:5.2f} -> "
+              f"{c['mean_scielab_de2000']:5.2f}, cov {p['coverage_error']:+.3f} -> "
+              f"{c['coverage_error']:+.3f}; where the source is empty "
+              f"({100 * p['empty_source_fraction']:.0f} % of them): shares of dE "
+              f"{p['empty_source_de2000']:5.2f} / {c['empty_source_de2000']:5.2f}, "
+              f"S-CIELAB {p['empty_source_scielab_de2000']:5.2f} / "
+              f"{c['empty_source_scielab_de2000']:5.2f}, cov "
+              f"{p['empty_source_coverage_error']:+.3f} / "
+              f"{c['empty_source_coverage_error']:+.3f} (paper / compensated)",
+              flush=True)
+    return row
 
 
 if __name__ == "__main__":
