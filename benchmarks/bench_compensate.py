@@ -145,6 +145,61 @@ def floor_only(a) -> None:
                   f"({time.perf_counter() - t0:.0f} s)", flush=True)
 
 
+def coverage_floor(a, src: str, bg: str) -> float | None:
+    """The least coverage error inside the source (held-out cameras, the judge's cells) that
+    any ink placed in the object reaches: per pixel, the print cannot be more transparent than
+    its Clear block alone (``compensate.floor_alphas``), so where the source is thinner than the
+    block the error is at least ``alpha_block - alpha_source``; mean over the pixels inside the
+    source of ``max(alpha_block - alpha_source, 0)`` (None without a block). A signed mean below
+    it needs other pixels more transparent than the source."""
+    import numpy as np
+
+    from dreamprint_gui.job.plan import ConvertSettings
+    from dreamprint_gui.proof.cameras import orbit_views
+    from dreamprint_gui.proof.compare import COVERAGE_THRESHOLD
+    from dreamprint_gui.proof.compensate import floor_alphas
+    from dreamprint_gui.proof.labels import EngineLabels
+    from dreamprint_gui.proof.medium import EMPTY, N_LABELS, block_for_cell
+    from dreamprint_gui.proof.runner import ProofSettings
+    from dreamprint_gui.proof.source_render import render_source, sample_source
+    from dreamprint_gui.proof.spectral import spectral_bands
+
+    if bg != "clear":
+        return None
+    ps = ProofSettings(source=src, height_mm=a.height_mm, views=a.judge_views,
+                       resolution=a.resolution, background=bg, max_cells=a.judge_cells,
+                       intent=a.intent)
+    lab = EngineLabels(ConvertSettings.from_spec(ps.spec))
+    size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
+    block = block_for_cell(lab.voxel_mm, size, a.judge_cells)
+    cells = tuple(-(-n // b) for n, b in zip(lab.shape_xyz, block, strict=True))
+    # the cells' printed share (the rest lies beyond the print grid: air), as block_fractions
+    # counts it; the block is all of it
+    share = np.ones(cells[::-1])
+    for axis, (n, b) in enumerate(zip(lab.shape_xyz, block, strict=True)):
+        k = np.arange(cells[axis])
+        part = np.clip(n - k * b, 0, b) / b
+        shape = [1, 1, 1]
+        shape[2 - axis] = cells[axis]
+        share = share * part.reshape(shape)
+    frac = np.zeros(share.shape + (N_LABELS,), np.float32)
+    frac[..., EMPTY] = 1.0 - share
+    frac[..., 0] = share   # any printed label: floor_alphas makes it Clear
+    lo = -0.5 * np.asarray(size)
+    cell_mm = tuple(b * v for b, v in zip(block, lab.voxel_mm, strict=True))
+    views = orbit_views(size, a.judge_views)
+    bands = spectral_bands(lab.profile, 12)
+    field = sample_source(lab.source, lab.grid, block, lab.density_scale, cells, lo)
+    a0 = floor_alphas(frac, bg, bands, lo, cell_mm, views, a.resolution)
+    gaps, n = 0.0, 0
+    for v, f0 in zip(views, a0, strict=True):
+        _, a_s = render_source(field, v, a.resolution)
+        inside = a_s > COVERAGE_THRESHOLD
+        gaps += float(np.maximum(f0 - a_s, 0.0)[inside].sum())
+        n += int(inside.sum())
+    return gaps / max(n, 1)
+
+
 def main() -> None:
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
     from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS
@@ -179,6 +234,10 @@ def main() -> None:
                          "reference is the source as it maps it.")
     ap.add_argument("--only", default="knight,smoke,splat")
     ap.add_argument("--json", default=None, help="Also write the rows to this file.")
+    ap.add_argument("--coverage-floor", action="store_true",
+                    help="Only the least coverage error inside the source any ink in the "
+                         "object reaches with a Clear block (the block's own coverage where "
+                         "the source is thinner).")
     ap.add_argument("--floor-only", action="store_true",
                     help="Only the gamut floor of each source (no labels, no print render).")
     ap.add_argument("--job-cost", action="store_true",
@@ -190,6 +249,17 @@ def main() -> None:
         return
     if a.floor_only:
         floor_only(a)
+        return
+    if a.coverage_floor:
+        for name in a.only.split(","):
+            for bg in a.backgrounds.split(","):
+                t0, c0 = time.perf_counter(), time.process_time()
+                f = coverage_floor(a, SOURCES[name], bg)
+                print(f"{name:7s} {bg:6s} coverage floor inside the source: "
+                      + ("none (no block)" if f is None else f"{f:+.3f}")
+                      + f" ({time.perf_counter() - t0:.0f} s, {time.process_time() - c0:.0f} "
+                      f"CPU s, load {' '.join(open('/proc/loadavg').read().split()[:3])})",
+                      flush=True)
         return
     rows = []
     for name in a.only.split(","):

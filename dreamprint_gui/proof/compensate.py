@@ -121,6 +121,7 @@ from dreamprint_gui.proof.spectral import spectral_bands
 
 __all__ = ["CompensateSettings", "run_compensate", "optimise", "backproject",
            "training_views", "pixel_values", "cell_log_ratios", "pixel_log_ratios",
+           "floor_alphas",
            "TRAIN_ELEVATION_DEG"]
 
 TRAIN_ELEVATION_DEG = 35.0
@@ -353,6 +354,20 @@ def pixel_log_ratios(src_lin: NDArray, src_alpha: NDArray, prn_lin: NDArray,
     return cell_log_ratios(pixel_values(src_lin, src_alpha, prn_lin, prn_alpha, floor_alpha))
 
 
+def floor_alphas(fractions: NDArray, background: str, bands: Any, lo: NDArray,
+                 cell_mm: tuple[float, float, float], views: list[View], resolution: int
+                 ) -> list[NDArray | None]:
+    """Per view (res, res): the print's coverage with the object taken out
+    (:func:`.medium.background_fractions`: the Clear block's own, luminance-weighted direct
+    transmittance as the proof takes it), or None per view without a block. No density factor
+    in the object takes a pixel's coverage below it."""
+    if background != "clear":
+        return [None] * len(views)
+    st0, _ = medium_coefficients(background_fractions(fractions, "clear"), bands.K, bands.S)
+    y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    return [1.0 - optical_depth(st0, lo, cell_mm, v, resolution, sub=3) @ y_w for v in views]
+
+
 def _field_update(num: NDArray, den: NDArray, smooth: float = 0.7) -> NDArray:
     """Weighted mean log ratio per cell (0 where no weight), smoothed (Gaussian, in cells)."""
     from scipy.ndimage import gaussian_filter
@@ -434,13 +449,8 @@ class _Loop:
         obs = bands.observer
         to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
         if not self.floor_alpha:
-            self.floor_alpha = [None] * len(self.views)
-            if s.background == "clear":
-                st0, _ = medium_coefficients(background_fractions(medium.fractions, "clear"),
-                                             bands.K, bands.S)
-                self.floor_alpha = [1.0 - optical_depth(st0, lo, medium.cell_mm, v,
-                                                        s.resolution, sub=3) @ y_w
-                                    for v in self.views]
+            self.floor_alpha = floor_alphas(medium.fractions, s.background, bands, lo,
+                                            medium.cell_mm, self.views, s.resolution)
         lins, alphas, figs = [], [], []
         for i, v in enumerate(self.views):
             T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
