@@ -32,19 +32,13 @@ plain ratio ``tau_s / tau_p`` took the block for the object's: the INRIA splat i
 at 20 mm, held-out coverage error inside the source +0.033 open loop, +0.040 compensated with
 it (bench_compensate.py, docs/proof-measurements.md)
 
-are taken per field cell, clipped to [1/2, 2]: the colour's as the ratio of the back-projected
-means of ``s_c`` and ``p_c`` over the pixels that see the cell (:func:`pixel_values`,
-:func:`cell_log_ratios`), with each cell's weight in the source's emission-absorption render
-of the pixel (``T_i (1 - exp(-sigma_i h))``, :func:`backproject`), the coverage's as the mean of
-its per-pixel log (no render noise: the print's direct transmittance is a deterministic ray
-march). The mean of per-pixel ratios of a noisy render is biased, ``E ln(s/p) ~ ln(s/E p) +
-Var(p) / (2 p^2)``: at the training's 32 spp most on dark channels, which it asked to lighten
-(the knight's b* moved the wrong way, docs/proof-measurements.md); the ratio of means averages
-the noise first. The coarse field moves by ``log g += step * ln r``, the fine one by the detail
-of the same ratio on its cells (:func:`.fine_field.fine_update`). On a monotone map from
-source colour to printed colour this is a damped Newton step with unit slope (a multiplicative
-fixed point, ``g <- g * s / p``); the field whose training error was lowest is kept (the
-renders are noisy).
+are clipped to [1/2, 2] and back-projected, in the log, onto the field's cells with the weight
+each cell has in the source's emission-absorption render of that pixel
+(``T_i (1 - exp(-sigma_i h))``, :func:`backproject`); the coarse field moves by
+``log g += step * (weighted mean log r)``, the fine one by the detail of the same mean on its
+cells (:func:`.fine_field.fine_update`). On a monotone map from source colour to printed
+colour this is a damped Newton step with unit slope (a multiplicative fixed point,
+``g <- g * s / p``); the field whose training error was lowest is kept (the renders are noisy).
 Why not gradients of ``prbvolpath`` (Mitsuba 3 on ``llvm_ad_rgb``): each Mitsuba render of the
 print here is a medium on 16^3 cell bricks through the job's halftoning (labels are discrete, so
 d(print)/d(field) does not exist through the job itself; a differentiable proxy would optimise
@@ -120,9 +114,7 @@ from dreamprint_gui.proof.source_render import (
 from dreamprint_gui.proof.spectral import spectral_bands
 
 __all__ = ["CompensateSettings", "run_compensate", "optimise", "backproject",
-           "training_views", "pixel_values", "cell_log_ratios", "pixel_log_ratios",
-           "floor_alphas",
-           "TRAIN_ELEVATION_DEG"]
+           "training_views", "floor_alphas", "TRAIN_ELEVATION_DEG"]
 
 TRAIN_ELEVATION_DEG = 35.0
 # the history's headline figures (inside the source)
@@ -312,19 +304,19 @@ def backproject(field: SourceField, view: View, resolution: int, values: NDArray
                  num, den)
 
 
-def pixel_values(src_lin: NDArray, src_alpha: NDArray, prn_lin: NDArray,
-                 prn_alpha: NDArray, floor_alpha: NDArray | None = None) -> NDArray:
-    """Per pixel (res, res, 7): the object colour the source asks for (3) and the print's
-    (3), linear sRGB unpremultiplied over the white background at the print's coverage, and
-    the log of the clipped ratio of the object's optical depth (1), source over print (module
-    docstring); ``floor_alpha``: the print's coverage with the object taken out (a Clear
-    block's; None: no block, 0). :func:`cell_log_ratios` makes them log ratios."""
+def pixel_log_ratios(src_lin: NDArray, src_alpha: NDArray, prn_lin: NDArray,
+                     prn_alpha: NDArray, floor_alpha: NDArray | None = None) -> NDArray:
+    """Per pixel (res, res, 4): log of the clipped ratios of object colour (3, linear sRGB,
+    unpremultiplied over the white background) and of the object's optical depth (1), source
+    over print (module docstring); ``floor_alpha``: the print's coverage with the object taken
+    out (a Clear block's; None: no block, 0)."""
     a_p = np.clip(prn_alpha, _ALPHA_MIN, 1.0)[..., None]
     # the object colour the print needs at its own coverage for its pixel to equal the
     # source's (over the white background): (S - (1 - a_p)) / a_p; a print more transparent
     # than the source asks for a darker colour
     t_obj = np.clip((src_lin - (1.0 - a_p)) / a_p, 0.0, None)
     p_obj = np.clip((prn_lin - (1.0 - a_p)) / a_p, 0.0, None)
+    rc = (t_obj + _EPS_COLOUR) / (p_obj + _EPS_COLOUR)
     tau_s = -np.log1p(-np.clip(src_alpha, _ALPHA_MIN, 0.98))
     tau_p = -np.log1p(-np.clip(prn_alpha, _ALPHA_MIN, 0.98))
     t_min = -math.log1p(-_ALPHA_MIN)
@@ -333,25 +325,8 @@ def pixel_values(src_lin: NDArray, src_alpha: NDArray, prn_lin: NDArray,
     else:
         tau_0 = -np.log1p(-np.clip(floor_alpha, 0.0, 0.98))
         rs = np.maximum(tau_s - tau_0, t_min) / np.maximum(tau_p - tau_0, t_min)
-    ls = np.log(np.clip(rs, 1.0 / RATIO_CLIP, RATIO_CLIP))
-    return np.concatenate([t_obj, p_obj, ls[..., None]], axis=-1)
-
-
-def cell_log_ratios(values: NDArray) -> NDArray[np.float64]:
-    """(..., 4) log factors asked for from (weighted means of) :func:`pixel_values` (..., 7):
-    the log of the clipped ratio of source to print colour per channel, and the coverage's
-    log ratio as it is."""
-    v = np.asarray(values, np.float64)
-    rc = (v[..., 0:3] + _EPS_COLOUR) / (v[..., 3:6] + _EPS_COLOUR)
-    return np.concatenate([np.log(np.clip(rc, 1.0 / RATIO_CLIP, RATIO_CLIP)), v[..., 6:7]],
-                          axis=-1)
-
-
-def pixel_log_ratios(src_lin: NDArray, src_alpha: NDArray, prn_lin: NDArray,
-                     prn_alpha: NDArray, floor_alpha: NDArray | None = None) -> NDArray:
-    """Per pixel (res, res, 4): the log ratios one pixel asks for (:func:`cell_log_ratios` of
-    its own :func:`pixel_values`)."""
-    return cell_log_ratios(pixel_values(src_lin, src_alpha, prn_lin, prn_alpha, floor_alpha))
+    r = np.concatenate([rc, rs[..., None]], axis=-1)
+    return np.log(np.clip(r, 1.0 / RATIO_CLIP, RATIO_CLIP))
 
 
 def floor_alphas(fractions: NDArray, background: str, bands: Any, lo: NDArray,
@@ -543,22 +518,21 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
             best = (_score(o), gain.copy(), o)
         if it == n_it:
             break
-        num = np.zeros(loop.gshape + (7,))
+        num = np.zeros(loop.gshape + (4,))
         den = np.zeros(loop.gshape)
-        num_f = np.zeros(fshape + (7,)) if fshape else None
+        num_f = np.zeros(fshape + (4,)) if fshape else None
         den_f = np.zeros(fshape) if fshape else None
         for i, v in enumerate(loop.views):
-            pv = pixel_values(loop.src_lin[i], loop.src_alpha[i], lins[i], alphas[i],
-                              loop.floor_alpha[i])
-            backproject(loop.src, v, s.resolution, pv, loop.box_lo, loop.box_size, num, den)
+            lr = pixel_log_ratios(loop.src_lin[i], loop.src_alpha[i], lins[i], alphas[i],
+                                  loop.floor_alpha[i])
+            backproject(loop.src, v, s.resolution, lr, loop.box_lo, loop.box_size, num, den)
             if fshape:
-                backproject(loop.src, v, s.resolution, pv, loop.box_lo, loop.box_size, num_f,
+                backproject(loop.src, v, s.resolution, lr, loop.box_lo, loop.box_size, num_f,
                             den_f)
-        upd = cell_log_ratios(_field_update(num, den))
+        upd = _field_update(num, den)
         log_c = np.clip(log_c + s.step * upd, -math.log(8.0), math.log(8.0))
         if fshape:
-            log_f = np.clip(log_f + s.step * fine_update(num_f, den_f, upd,
-                                                         transform=cell_log_ratios),
+            log_f = np.clip(log_f + s.step * fine_update(num_f, den_f, upd),
                             -math.log(FINE_RANGE), math.log(FINE_RANGE))
         gain = compose(log_c, log_f)
     _, gain, o_best = best

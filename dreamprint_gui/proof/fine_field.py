@@ -40,7 +40,6 @@ Hand-written: the split is a few lines of NumPy and SciPy's Gaussian filter.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -75,25 +74,22 @@ def upsample(coarse: NDArray, fshape: tuple[int, int, int]) -> NDArray[np.float6
 
 
 def fine_update(num: NDArray, den: NDArray, coarse_update: NDArray, smooth: float = 0.7,
-                shrink: float = SHRINK_WEIGHT,
-                transform: Callable[[NDArray], NDArray] | None = None) -> NDArray[np.float64]:
+                shrink: float = SHRINK_WEIGHT) -> NDArray[np.float64]:
     """The fine field's update (module docstring): ``num`` (fz, fy, fx, C) and ``den`` (fz, fy,
     fx) the back-projected sums on the fine cells, ``coarse_update`` the coarse field's update
-    (gz, gy, gx, C') of the same iteration; ``transform`` maps the fine cells' weighted means
-    (..., C) to the update's channels (..., C'; None: the means are the update)."""
+    (gz, gy, gx, C) of the same iteration."""
     from scipy.ndimage import gaussian_filter
 
     W = gaussian_filter(den, smooth, mode="nearest")
     up = upsample(coarse_update, den.shape)
+    out = np.zeros(num.shape)
     ok = W > 1e-9
     conf = np.where(ok, W / (W + shrink), 0.0)
-    mean = np.zeros(num.shape)
     for c in range(num.shape[-1]):
         sm = gaussian_filter(num[..., c], smooth, mode="nearest")
-        mean[..., c] = np.divide(sm, W, out=np.zeros_like(sm), where=ok)
-    if transform is not None:
-        mean = transform(mean)
-    return conf[..., None] * (mean - up)
+        mean = np.divide(sm, W, out=np.zeros_like(sm), where=ok)
+        out[..., c] = conf * (mean - up[..., c])
+    return out
 
 
 def compose(log_coarse: NDArray, log_fine: NDArray | None) -> NDArray[np.float64]:
