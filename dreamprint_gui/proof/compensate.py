@@ -28,9 +28,11 @@ without a block), ``t = -ln(1 - 0.02)``: the density factor scales the object's 
 optical depth, not the block's, so the Newton step on it is the ratio of the object's parts
 (``tau_0 + g' tau_obj = tau_s``); a source thinner than the block alone asks for the least
 density (the clip), a print at the block's floor where the source is too asks for nothing. The
-plain ratio ``tau_s / tau_p`` took the block for the object's: the INRIA splat in its Clear block
-at 20 mm, held-out coverage error inside the source +0.033 open loop, +0.040 compensated with
-it (bench_compensate.py, docs/proof-measurements.md)
+plain ratio ``tau_s / tau_p`` took the block for the object's (the INRIA splat in its Clear
+block at 20 mm, held-out coverage error inside the source +0.033 open loop, +0.040 compensated
+with it, +0.039 with this; no ink in the object takes it below +0.038 there, where a quarter
+of the pixels see a source thinner than the block alone: ``bench_compensate.py
+--coverage-floor``, docs/proof-measurements.md)
 
 are clipped to [1/2, 2] and back-projected, in the log, onto the field's cells with the weight
 each cell has in the source's emission-absorption render of that pixel
