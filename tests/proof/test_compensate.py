@@ -192,3 +192,33 @@ def test_training_renders_use_the_proofs_cells(shared_data):
                  never).cells == TRAIN_CELLS
     assert _Loop(CompensateSettings(source=knight, height_mm=3.0, table_size=17, max_cells=20),
                  [], never).cells == 20
+
+
+def test_floor_alphas_are_the_clear_blocks_own_transmittance():
+    # a box of 8 x 6 x 4 cells of 1 mm, every cell printed: seen along x, each ray crosses
+    # 8 mm of Clear, so the coverage is 1 - sum_b y_b exp(-8 sigma_Clear,b) (luminance
+    # weights y); along z 4 mm. Without a block: no floor.
+    from dreamprint_gui.core.profile import default_profile
+    from dreamprint_gui.proof.compensate import floor_alphas
+    from dreamprint_gui.proof.medium import CLEAR, EMPTY, N_LABELS, medium_coefficients
+    from dreamprint_gui.proof.spectral import spectral_bands
+
+    bands = spectral_bands(default_profile(), 12)
+    f = np.zeros((4, 6, 8, N_LABELS), np.float32)
+    f[..., 0] = 0.3   # any printed labels: taken out, they are Clear
+    f[..., 3] = 0.7
+    lo = np.array([-4.0, -3.0, -2.0])
+    views = [View(0.0, 0.0, 5.0, 30.0), View(0.0, 90.0, 5.0, 30.0)]
+    a0 = floor_alphas(f, "clear", bands, lo, (1.0, 1.0, 1.0), views, 16)
+    clear = np.zeros(N_LABELS)
+    clear[CLEAR] = 1.0
+    sigma, _ = medium_coefficients(clear, bands.K, bands.S)
+    y = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    for a, length in zip(a0, (8.0, 4.0), strict=True):
+        np.testing.assert_allclose(a[8, 8], 1.0 - y @ np.exp(-sigma * length), rtol=1e-3)
+    np.testing.assert_allclose(a0[0][0, 0], 0.0, atol=1e-12)   # a ray beside the box
+    f[..., EMPTY] = 1.0
+    f[..., :EMPTY] = 0.0
+    np.testing.assert_allclose(
+        floor_alphas(f, "clear", bands, lo, (1.0, 1.0, 1.0), views, 16)[0], 0.0, atol=1e-12)
+    assert floor_alphas(f, "empty", bands, lo, (1.0, 1.0, 1.0), views, 16) == [None, None]
