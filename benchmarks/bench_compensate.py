@@ -200,6 +200,54 @@ def coverage_floor(a, src: str, bg: str) -> float | None:
     return gaps / max(n, 1)
 
 
+def edge_split(a) -> None:
+    """Where the paper's proof's per-pixel dE2000 lies (held-out cameras, the first
+    ``--judge-spp``): the object pixels with a neighbour (of 8) more than 10 dE2000 away in the
+    source image (a voxel's edge, for a voxel model a voxel or two wide in the frame) against
+    the rest."""
+    import numpy as np
+
+    from dreamprint_gui.core.profile import default_profile
+    from dreamprint_gui.physics.colorimetry import delta_E2000
+    from dreamprint_gui.proof.runner import ProofSettings, render_proof
+    from dreamprint_gui.proof.spectral import spectral_bands
+
+    for name in a.only.split(","):
+        for bg in a.backgrounds.split(","):
+            t0, c0 = time.perf_counter(), time.process_time()
+            ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm,
+                               views=a.judge_views, resolution=a.resolution,
+                               spp=int(str(a.judge_spp).split(",")[0]), seed=a.seed,
+                               background=bg, max_cells=a.judge_cells,
+                               layers_per_block=a.judge_layers, intent=a.intent)
+            res = drive(render_proof(ps))
+            obs = spectral_bands(default_profile(), 12).observer
+            to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
+            des, nbs = [], []
+            for im in res["images"]:
+                de = im["de2000"]
+                lab = obs.XYZ_to_Lab(np.maximum(im["source"] @ to_xyz.T, 0.0))
+                pad = np.pad(lab, ((1, 1), (1, 1), (0, 0)), mode="edge")
+                nb = np.zeros(de.shape)
+                for dy in (-1, 0, 1):
+                    for dx in (-1, 0, 1):
+                        if dy or dx:
+                            sh = pad[1 + dy:1 + dy + de.shape[0], 1 + dx:1 + dx + de.shape[1]]
+                            nb = np.maximum(nb, delta_E2000(lab, sh))
+                des.append(de.ravel())
+                nbs.append(nb.ravel())
+            de, nb = np.concatenate(des), np.concatenate(nbs)
+            ok = np.isfinite(de)
+            edge, flat = ok & (nb > 10.0), ok & ~(nb > 10.0)
+            n = max(int(ok.sum()), 1)
+            print(f"{name:7s} {bg:6s} paper's proof, object pixels: dE2000 {de[ok].mean():5.2f}; "
+                  f"at an edge {edge.sum() / n:.0%} of them, {de[edge].mean():5.2f} (share "
+                  f"{de[edge].sum() / n:4.2f}); flat {de[flat].mean():5.2f} (share "
+                  f"{de[flat].sum() / n:4.2f}) ({time.perf_counter() - t0:.0f} s, "
+                  f"{time.process_time() - c0:.0f} CPU s, load "
+                  f"{' '.join(open('/proc/loadavg').read().split()[:3])})", flush=True)
+
+
 def main() -> None:
     from dreamprint_gui.proof.compensate import CompensateSettings, run_compensate
     from dreamprint_gui.proof.runner import DEFAULT_MAX_CELLS
@@ -238,6 +286,9 @@ def main() -> None:
                     help="Only the least coverage error inside the source any ink in the "
                          "object reaches with a Clear block (the block's own coverage where "
                          "the source is thinner).")
+    ap.add_argument("--edge-split", action="store_true",
+                    help="Only the paper's proof's per-pixel dE2000 at the source's edges (a "
+                         "neighbour 10 dE2000 away) and elsewhere.")
     ap.add_argument("--floor-only", action="store_true",
                     help="Only the gamut floor of each source (no labels, no print render).")
     ap.add_argument("--job-cost", action="store_true",
@@ -249,6 +300,9 @@ def main() -> None:
         return
     if a.floor_only:
         floor_only(a)
+        return
+    if a.edge_split:
+        edge_split(a)
         return
     if a.coverage_floor:
         for name in a.only.split(","):
