@@ -12,9 +12,10 @@ wall time and the row's CPU time (all threads); with the machine's load (``/proc
 since the wall time depends on it.
 
     PYTHONPATH=. python benchmarks/bench_compensate.py [--height-mm 20] [--iterations 4]
-        [--resolution 64] [--spp 32] [--views 3] [--backgrounds clear,empty] [--only knight]
-        [--seed 0] [--step 1.0] [--judge-spp 256[,1024]] [--judge-views 4] [--judge-cells 128]
-        [--judge-layers 0] [--intent relative] [--fine-cells 0]
+        [--resolution 64] [--train-resolution 64] [--spp 32] [--views 3]
+        [--backgrounds clear,empty] [--only knight] [--seed 0] [--step 1.0]
+        [--judge-spp 256[,1024]] [--judge-views 4] [--judge-cells 128] [--judge-layers 0]
+        [--intent relative] [--fine-cells 0] [--coverage-floor] [--edge-split]
 
 Every figure is the proof's headline, inside the source (``compare.headline``; all object
 pixels and the share where the source is empty on a second line), against the source as the
@@ -256,6 +257,8 @@ def main() -> None:
     ap.add_argument("--height-mm", type=float, default=20.0)
     ap.add_argument("--iterations", type=int, default=4)
     ap.add_argument("--resolution", type=int, default=64)
+    ap.add_argument("--train-resolution", type=int, default=None,
+                    help="The optimisation's pixels (default: --resolution, the judge's).")
     ap.add_argument("--spp", type=int, default=32)
     ap.add_argument("--views", type=int, default=3)
     ap.add_argument("--cells", type=int, default=DEFAULT_MAX_CELLS,
@@ -326,7 +329,8 @@ def main() -> None:
             t0 = time.perf_counter()
             cs = CompensateSettings(source=src, output=corr, height_mm=a.height_mm,
                                     views=a.views, iterations=a.iterations, seed=a.seed + 1,
-                                    resolution=a.resolution, spp=a.spp, max_cells=a.cells,
+                                    resolution=a.train_resolution or a.resolution,
+                                    spp=a.spp, max_cells=a.cells,
                                     background=bg, overwrite=True, step=a.step,
                                     intent=a.intent, **({} if a.fine_cells is None else
                                                         {"fine_cells": a.fine_cells}))
