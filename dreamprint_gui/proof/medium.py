@@ -171,11 +171,12 @@ def medium_coefficients(fractions: NDArray, K_bands: NDArray, S_bands: NDArray,
 
 def background_fractions(fractions: NDArray, background: str) -> NDArray[np.float32]:
     """Label ``fractions`` (..., 7) of cells with the object taken out: every printed voxel
-    is the job's background, pure Clear for ``background`` "clear" (the Clear block: the print's
-    box less nothing), air for "empty"; cells' air (beyond the print grid) stays air.
+    is the job's background, pure Clear for ``background`` "clear" (the Clear block fills the
+    print's box), air for "empty"; a cell's air (beyond the print grid) stays air.
 
-    What the print's direct transmittance is when every voxel of the object has fallen below
-    the background threshold: the floor no density factor inside the object goes under."""
+    The medium of the print when every voxel of the object has fallen below the background
+    threshold: its direct transmittance is the floor no density factor inside the object goes
+    under."""
     f = np.asarray(fractions, np.float32)
     out = np.zeros_like(f)
     printed = 1.0 - f[..., EMPTY]
