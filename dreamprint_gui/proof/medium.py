@@ -8,6 +8,8 @@ Defines
 - :func:`block_fractions`: build it from a labels-per-layer function (a real job's slices or the
   engine's own labelling of a layer, :mod:`.labels`).
 - :func:`medium_coefficients`: per cell and band, ``sigma_t`` and ``albedo`` of the mixture.
+- :func:`background_fractions`: the same cells with the object taken out (every printed voxel
+  the job's background: Clear in a Clear block, air without), what no ink in the object changes.
 
 Method (the step between the halftoned labels and the renderer): a cell of ``bx x by x bz`` print
 voxels holds label fractions f_m; KM K and S mix linearly in the fractions (paper eq. 5, the
@@ -44,10 +46,11 @@ from dreamprint_gui.proof.km_to_rte import MAP_GEOMETRY, rte_coefficients
 from dreamprint_gui.proof.optics import Optics
 
 __all__ = ["BlockMedium", "block_fractions", "medium_coefficients", "block_for_cell",
-           "N_LABELS", "EMPTY"]
+           "background_fractions", "N_LABELS", "EMPTY", "CLEAR"]
 
 N_LABELS = 7
 EMPTY = 6
+CLEAR = 5  # INKS order: C, M, Y, K, W, Cl
 
 
 @dataclass(frozen=True)
@@ -164,3 +167,24 @@ def medium_coefficients(fractions: NDArray, K_bands: NDArray, S_bands: NDArray,
     st = sa + ss
     albedo = np.divide(ss, st, out=np.zeros_like(st), where=st > 0)
     return st.astype(np.float32), albedo.astype(np.float32)
+
+
+def background_fractions(fractions: NDArray, background: str) -> NDArray[np.float32]:
+    """Label ``fractions`` (..., 7) of cells with the object taken out: every printed voxel
+    is the job's background, pure Clear for ``background`` "clear" (the Clear block fills the
+    print's box), air for "empty"; a cell's air (beyond the print grid) stays air.
+
+    The medium of the print when every voxel of the object has fallen below the background
+    threshold: its direct transmittance is the floor no density factor inside the object goes
+    under."""
+    f = np.asarray(fractions, np.float32)
+    out = np.zeros_like(f)
+    printed = 1.0 - f[..., EMPTY]
+    if background == "clear":
+        out[..., CLEAR] = printed
+        out[..., EMPTY] = f[..., EMPTY]
+    elif background == "empty":
+        out[..., EMPTY] = 1.0
+    else:
+        raise ValueError(f"background must be clear or empty, not {background!r}")
+    return out

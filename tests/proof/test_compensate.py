@@ -52,6 +52,47 @@ def test_ratios_are_source_over_print_and_clipped():
     np.testing.assert_allclose(r[..., :3], np.log(0.5))
 
 
+def test_coverage_ratio_is_the_newton_step_on_the_objects_optical_depth():
+    # a print whose optical depth on a ray is the block's tau_0 plus g times the object's:
+    # one step g' = g r reaches the source's optical depth exactly (unclipped)
+    tau_0, tau_obj, tau_s = 0.35, 0.30, 0.50
+    a = lambda tau: np.full((1, 1), 1.0 - np.exp(-tau))  # noqa: E731
+    col = np.full((1, 1, 3), 0.5)
+    r = np.exp(pixel_log_ratios(col, a(tau_s), col, a(tau_0 + tau_obj), a(tau_0))[..., 3])
+    np.testing.assert_allclose(tau_0 + r * tau_obj, tau_s, rtol=1e-9)
+    # without the block the same pixel's plain ratio tau_s / tau_p asks for too little
+    r0 = np.exp(pixel_log_ratios(col, a(tau_s), col, a(tau_0 + tau_obj))[..., 3])
+    np.testing.assert_allclose(r0, tau_s / (tau_0 + tau_obj), rtol=1e-9)
+    assert tau_0 + r0 * tau_obj > tau_s + 0.05
+    # a source thinner than the block alone: the least density (the clip); a print already at
+    # the block's floor where the source is too: no change
+    r = pixel_log_ratios(col, a(0.1), col, a(tau_0 + tau_obj), a(tau_0))[..., 3]
+    np.testing.assert_allclose(r, np.log(0.5))
+    r = pixel_log_ratios(col, a(0.1), col, a(tau_0), a(tau_0))[..., 3]
+    np.testing.assert_allclose(r, 0.0, atol=1e-12)
+    # an empty background (floor coverage 0) is the plain ratio
+    np.testing.assert_allclose(
+        pixel_log_ratios(col, a(tau_s), col, a(0.7), np.zeros((1, 1))),
+        pixel_log_ratios(col, a(tau_s), col, a(0.7)), atol=1e-12)
+
+
+def test_background_fractions_take_the_object_out():
+    from dreamprint_gui.proof.medium import CLEAR, EMPTY, background_fractions
+
+    rng = np.random.default_rng(3)
+    f = rng.random((2, 3, 4, 7))
+    f /= f.sum(-1, keepdims=True)
+    b = background_fractions(f, "clear")
+    np.testing.assert_allclose(b.sum(-1), 1.0, rtol=1e-6)
+    np.testing.assert_allclose(b[..., CLEAR], 1.0 - f[..., EMPTY], rtol=1e-6)
+    np.testing.assert_allclose(b[..., EMPTY], f[..., EMPTY], rtol=1e-6)
+    assert not b[..., :CLEAR].any()
+    e = background_fractions(f, "empty")
+    assert (e[..., EMPTY] == 1).all() and not e[..., :EMPTY].any()
+    with pytest.raises(ValueError):
+        background_fractions(f, "white")
+
+
 def test_loop_lowers_the_error_and_writes_a_correction(tmp_path, capsys):
     out = tmp_path / "c.npz"
     code = main(["compensate", "demo", "-o", str(out), "--height-mm", "3", "--views", "2",
@@ -151,3 +192,33 @@ def test_training_renders_use_the_proofs_cells(shared_data):
                  never).cells == TRAIN_CELLS
     assert _Loop(CompensateSettings(source=knight, height_mm=3.0, table_size=17, max_cells=20),
                  [], never).cells == 20
+
+
+def test_floor_alphas_are_the_clear_blocks_own_transmittance():
+    # a box of 8 x 6 x 4 cells of 1 mm, every cell printed: seen along x, each ray crosses
+    # 8 mm of Clear, so the coverage is 1 - sum_b y_b exp(-8 sigma_Clear,b) (luminance
+    # weights y); along z 4 mm. Without a block: no floor.
+    from dreamprint_gui.core.profile import default_profile
+    from dreamprint_gui.proof.compensate import floor_alphas
+    from dreamprint_gui.proof.medium import CLEAR, EMPTY, N_LABELS, medium_coefficients
+    from dreamprint_gui.proof.spectral import spectral_bands
+
+    bands = spectral_bands(default_profile(), 12)
+    f = np.zeros((4, 6, 8, N_LABELS), np.float32)
+    f[..., 0] = 0.3   # any printed labels: taken out, they are Clear
+    f[..., 3] = 0.7
+    lo = np.array([-4.0, -3.0, -2.0])
+    views = [View(0.0, 0.0, 5.0, 30.0), View(0.0, 90.0, 5.0, 30.0)]
+    a0 = floor_alphas(f, "clear", bands, lo, (1.0, 1.0, 1.0), views, 16)
+    clear = np.zeros(N_LABELS)
+    clear[CLEAR] = 1.0
+    sigma, _ = medium_coefficients(clear, bands.K, bands.S)
+    y = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
+    for a, length in zip(a0, (8.0, 4.0), strict=True):
+        np.testing.assert_allclose(a[8, 8], 1.0 - y @ np.exp(-sigma * length), rtol=1e-3)
+    np.testing.assert_allclose(a0[0][0, 0], 0.0, atol=1e-12)   # a ray beside the box
+    f[..., EMPTY] = 1.0
+    f[..., :EMPTY] = 0.0
+    np.testing.assert_allclose(
+        floor_alphas(f, "clear", bands, lo, (1.0, 1.0, 1.0), views, 16)[0], 0.0, atol=1e-12)
+    assert floor_alphas(f, "empty", bands, lo, (1.0, 1.0, 1.0), views, 16) == [None, None]
