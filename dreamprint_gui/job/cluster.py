@@ -43,17 +43,43 @@ def quiet_client_logs() -> None:
         logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
+def _check_address(address: str) -> None:
+    """Dask's own parsing of a scheduler address (its scheme known, a port where the scheme
+    needs one), before any ``Client`` is made: ValueError as Dask words it."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+    from distributed.comm.registry import get_backend
+
+    scheme, location = parse_address(address)
+    get_backend(scheme)
+    if scheme in ("tcp", "tls", "ws", "wss"):
+        parse_host_port(location)
+
+
 def connect(address: str, timeout: str = "10s") -> Any:
-    """A ``distributed.Client`` of the scheduler at ``address``, or one line saying why not."""
+    """A ``distributed.Client`` of the scheduler at ``address``, or one line saying why not.
+
+    A malformed address is refused before a ``Client`` exists, and a ``Client`` that failed
+    to connect is collected at once: a half-made one left to the garbage collector closed
+    itself from inside the next ``Client``'s start and deadlocked on its loop's lock (seen in
+    the test suite; dask.distributed's ``Client.__del__`` -> ``LoopRunner.stop``)."""
+    import gc
+
     from distributed import Client
 
     try:
-        return Client(address, timeout=timeout)
-    except (OSError, TimeoutError) as exc:
-        raise DreamPrintError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
-    except ValueError as exc:  # Dask's parsing of the address: "missing port number in ''"
+        _check_address(address)
+    except ValueError as exc:  # "missing port number in ''", "unknown address scheme 'foo'"
         raise DreamPrintError(f"--scheduler {address!r} is not a Dask scheduler's address "
                               f"(tcp://HOST:PORT): {exc}") from None
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, TimeoutError) as exc:
+        message = f"cannot reach the Dask scheduler at {address}: {exc}"
+    except ValueError as exc:
+        message = (f"--scheduler {address!r} is not a Dask scheduler's address "
+                   f"(tcp://HOST:PORT): {exc}")
+    gc.collect()   # the failed Client's __del__ runs here, not inside another Client's start
+    raise DreamPrintError(message)
 
 
 def absolute_paths(settings: Any) -> Any:
