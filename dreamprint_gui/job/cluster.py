@@ -66,18 +66,19 @@ def connect(address: str, timeout: str = "10s") -> Any:
 
     from distributed import Client
 
+    def not_an_address(exc: ValueError) -> str:
+        return f"--scheduler {address!r} is not a Dask scheduler's address (tcp://HOST:PORT): {exc}"
+
     try:
         _check_address(address)
     except ValueError as exc:  # "missing port number in ''", "unknown address scheme 'foo'"
-        raise DreamPrintError(f"--scheduler {address!r} is not a Dask scheduler's address "
-                              f"(tcp://HOST:PORT): {exc}") from None
+        raise DreamPrintError(not_an_address(exc)) from None
     try:
         return Client(address, timeout=timeout)
     except (OSError, TimeoutError) as exc:
         message = f"cannot reach the Dask scheduler at {address}: {exc}"
     except ValueError as exc:
-        message = (f"--scheduler {address!r} is not a Dask scheduler's address "
-                   f"(tcp://HOST:PORT): {exc}")
+        message = not_an_address(exc)
     gc.collect()   # the failed Client's __del__ runs here, not inside another Client's start
     raise DreamPrintError(message)
 

@@ -31,9 +31,11 @@ states it beside the conversion's own estimate. The model, written once here:
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import os
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -232,9 +234,6 @@ def parallel_slowdown(cpu_seconds: float = 0.05, threads: int | None = None) -> 
     on an idle 2-core machine a step's two threads run at once, under load they share what one
     core would get (2026-12-02 at load 4-5: one thread 3.1-4.3 x slower than idle, two threads
     together 5.4-8.4 x; idle, the 100^3 de2000 build took 17.6-22.0 s wall for 40 CPU s)."""
-    import hashlib
-    import threading
-
     if threads is None:
         threads = (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                    else os.cpu_count() or 1)
