@@ -269,6 +269,17 @@ def main() -> None:
     ap.add_argument("--fine-cells", type=int, default=None,
                     help="The fine field's cells (proof/fine_field.py; 0: the coarse field "
                          "alone; default: the optimiser's).")
+    ap.add_argument("--sharpen", type=float, default=None,
+                    help="The fine field's start: the source sharpened against the print's "
+                         "blur, this strength (proof/fine_field.sharpen_prior; default: the "
+                         "optimiser's).")
+    ap.add_argument("--sharpen-mm", type=float, default=None,
+                    help="The blur's radius the sharpening inverts (default: the optimiser's).")
+    ap.add_argument("--occlusion", type=float, default=None,
+                    help="The fine field's start against the print's shading by its shape, "
+                         "this strength (proof/fine_field.occlusion_prior).")
+    ap.add_argument("--occlusion-mm", type=float, default=None,
+                    help="The neighbourhood's radius of that shading.")
     ap.add_argument("--judge-spp", default="256",
                     help="Samples per pixel of the held-out proofs; several (128,512): the "
                          "same correction judged at each, a row per figure (is a change "
@@ -332,8 +343,10 @@ def main() -> None:
                                     resolution=a.train_resolution or a.resolution,
                                     spp=a.spp, max_cells=a.cells,
                                     background=bg, overwrite=True, step=a.step,
-                                    intent=a.intent, **({} if a.fine_cells is None else
-                                                        {"fine_cells": a.fine_cells}))
+                                    intent=a.intent, **{k: v for k, v in (
+                                        ("fine_cells", a.fine_cells), ("sharpen", a.sharpen),
+                                        ("sharpen_mm", a.sharpen_mm), ("occlusion", a.occlusion),
+                                        ("occlusion_mm", a.occlusion_mm)) if v is not None})
             rep = drive(run_compensate(cs))
             t_opt = time.perf_counter() - t0
             try:

@@ -87,12 +87,19 @@ from dreamprint_gui.proof.compare import (
     headline,
     summarise,
 )
-from dreamprint_gui.proof.fine_field import FINE_RANGE, compose, fine_update
+from dreamprint_gui.proof.fine_field import (
+    FINE_RANGE,
+    compose,
+    fine_update,
+    occlusion_prior,
+    sharpen_prior,
+)
 from dreamprint_gui.proof.labels import EngineLabels
 from dreamprint_gui.proof.medium import (
     background_fractions,
     block_for_cell,
     block_fractions,
+    cell_counts,
     medium_coefficients,
 )
 from dreamprint_gui.proof.optics import resolve_optics
@@ -159,6 +166,13 @@ class CompensateSettings(HasSpec):
     field_cells: int = 32          # correction cells on the longest axis
     # the fine field's cells on the longest axis (.fine_field), 0: the coarse field alone
     fine_cells: int = FINE_CELLS
+    # the fine field's start: the source's colours sharpened against the print's blur
+    # (.fine_field.sharpen_prior), strength (0: none) and the blur's radius in mm
+    sharpen: float = 0.0
+    sharpen_mm: float = 0.4
+    # and against its shading by its own shape (.fine_field.occlusion_prior)
+    occlusion: float = 0.0
+    occlusion_mm: float = 0.5
     step: float = 1.0
     halftone: str = "blue-noise"
     density_scale: float = 1.0
@@ -397,12 +411,13 @@ class _Loop:
                                self.s.layers_per_block, progress=progress,
                                cancelled=self.cancelled)
 
-    def render_sources(self, medium) -> None:
-        lo, _ = medium.box_mm
-        # the target: the source as the job's intent maps it, as the proof judges it
+    def render_sources(self) -> None:
+        # the target: the source as the job's intent maps it, as the proof judges it, on the
+        # proof's cells (those of .medium's blocks)
         self.src = intent_reference(
-            sample_source(self.lab.source, self.lab.grid, medium.block_xyz,
-                          self.lab.density_scale, medium.cells_xyz, lo),
+            sample_source(self.lab.source, self.lab.grid, self.block,
+                          self.lab.density_scale, cell_counts(self.lab.shape_xyz, self.block),
+                          self.box_lo),
             job_intent(self.lab), self.lab.profile)
         self.src_lin, self.src_alpha = [], []
         for v in self.views:
@@ -488,6 +503,13 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
     fine = min(int(s.fine_cells), int(s.max_cells))
     fshape = field_shape(size0, fine) if fine > int(s.field_cells) else None
     log_f = np.zeros(fshape + (4,), np.float64) if fshape else None
+    loop.render_sources()
+    if fshape and s.sharpen > 0:
+        log_f = log_f + sharpen_prior(loop.src.colour, loop.src.sigma, loop.src.cell_mm,
+                                      loop.box_size, fshape, s.sharpen, s.sharpen_mm)
+    if fshape and s.occlusion > 0:
+        log_f = log_f + occlusion_prior(loop.src.sigma, loop.src.cell_mm, loop.box_size,
+                                        fshape, s.occlusion, s.occlusion_mm)
     gain = compose(log_c, log_f)
     history: list[dict] = []
     best = (math.inf, gain.copy(), None)
@@ -498,8 +520,6 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
             raise JobCancelled("the compensation was cancelled")
         tag = f"iteration {it}/{n_it}"
         medium = yield from run(f"labels ({tag})", lambda p, g=gain: loop.medium(g, p))
-        if loop.src is None:
-            loop.render_sources(medium)
         lins, alphas, figs = yield from run(f"print ({tag})",
                                             lambda p, m=medium: loop.proof(m, s.seed, p))
         o = summarise(figs)

@@ -46,7 +46,9 @@ from numpy.typing import NDArray
 
 from dreamprint_gui.job.correction import axis_weights
 
-__all__ = ["upsample", "fine_update", "compose", "FINE_RANGE", "SHRINK_WEIGHT"]
+__all__ = ["upsample", "fine_update", "compose", "sharpen_prior", "occlusion_prior",
+           "FINE_RANGE",
+           "SHRINK_WEIGHT"]
 
 # the fine detail's largest factor around the coarse field
 FINE_RANGE = 2.0
@@ -99,3 +101,99 @@ def compose(log_coarse: NDArray, log_fine: NDArray | None) -> NDArray[np.float64
         return np.exp(np.asarray(log_coarse, np.float64))
     total = upsample(log_coarse, log_fine.shape[:3]) + log_fine
     return np.exp(np.clip(total, -math.log(8.0), math.log(8.0)))
+
+
+def sharpen_prior(colour: NDArray, sigma: NDArray, cell_mm: NDArray, box_mm: NDArray,
+                  fshape: tuple[int, int, int], strength: float, radius_mm: float
+                  ) -> NDArray[np.float64]:
+    """Log factors (fz, fy, fx, 4) on the fine field's cells that sharpen the source's colour
+    against the blur of light carried between voxels in the print (an unsharp mask)::
+
+        b = G * (o c) / G * o            o = 1 - exp(-sigma h), G a Gaussian of radius_mm
+        c' = c + strength (c - b)        log g = log(c' / c), clipped to +-ln FINE_RANGE
+
+    ``colour`` (nz, ny, nx, 3) linear sRGB and ``sigma`` (nz, ny, nx) 1/mm: the source sampled
+    on cells of ``cell_mm`` (x, y, z) from the corner of the print's box (``box_mm``, its size
+    x, y, z); the factors are read at the centres of the ``fshape`` cells of that box
+    (trilinear). The density factor (4th) is 0; where the source is empty the factors are 0.
+    A print blurs each colour towards its neighbours' over a few of the inks' transport mean
+    free paths; pre-sharpening by the same amount is the first-order inverse (a deconvolution
+    truncated after one term)."""
+    from scipy.ndimage import gaussian_filter
+
+    c = np.asarray(colour, np.float64)
+    o = _opacity(sigma, cell_mm)
+    rad = _radius_cells(radius_mm, cell_mm)
+    w = gaussian_filter(o, rad, mode="constant")
+    out = np.zeros(c.shape[:3] + (4,))
+    occ = o > 1e-3
+    lim = math.log(FINE_RANGE)
+    for ch in range(3):
+        b = np.divide(gaussian_filter(o * c[..., ch], rad, mode="constant"), w,
+                      out=c[..., ch].copy(), where=w > 1e-9)
+        sharp = np.clip(c[..., ch] + float(strength) * (c[..., ch] - b), 0.0, None)
+        ratio = (sharp + 1e-3) / (c[..., ch] + 1e-3)
+        out[..., ch] = np.where(occ, np.clip(np.log(ratio), -lim, lim), 0.0)
+    return _at_fine_centres(out, cell_mm, box_mm, fshape)
+
+
+def occlusion_prior(sigma: NDArray, cell_mm: NDArray, box_mm: NDArray,
+                    fshape: tuple[int, int, int], strength: float, radius_mm: float
+                    ) -> NDArray[np.float64]:
+    """Log factors (fz, fy, fx, 4) on the fine field's cells against a solid print's shading by
+    its own shape under the uniform environment: a print receives light only through its
+    surface, so in a concave step (more of the object around it) it is darker than the same ink
+    on a flat face, and on a convex edge lighter (light entering the side face leaves through
+    the front), while the source's emission-absorption render has no shading at all. With ``n``
+    the object's share of a Gaussian neighbourhood of ``radius_mm`` at a surface cell (1/2 on a
+    flat face, more in a concave step, less on an edge), the open share ``2 (1 - n)`` scales the
+    light it receives (an ambient-occlusion estimate), and the colour factors undo it::
+
+        log g = -strength ln(2 (1 - n))     clipped to +-ln FINE_RANGE, colour channels only
+
+    A cell inside takes the factor of the surface cell nearest to it (the light it sends out
+    leaves there). The object: cells more than half opaque across (a solid's voxels);
+    ``sigma`` and the rest as :func:`sharpen_prior`'s; 0 where the source is empty."""
+    from scipy.ndimage import binary_erosion, distance_transform_edt, gaussian_filter
+
+    solid = _opacity(sigma, cell_mm) > 0.5
+    out = np.zeros(solid.shape + (4,))
+    if not solid.any():
+        return _at_fine_centres(out, cell_mm, box_mm, fshape)
+    n = gaussian_filter(solid.astype(np.float64), _radius_cells(radius_mm, cell_mm),
+                        mode="constant")
+    surface = solid & ~binary_erosion(solid, border_value=0)
+    lim = math.log(FINE_RANGE)
+    log_s = np.clip(-float(strength) * np.log(np.clip(2.0 * (1.0 - n), 1e-3, None)), -lim, lim)
+    # every cell reads its nearest surface cell (in mm)
+    _, idx = distance_transform_edt(~surface, sampling=[float(cell_mm[a]) for a in (2, 1, 0)],
+                                    return_indices=True)
+    log_g = np.where(solid, log_s[idx[0], idx[1], idx[2]], 0.0)
+    out[..., :3] = log_g[..., None]
+    return _at_fine_centres(out, cell_mm, box_mm, fshape)
+
+
+def _opacity(sigma: NDArray, cell_mm: NDArray) -> NDArray[np.float64]:
+    """A cell's opacity across its smallest side, ``1 - exp(-sigma h)``."""
+    return 1.0 - np.exp(-np.asarray(sigma, np.float64) * float(np.min(cell_mm)))
+
+
+def _radius_cells(radius_mm: float, cell_mm: NDArray) -> list[float]:
+    """A radius in mm in cells along (z, y, x)."""
+    return [float(radius_mm) / float(cell_mm[a]) for a in (2, 1, 0)]
+
+
+def _at_fine_centres(values: NDArray, cell_mm: NDArray, box_mm: NDArray,
+                     fshape: tuple[int, int, int]) -> NDArray[np.float64]:
+    """``values`` (nz, ny, nx, C) on cells of ``cell_mm`` from the corner of the print's box
+    read at the centres of the ``fshape`` cells of the box (size ``box_mm`` x, y, z;
+    trilinear, the edge cells held beyond the last centre)."""
+    from scipy.ndimage import map_coordinates
+
+    axes = [(np.arange(n) + 0.5) * (float(box_mm[a]) / n) / float(cell_mm[a]) - 0.5
+            for n, a in zip(fshape, (2, 1, 0), strict=True)]
+    zz, yy, xx = np.meshgrid(*axes, indexing="ij")
+    res = np.zeros(tuple(fshape) + (values.shape[-1],))
+    for ch in range(values.shape[-1]):
+        res[..., ch] = map_coordinates(values[..., ch], [zz, yy, xx], order=1, mode="nearest")
+    return res

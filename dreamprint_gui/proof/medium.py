@@ -46,7 +46,7 @@ from dreamprint_gui.proof.km_to_rte import MAP_GEOMETRY, rte_coefficients
 from dreamprint_gui.proof.optics import Optics
 
 __all__ = ["BlockMedium", "block_fractions", "medium_coefficients", "block_for_cell",
-           "background_fractions", "N_LABELS", "EMPTY", "CLEAR"]
+           "background_fractions", "cell_counts", "N_LABELS", "EMPTY", "CLEAR"]
 
 N_LABELS = 7
 EMPTY = 6
@@ -96,6 +96,13 @@ def block_for_cell(voxel_mm: tuple[float, float, float], size_mm: tuple[float, f
     return tuple(max(1, int(round(cell / v))) for v in voxel_mm)
 
 
+def cell_counts(shape_xyz: tuple[int, int, int], block_xyz: tuple[int, int, int]
+                ) -> tuple[int, int, int]:
+    """Cells (x, y, z) of blocks of ``block_xyz`` voxels covering a print grid of ``shape_xyz``
+    voxels (the last block along an axis may reach beyond the grid)."""
+    return tuple(-(-int(n) // int(b)) for n, b in zip(shape_xyz, block_xyz, strict=True))
+
+
 def _layer_counts(lab: NDArray[np.uint8], block_xy: tuple[int, int], ncx: int, ncy: int,
                   out: NDArray[np.float64]) -> None:
     """Add the per-cell label counts of one layer (ny, nx) to ``out`` (ncy, ncx, 7)."""
@@ -120,7 +127,7 @@ def block_fractions(layer_labels: Callable[[int], NDArray[np.uint8]],
     """
     nx, ny, nz = (int(v) for v in shape_xyz)
     bx, by, bz = (int(v) for v in block_xyz)
-    ncx, ncy, ncz = -(-nx // bx), -(-ny // by), -(-nz // bz)
+    ncx, ncy, ncz = cell_counts(shape_xyz, block_xyz)
     chosen: list[list[int]] = []
     for kz in range(ncz):
         z0 = kz * bz
