@@ -12,7 +12,7 @@ wall time and the row's CPU time (all threads); with the machine's load (``/proc
 since the wall time depends on it.
 
     PYTHONPATH=. python benchmarks/bench_compensate.py [--height-mm 20] [--iterations 4]
-        [--resolution 64] [--train-resolution 64] [--spp 32] [--views 3]
+        [--resolution 64] [--train-resolution 128] [--spp 32] [--views 6]
         [--backgrounds clear,empty] [--only knight] [--seed 0] [--step 1.0]
         [--judge-spp 256[,1024]] [--judge-views 4] [--judge-cells 128] [--judge-layers 0]
         [--intent relative] [--fine-cells 0] [--coverage-floor] [--edge-split]
@@ -258,9 +258,11 @@ def main() -> None:
     ap.add_argument("--iterations", type=int, default=4)
     ap.add_argument("--resolution", type=int, default=64)
     ap.add_argument("--train-resolution", type=int, default=None,
-                    help="The optimisation's pixels (default: --resolution, the judge's).")
-    ap.add_argument("--spp", type=int, default=32)
-    ap.add_argument("--views", type=int, default=3)
+                    help="The optimisation's pixels (default: the optimiser's).")
+    ap.add_argument("--spp", type=int, default=None,
+                    help="The optimisation's samples per pixel (default: the optimiser's).")
+    ap.add_argument("--views", type=int, default=None,
+                    help="The optimisation's cameras (default: the optimiser's).")
     ap.add_argument("--cells", type=int, default=DEFAULT_MAX_CELLS,
                     help="The optimisation's proof cells (the proof's); --floor-only: the "
                          "proof's.")
@@ -269,12 +271,6 @@ def main() -> None:
     ap.add_argument("--fine-cells", type=int, default=None,
                     help="The fine field's cells (proof/fine_field.py; 0: the coarse field "
                          "alone; default: the optimiser's).")
-    ap.add_argument("--sharpen", type=float, default=None,
-                    help="The fine field's start: the source sharpened against the print's "
-                         "blur, this strength (proof/fine_field.sharpen_prior; default: the "
-                         "optimiser's).")
-    ap.add_argument("--sharpen-mm", type=float, default=None,
-                    help="The blur's radius the sharpening inverts (default: the optimiser's).")
     ap.add_argument("--occlusion", type=float, default=None,
                     help="The fine field's start against the print's shading by its shape, "
                          "this strength (proof/fine_field.occlusion_prior).")
@@ -339,13 +335,13 @@ def main() -> None:
             os.close(fd)
             t0 = time.perf_counter()
             cs = CompensateSettings(source=src, output=corr, height_mm=a.height_mm,
-                                    views=a.views, iterations=a.iterations, seed=a.seed + 1,
-                                    resolution=a.train_resolution or a.resolution,
-                                    spp=a.spp, max_cells=a.cells,
+                                    iterations=a.iterations, seed=a.seed + 1,
+                                    max_cells=a.cells,
                                     background=bg, overwrite=True, step=a.step,
                                     intent=a.intent, **{k: v for k, v in (
-                                        ("fine_cells", a.fine_cells), ("sharpen", a.sharpen),
-                                        ("sharpen_mm", a.sharpen_mm), ("occlusion", a.occlusion),
+                                        ("fine_cells", a.fine_cells), ("occlusion", a.occlusion),
+                                        ("views", a.views), ("spp", a.spp),
+                                        ("resolution", a.train_resolution),
                                         ("occlusion_mm", a.occlusion_mm)) if v is not None})
             rep = drive(run_compensate(cs))
             t_opt = time.perf_counter() - t0

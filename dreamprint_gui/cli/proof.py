@@ -432,11 +432,12 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @size_options
 @click.option("--printer", default=None, help="Printer name or .toml (default voxelprint-27um).")
 @click.option("--profile", default=None, help="Ink profile JSON (default: built-in).")
-@click.option("--views", type=int, default=3, show_default=True,
+@click.option("--views", type=int, default=6, show_default=True,
               help="Training cameras (not the proof's).")
 @click.option("--iterations", type=int, default=4, show_default=True)
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--resolution", type=int, default=64, show_default=True)
+@click.option("--resolution", type=int, default=128, show_default=True,
+              help="Pixels a side of the training renders.")
 @click.option("--spp", type=int, default=32, show_default=True,
               help="Samples per pixel of the training renders.")
 @click.option("--cells", "max_cells", type=int, default=128, show_default=True,
@@ -447,6 +448,9 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @click.option("--fine-cells", type=int, default=64, show_default=True,
               help="The fine field's cells along the longest axis, where the camera sees the "
                    "object's surface (no finer than --cells); 0: the coarse field alone.")
+@click.option("--occlusion", type=float, default=1.0, show_default=True,
+              help="A solid's (voxel model's) start against its shading by its own shape under "
+                   "the proof's light: concave steps lightened, edges darkened; 0: none.")
 @click.option("--halftone", type=click.Choice(["blue-noise", "random"]), default="blue-noise",
               show_default=True)
 @click.option("--density-scale", type=float, default=1.0, show_default=True)
@@ -460,8 +464,8 @@ def _held_out_correction(source, kw, prefix, iterations, views):
 @placement_options
 @rendering_options
 def compensate(source, output, height_mm, size_mm, printer, profile, views, iterations, seed,
-               resolution, spp, max_cells, field_cells, fine_cells, halftone, density_scale,
-               background,
+               resolution, spp, max_cells, field_cells, fine_cells, occlusion, halftone,
+               density_scale, background,
                source_options, table_size, overwrite, as_json, up, rotate, fit,
                **rendering) -> None:
     """Optimise a correction (colour and density factors on a coarse field) so that the proof
@@ -473,7 +477,8 @@ def compensate(source, output, height_mm, size_mm, printer, profile, views, iter
     cs = CompensateSettings.from_spec(
         print_spec(source, {**locals(), **rendering}), output=output, views=views,
         iterations=iterations, resolution=resolution, spp=spp, max_cells=max_cells,
-        field_cells=field_cells, fine_cells=fine_cells, overwrite=overwrite)
+        field_cells=field_cells, fine_cells=fine_cells, occlusion=occlusion,
+        overwrite=overwrite)
     report = _drive(run_compensate(cs))
     if as_json:
         emit_json(report)

@@ -56,6 +56,20 @@ class View:
              + ys[:, None, None] * up[None, None, :])
         return o, fwd
 
+    def pixel_rays(self, resolution: int, rows: NDArray, cols: NDArray, sub: int
+                   ) -> NDArray[np.float64]:
+        """Ray origins (len(rows), sub * sub, 3) of the pixels (``rows``, ``cols``) at ``sub x
+        sub`` sub-samples each, placed as :meth:`rays` places them (direction: :meth:`rays`')."""
+        right, up, _ = self.basis()
+        k = (np.arange(sub) + 0.5) / sub
+        cols = np.asarray(cols, np.float64)[:, None]
+        rows = np.asarray(rows, np.float64)[:, None]
+        xs = ((cols + k[None, :]) / resolution * 2.0 - 1.0) * self.half_mm       # (n, sub)
+        ys = -((rows + k[None, :]) / resolution * 2.0 - 1.0) * self.half_mm
+        o = (self.eye[None, None, None, :] + xs[:, None, :, None] * right
+             + ys[:, :, None, None] * up)                                        # (n, sy, sx, 3)
+        return o.reshape(len(rows), sub * sub, 3)
+
     def describe(self) -> dict:
         return {"azimuth_deg": self.azimuth_deg, "elevation_deg": self.elevation_deg,
                 "half_width_mm": round(self.half_mm, 4), "projection": "orthographic"}

@@ -92,7 +92,6 @@ from dreamprint_gui.proof.fine_field import (
     compose,
     fine_update,
     occlusion_prior,
-    sharpen_prior,
 )
 from dreamprint_gui.proof.labels import EngineLabels
 from dreamprint_gui.proof.medium import (
@@ -115,6 +114,7 @@ from dreamprint_gui.proof.runner import (
 from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_render import (
     SourceField,
+    edge_refine,
     optical_depth,
     ray_box,
     render_source,
@@ -155,10 +155,12 @@ class CompensateSettings(HasSpec):
     size_mm: tuple[float, float, float] | None = None
     printer: str | None = None
     profile: str | None = None
-    views: int = 3
+    # 6 cameras at 128 px: the knight's held-out dE2000 -2 % at 3 x 64 px, -13 % at 3 x 128,
+    # -16 % at 6 x 128 (docs/proof-measurements.md, issue 44)
+    views: int = 6
     iterations: int = 4
     seed: int = 0
-    resolution: int = 64
+    resolution: int = 128
     # training renders: at 4 spp their noise drowned the error (INRIA splat, held-out dE2000
     # 5.81 trained at 4 spp, 5.33 at 32; bench_compensate.py)
     spp: int = 32
@@ -166,13 +168,13 @@ class CompensateSettings(HasSpec):
     field_cells: int = 32          # correction cells on the longest axis
     # the fine field's cells on the longest axis (.fine_field), 0: the coarse field alone
     fine_cells: int = FINE_CELLS
-    # the fine field's start: the source's colours sharpened against the print's blur
-    # (.fine_field.sharpen_prior), strength (0: none) and the blur's radius in mm
-    sharpen: float = 0.0
-    sharpen_mm: float = 0.4
-    # and against its shading by its own shape (.fine_field.occlusion_prior)
-    occlusion: float = 0.0
-    occlusion_mm: float = 0.5
+    # the fine field's start for a solid (a voxel model): against its shading by its own shape
+    # under the uniform environment (.fine_field.occlusion_prior), strength (0: none) and the
+    # neighbourhood's radius. Knight at 20 mm without a block, --iterations 0 (the prior
+    # alone), held-out 256 spp: dE2000 -8 % / -13 % / -12 % at 0.5 / 1.0 / 1.5 mm, strength
+    # 1.5 at 1 mm -12 % (bench_compensate.py, docs/proof-measurements.md)
+    occlusion: float = 1.0
+    occlusion_mm: float = 1.0
     step: float = 1.0
     halftone: str = "blue-noise"
     density_scale: float = 1.0
@@ -346,8 +348,8 @@ def pixel_log_ratios(src_lin: NDArray, src_alpha: NDArray, prn_lin: NDArray,
 
 
 def floor_alphas(fractions: NDArray, background: str, bands: Any, lo: NDArray,
-                 cell_mm: tuple[float, float, float], views: list[View], resolution: int
-                 ) -> list[NDArray | None]:
+                 cell_mm: tuple[float, float, float], views: list[View], resolution: int,
+                 refine: int = 0) -> list[NDArray | None]:
     """Per view (res, res): the print's coverage with the object taken out
     (:func:`.medium.background_fractions`: the Clear block's own, luminance-weighted direct
     transmittance as the proof takes it), or None per view without a block. No density factor
@@ -356,7 +358,8 @@ def floor_alphas(fractions: NDArray, background: str, bands: Any, lo: NDArray,
         return [None] * len(views)
     st0, _ = medium_coefficients(background_fractions(fractions, "clear"), bands.K, bands.S)
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
-    return [1.0 - optical_depth(st0, lo, cell_mm, v, resolution, sub=3) @ y_w for v in views]
+    return [1.0 - optical_depth(st0, lo, cell_mm, v, resolution, sub=3, refine=refine) @ y_w
+            for v in views]
 
 
 def _field_update(num: NDArray, den: NDArray, smooth: float = 0.7) -> NDArray:
@@ -442,10 +445,12 @@ class _Loop:
         to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
         if not self.floor_alpha:
             self.floor_alpha = floor_alphas(medium.fractions, s.background, bands, lo,
-                                            medium.cell_mm, self.views, s.resolution)
+                                            medium.cell_mm, self.views, s.resolution,
+                                            edge_refine(self.src))
         lins, alphas, figs = [], [], []
         for i, v in enumerate(self.views):
-            T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
+            T = optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3,
+                              refine=edge_refine(self.src))
             a_p = 1.0 - T @ y_w
             xyz = print_xyz(bands, prn_bands[i], T, False, optics)
             fig, _ = compare_view(self.src_lin[i] @ to_xyz.T, xyz, self.src_alpha[i], a_p, obs,
@@ -504,10 +509,7 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
     fshape = field_shape(size0, fine) if fine > int(s.field_cells) else None
     log_f = np.zeros(fshape + (4,), np.float64) if fshape else None
     loop.render_sources()
-    if fshape and s.sharpen > 0:
-        log_f = log_f + sharpen_prior(loop.src.colour, loop.src.sigma, loop.src.cell_mm,
-                                      loop.box_size, fshape, s.sharpen, s.sharpen_mm)
-    if fshape and s.occlusion > 0:
+    if fshape and s.occlusion > 0 and loop.src.nearest:   # a solid's shape (a voxel model)
         log_f = log_f + occlusion_prior(loop.src.sigma, loop.src.cell_mm, loop.box_size,
                                         fshape, s.occlusion, s.occlusion_mm)
     gain = compose(log_c, log_f)

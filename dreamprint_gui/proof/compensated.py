@@ -193,8 +193,9 @@ def _optimise_into(cs: CompensateSettings, cancel: threading.Event | None, clock
 
 
 def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = None,
-                         iterations: int = 4, training_views: int = 3, train_resolution: int = 64,
-                         train_spp: int = 32, field_cells: int = 32,
+                         iterations: int | None = None, training_views: int | None = None,
+                         train_resolution: int | None = None, train_spp: int | None = None,
+                         field_cells: int | None = None,
                          ) -> Generator[CompensationProgress, None, dict[str, Any]]:
     """Optimise a correction for the proof's job on the training cameras with halftone and
     render seed ``ps.seed + 1`` (:mod:`.compensate`), then render the proof of the open-loop
@@ -203,13 +204,16 @@ def compare_compensation(ps: ProofSettings, cancel: threading.Event | None = Non
 
     Returns ``{"open_loop": render_proof result, "compensated": ..., "optimiser": report}``.
     No file stays behind (the correction lives in a temporary file while the proof reads it).
+    The optimiser's options left None are :class:`.compensate.CompensateSettings`' defaults.
     """
     ps = replace(ps, method="paper", compensation=None, output=None)
+    given = {"views": training_views, "iterations": iterations, "resolution": train_resolution,
+             "spp": train_spp, "field_cells": field_cells}
     cs = CompensateSettings.from_spec(
-        replace(ps.spec, seed=ps.seed + 1), views=training_views, iterations=iterations,
-        resolution=train_resolution, spp=train_spp, max_cells=ps.max_cells,
-        field_cells=field_cells)
-    train = (iterations + 1) * training_views * train_resolution ** 2 * train_spp
+        replace(ps.spec, seed=ps.seed + 1), max_cells=ps.max_cells,
+        **{k: v for k, v in given.items() if v is not None})
+    iterations = cs.iterations
+    train = (cs.iterations + 1) * cs.views * cs.resolution ** 2 * cs.spp
     proof = ps.views * ps.resolution ** 2 * ps.spp   # its noise floor is free (two halves)
     clock = PhaseClock({"compensating": float(train), "proof (open loop)": float(proof),
                         "proof (compensated)": float(proof)})

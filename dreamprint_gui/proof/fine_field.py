@@ -46,8 +46,7 @@ from numpy.typing import NDArray
 
 from dreamprint_gui.job.correction import axis_weights
 
-__all__ = ["upsample", "fine_update", "compose", "sharpen_prior", "occlusion_prior",
-           "FINE_RANGE",
+__all__ = ["upsample", "fine_update", "compose", "occlusion_prior", "FINE_RANGE",
            "SHRINK_WEIGHT"]
 
 # the fine detail's largest factor around the coarse field
@@ -103,40 +102,6 @@ def compose(log_coarse: NDArray, log_fine: NDArray | None) -> NDArray[np.float64
     return np.exp(np.clip(total, -math.log(8.0), math.log(8.0)))
 
 
-def sharpen_prior(colour: NDArray, sigma: NDArray, cell_mm: NDArray, box_mm: NDArray,
-                  fshape: tuple[int, int, int], strength: float, radius_mm: float
-                  ) -> NDArray[np.float64]:
-    """Log factors (fz, fy, fx, 4) on the fine field's cells that sharpen the source's colour
-    against the blur of light carried between voxels in the print (an unsharp mask)::
-
-        b = G * (o c) / G * o            o = 1 - exp(-sigma h), G a Gaussian of radius_mm
-        c' = c + strength (c - b)        log g = log(c' / c), clipped to +-ln FINE_RANGE
-
-    ``colour`` (nz, ny, nx, 3) linear sRGB and ``sigma`` (nz, ny, nx) 1/mm: the source sampled
-    on cells of ``cell_mm`` (x, y, z) from the corner of the print's box (``box_mm``, its size
-    x, y, z); the factors are read at the centres of the ``fshape`` cells of that box
-    (trilinear). The density factor (4th) is 0; where the source is empty the factors are 0.
-    A print blurs each colour towards its neighbours' over a few of the inks' transport mean
-    free paths; pre-sharpening by the same amount is the first-order inverse (a deconvolution
-    truncated after one term)."""
-    from scipy.ndimage import gaussian_filter
-
-    c = np.asarray(colour, np.float64)
-    o = _opacity(sigma, cell_mm)
-    rad = _radius_cells(radius_mm, cell_mm)
-    w = gaussian_filter(o, rad, mode="constant")
-    out = np.zeros(c.shape[:3] + (4,))
-    occ = o > 1e-3
-    lim = math.log(FINE_RANGE)
-    for ch in range(3):
-        b = np.divide(gaussian_filter(o * c[..., ch], rad, mode="constant"), w,
-                      out=c[..., ch].copy(), where=w > 1e-9)
-        sharp = np.clip(c[..., ch] + float(strength) * (c[..., ch] - b), 0.0, None)
-        ratio = (sharp + 1e-3) / (c[..., ch] + 1e-3)
-        out[..., ch] = np.where(occ, np.clip(np.log(ratio), -lim, lim), 0.0)
-    return _at_fine_centres(out, cell_mm, box_mm, fshape)
-
-
 def occlusion_prior(sigma: NDArray, cell_mm: NDArray, box_mm: NDArray,
                     fshape: tuple[int, int, int], strength: float, radius_mm: float
                     ) -> NDArray[np.float64]:
@@ -153,7 +118,9 @@ def occlusion_prior(sigma: NDArray, cell_mm: NDArray, box_mm: NDArray,
 
     A cell inside takes the factor of the surface cell nearest to it (the light it sends out
     leaves there). The object: cells more than half opaque across (a solid's voxels);
-    ``sigma`` and the rest as :func:`sharpen_prior`'s; 0 where the source is empty."""
+    ``sigma`` (nz, ny, nx) 1/mm: the source sampled on cells of ``cell_mm`` (x, y, z) from the
+    corner of the print's box (``box_mm``, its size x, y, z); the factors are read at the
+    centres of the ``fshape`` cells of that box (trilinear); 0 where the source is empty."""
     from scipy.ndimage import binary_erosion, distance_transform_edt, gaussian_filter
 
     solid = _opacity(sigma, cell_mm) > 0.5

@@ -62,6 +62,7 @@ from dreamprint_gui.proof.scielab import samples_per_degree
 from dreamprint_gui.proof.source_cache import cached_render_source
 from dreamprint_gui.proof.source_render import (
     SourceField,
+    edge_refine,
     optical_depth,
     sample_source,
 )
@@ -281,8 +282,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     def work_print() -> None:
         # the direct transmittance and its thick tiles (measured 7.6 s before the first
         # pass, silent when it ran in the generator)
-        direct_T.extend(optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
-                        for v in views)
+        direct_T.extend(optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3,
+                                      refine=edge_refine(raw)) for v in views)
         extra = [(i, r) for i, T in enumerate(direct_T)
                  for r in thick_tiles(T @ y_w, THICK_T)]
         # two halves of the samples at seeds s, s + 1: their mean is the print, their
@@ -330,7 +331,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
     bounds = None
     if s.clear_low_bound and clear_is_modelled(lab.profile):
         bounds = yield from _at_clear_low_bound(
-            s, lab, medium, optics, views, src_lin, src_alpha, prints, spd, el, cancel)
+            s, lab, medium, optics, views, src_lin, src_alpha, prints, spd, el, cancel,
+            edge_refine(raw))
     clear = clear_report(lab.profile, bounds, s.clear_low_bound)
     timings["clear_low_bound"] = time.perf_counter() - t5
     t4 = time.perf_counter()
@@ -394,7 +396,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
 
 
 def _at_clear_low_bound(s: ProofSettings, lab, medium, optics, views, src_lin: list,
-                        src_alpha: list, prints: list, spd: float, el, cancel):
+                        src_alpha: list, prints: list, spd: float, el, cancel,
+                        refine: int = 0):
     """The same labels rendered (one seed) with the Clear at its low bound
     (:func:`~dreamprint_gui.physics.clear_bounds.clear_low_bound`); both prints compared with
     the same source renders on the same pixels (the union of the two comparisons' object
@@ -404,8 +407,8 @@ def _at_clear_low_bound(s: ProofSettings, lab, medium, optics, views, src_lin: l
     sigma_t, albedo = medium_coefficients(medium.fractions, bands.K, bands.S, optics)
     lo, hi = medium.box_mm
     y_w = bands.xyz_weights[:, 1] / bands.xyz_weights[:, 1].sum()
-    direct_T = [optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3)
-                for v in views]
+    direct_T = [optical_depth(sigma_t, lo, medium.cell_mm, v, s.resolution, sub=3,
+                              refine=refine) for v in views]
     extra = [(i, r) for i, T in enumerate(direct_T) for r in thick_tiles(T @ y_w, THICK_T)]
     box: dict[str, Any] = {}
     prog: dict[str, tuple[int, int]] = {"p": (0, 1)}

@@ -93,66 +93,17 @@ def test_the_optimiser_writes_a_fine_field_or_the_coarse_one(tmp_path):
 
 
 def test_the_command_line_default_is_the_optimisers():
+    from dataclasses import fields
+
     from dreamprint_gui.cli.proof import compensate
-    from dreamprint_gui.proof.compensate import FINE_CELLS
+    from dreamprint_gui.proof.compensate import FINE_CELLS, CompensateSettings
 
-    opt = {p.name: p for p in compensate.params}["fine_cells"]
-    assert opt.default == FINE_CELLS
-
-
-def test_sharpening_prior_inverts_a_gaussian_blur_to_first_order():
-    """A colour edge between two halves of a solid: the prior lightens the light side and darkens
-    the dark side near the edge, leaves the far field and the empty cells at 1 and sets no
-    density factor. On a sinusoid that the blur attenuates by ``a`` the sharpened colour
-    blurred by the same Gaussian is off by ``(1 - a)^2`` instead of ``1 - a`` (c' = c + (c -
-    G c), G c' - c = -(1 - G)^2 c)."""
-    from scipy.ndimage import gaussian_filter
-
-    from dreamprint_gui.proof.fine_field import sharpen_prior
-
-    n = 40
-    cell = np.array([0.1, 0.1, 0.1])
-    colour = np.zeros((n, n, n, 3))
-    colour[..., :20, :] = 0.6   # x < 2 mm light
-    colour[..., 20:, :] = 0.4
-    sigma = np.full((n, n, n), 50.0)
-    sigma[:, :2] = 0.0     # two empty rows in y
-    box = cell * n
-    log_g = sharpen_prior(colour, sigma, cell, box, (n, n, n), 1.0, 0.3)
-    g = np.exp(log_g[20, 20, :, 0])
-    assert g[18] > 1.05 and g[21] < 0.95          # light side lighter, dark side darker
-    assert abs(g[2] - 1) < 1e-3 and abs(g[37] - 1) < 1e-3   # far from the edge: none
-    assert np.abs(log_g[:, :2]).max() < 1e-9      # empty cells: none
-    assert np.all(log_g[..., 3] == 0)             # no density factor
-
-    x = (np.arange(n) + 0.5) * 0.1
-    wave = 0.5 + 0.1 * np.sin(2 * np.pi * x / 2.0)      # 2 mm period: 20 cells
-    colour = np.broadcast_to(wave[None, None, :, None], (n, n, n, 3)).copy()
-    sigma = np.full((n, n, n), 50.0)
-    g = np.exp(sharpen_prior(colour, sigma, cell, box, (n, n, n), 1.0, 0.3)[20, 20, :, 0])
-    a = math.exp(-0.5 * (2 * np.pi * 0.3 / 2.0) ** 2)   # the Gaussian's response at 2 mm
-    mid = slice(10, 30)                                  # away from the box's ends
-    err_blur = gaussian_filter(wave, 3.0, mode="wrap") - wave
-    err_sharp = gaussian_filter(wave * g, 3.0, mode="wrap") - wave
-    np.testing.assert_allclose(np.abs(err_blur[mid]).max(), 0.1 * (1 - a), rtol=0.02)
-    np.testing.assert_allclose(np.abs(err_sharp[mid]).max(), 0.1 * (1 - a) ** 2, rtol=0.1)
-
-
-def test_sharpening_prior_reads_the_fine_cells_at_their_centres():
-    """On a fine field with half the cells the factors are the source cells' mean at each fine
-    centre (a linear ramp of log factor stays linear)."""
-    from dreamprint_gui.proof.fine_field import sharpen_prior
-
-    n = 20
-    cell = np.array([0.1, 0.1, 0.1])
-    colour = np.full((n, n, n, 3), 0.5)
-    colour[..., 10:, :] = 0.1
-    sigma = np.full((n, n, n), 50.0)
-    full = sharpen_prior(colour, sigma, cell, cell * n, (n, n, n), 1.0, 0.2)
-    half = sharpen_prior(colour, sigma, cell, cell * n, (n // 2,) * 3, 1.0, 0.2)
-    # fine centre i sits between source cells 2i and 2i + 1
-    expect = 0.5 * (full[10, 10, 0::2, 0] + full[10, 10, 1::2, 0])
-    np.testing.assert_allclose(half[5, 5, :, 0], expect, atol=1e-9)
+    opts = {p.name: p for p in compensate.params}
+    assert opts["fine_cells"].default == FINE_CELLS
+    defaults = {f.name: f.default for f in fields(CompensateSettings)}
+    for name in ("views", "iterations", "resolution", "spp", "max_cells", "field_cells",
+                 "fine_cells", "occlusion"):
+        assert opts[name].default == defaults[name], name
 
 
 def test_occlusion_prior_against_the_open_share_of_flat_faces_edges_and_steps():
