@@ -127,7 +127,7 @@ def _fake_proof(monkeypatch, slow: str):
              "job_intent": "colorimetric", "medium_coefficients": (None, None),
              "sample_source": None, "intent_reference": None,
              "cached_render_source": (np.zeros((2, 2, 3)), np.zeros((2, 2)), 0),
-             "optical_depth": np.ones((2, 2, 2)), "thick_tiles": [],
+             "optical_depth": np.ones((2, 2, 2)), "edge_refine": 0, "thick_tiles": [],
              "render_print_halves": ([np.zeros((2, 2, 2))], [[np.zeros((2, 2, 2))]] * 2,
                                      {"halves": {"seeds": [0, 1]}}),
              "samples_per_degree": 1.0, "print_xyz": np.zeros((2, 2, 3)),
