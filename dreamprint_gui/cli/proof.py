@@ -280,8 +280,9 @@ def _common_halftones(f):
                    "another seed, then proofed.")
 @click.option("--iterations", type=int, default=4, show_default=True,
               help="The compensated method's iterations.")
-@click.option("--training-views", "comp_views", type=int, default=3, show_default=True,
-              help="The compensated method's training cameras (not the proof's).")
+@click.option("--training-views", "comp_views", type=int, default=None,
+              help="The compensated method's training cameras (not the proof's; default: "
+                   "dreamprint compensate's).")
 @_common_halftones
 def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
     """Proof SOURCE with each method and halftoning (same cameras, seed, size) and tabulate the
@@ -413,10 +414,11 @@ def _held_out_correction(source, kw, prefix, iterations, views):
     fd, name = tempfile.mkstemp(suffix=".npz", prefix="dreamprint-correction-")
     os.close(fd)
     spec = print_spec(source, dict(kw, seed=kw["seed"] + 1))
+    # the optimiser's own cameras, pixels and samples unless given (dreamprint compensate's)
     cs = CompensateSettings.from_spec(
-        spec, output=name, views=views, iterations=iterations, resolution=kw["resolution"],
-        spp=kw["spp"], max_cells=kw["max_cells"], bands=kw["bands"],
-        max_depth=kw["max_depth"], layers_per_block=kw["layers_per_block"], overwrite=True)
+        spec, output=name, iterations=iterations, max_cells=kw["max_cells"],
+        bands=kw["bands"], max_depth=kw["max_depth"], layers_per_block=kw["layers_per_block"],
+        overwrite=True, **({} if views is None else {"views": views}))
     try:
         report = _drive(run_compensate(cs), prefix=prefix + "optimise: ")
     except BaseException:

@@ -230,6 +230,10 @@ def validate(s: CompensateSettings) -> None:
                               f"{MAX_CELLS}, got {s.fine_cells}")
     if not (math.isfinite(s.step) and 0 < s.step <= 2):
         raise DreamPrintError(f"--step must be in (0, 2], got {s.step}")
+    if not (math.isfinite(s.occlusion) and 0 <= s.occlusion <= 4):
+        raise DreamPrintError(f"--occlusion must be 0..4, got {s.occlusion}")
+    if not (math.isfinite(s.occlusion_mm) and 0 < s.occlusion_mm <= 50):
+        raise DreamPrintError(f"the occlusion radius must be in (0, 50] mm, got {s.occlusion_mm}")
     if not 16 <= int(s.resolution) <= 1024:
         raise DreamPrintError(f"--resolution must be 16..1024, got {s.resolution}")
     if not 1 <= int(s.spp) <= 4096:
@@ -571,6 +575,10 @@ def optimise(s: CompensateSettings, cancel: threading.Event | None = None
         "field_cells_xyz": list(loop.gshape[::-1]),
         "fine_cells_xyz": list(fshape[::-1]) if fshape else None,
         "history": history,
+        # iteration 0 is the field's start: the open loop, or for a solid with the occlusion
+        # start that start (the proof of the paper's method is the open loop's judge)
+        "start": "occlusion prior (fine_field.occlusion_prior)" if (
+            fshape and s.occlusion > 0 and loop.src.nearest) else "open loop (no correction)",
         "figures": {"before": history[0], "after": {**history[int(np.argmin(
             [_score(h) for h in history]))]}},
         "renderer": getattr(loop, "render_info", {}),

@@ -116,27 +116,34 @@ def occlusion_prior(sigma: NDArray, cell_mm: NDArray, box_mm: NDArray,
 
         log g = -strength ln(2 (1 - n))     clipped to +-ln FINE_RANGE, colour channels only
 
-    A cell inside takes the factor of the surface cell nearest to it (the light it sends out
-    leaves there). The object: cells more than half opaque across (a solid's voxels);
+    ``n`` is read at a surface cell's centre, half a cell under the surface, so it is taken
+    relative to a flat face's share there (``2 (1 - n)`` becomes ``(1 - n) / (1 - n_flat)``).
+    Every other cell takes the factor of the surface cell nearest to it (the light it sends
+    out leaves there; empty cells too, so the fine cells straddling the surface and the job's
+    interpolation keep it: the job reads no colour where the source is empty). The object:
+    cells more than half opaque across (a solid's voxels);
     ``sigma`` (nz, ny, nx) 1/mm: the source sampled on cells of ``cell_mm`` (x, y, z) from the
     corner of the print's box (``box_mm``, its size x, y, z); the factors are read at the
-    centres of the ``fshape`` cells of that box (trilinear); 0 where the source is empty."""
+    centres of the ``fshape`` cells of that box (trilinear)."""
     from scipy.ndimage import binary_erosion, distance_transform_edt, gaussian_filter
 
     solid = _opacity(sigma, cell_mm) > 0.5
     out = np.zeros(solid.shape + (4,))
     if not solid.any():
         return _at_fine_centres(out, cell_mm, box_mm, fshape)
-    n = gaussian_filter(solid.astype(np.float64), _radius_cells(radius_mm, cell_mm),
-                        mode="constant")
+    rad = _radius_cells(radius_mm, cell_mm)
+    n = gaussian_filter(solid.astype(np.float64), rad, mode="constant")
+    # a flat face read at a surface cell's centre, half a cell under it: its share there
+    n_flat = 0.5 * (1.0 + math.erf(0.5 / (min(rad) * math.sqrt(2.0))))
     surface = solid & ~binary_erosion(solid, border_value=0)
     lim = math.log(FINE_RANGE)
-    log_s = np.clip(-float(strength) * np.log(np.clip(2.0 * (1.0 - n), 1e-3, None)), -lim, lim)
-    # every cell reads its nearest surface cell (in mm)
+    log_s = np.clip(-float(strength) * np.log(np.clip((1.0 - n) / (1.0 - n_flat), 5e-4, None)),
+                    -lim, lim)
+    # every cell, inside or out, reads its nearest surface cell (in mm): the fine cells
+    # straddling the surface and the job's interpolation keep the surface's factor
     _, idx = distance_transform_edt(~surface, sampling=[float(cell_mm[a]) for a in (2, 1, 0)],
                                     return_indices=True)
-    log_g = np.where(solid, log_s[idx[0], idx[1], idx[2]], 0.0)
-    out[..., :3] = log_g[..., None]
+    out[..., :3] = log_s[idx[0], idx[1], idx[2]][..., None]
     return _at_fine_centres(out, cell_mm, box_mm, fshape)
 
 
