@@ -13,12 +13,13 @@ once, kept in ``~/.drjit``; a row's seconds are the render's own when it compile
 ``proof.mitsuba_setup``); a process renders with one (Mitsuba's variant is process-wide), so
 compare them in separate runs, interleaved. Targets: floor <= 0.5 mean S-CIELAB dE2000, <= 60 s per
 view on CPU. ``--floor-check``: also the floor as defined until 2026-12 (two full renders at
-other seeds, figures between them), beside it. ``--reference-spp N``: the view rendered once at
-N spp; each row prints its figures against the source (dE2000 and S-CIELAB overall, inside the
-source, in the block body; coverage error) minus the reference's: the bias of the proof's
-figures at its spp. ``--reference-file F.npz``: the reference read from F when it is of the
-same print, view and spp, else rendered and saved there. ``--bands 12,6``: fewer spectral
-bands (the bias then includes theirs).
+other seeds, figures between them), beside it. ``--reference-spp N``: the view rendered at N
+spp (two halves of N / 2, seeds 99 and 100); each row prints its figures against the source
+(dE2000 and S-CIELAB overall, inside the source, in the block body; coverage error; the dE2000
+mean less the render's noise, ``dE nc``, ``proof.compare.noise_corrected_de2000``) minus the
+reference's: the bias of the proof's figures at its spp. ``--reference-file F.npz``: the
+reference read from F when it is of the same print, view and spp, else rendered and saved
+there. ``--bands 12,6``: fewer spectral bands (the bias then includes theirs).
 ``--spp 16,64 --thick-spp 0,48 --samplers independent,multijitter`` sweeps (the measurement
 behind the defaults); ``--thick-spp``: more samples on the tiles where the print is optically
 thick (``runner.THICK_T``);
@@ -118,14 +119,19 @@ def _print_xyz(medium, bands, view, res, spp, seeds, sampler=None, rr_depth=None
     return [print_xyz(bands, im[0], T, False) for im in imgs], 1.0 - T @ y_w, t, info
 
 
-def _figures(src_xyz, src_alpha, prn_xyz, prn_alpha, obs, spd) -> dict:
+def _figures(src_xyz, src_alpha, prn_xyz, prn_alpha, obs, spd, halves=None) -> dict:
     """The proof's figures of one view against the source: overall, inside the source and in
-    the block body (where the source is empty)."""
-    from dreamprint_gui.proof.compare import compare_view, inside_source
+    the block body (where the source is empty); with ``halves`` (the print's two halves, XYZ)
+    the dE2000 mean less the render's noise too (``dE nc``, overall and inside the source)."""
+    from dreamprint_gui.proof.compare import compare_view, inside_source, noise_corrected_figures
 
     f, _ = compare_view(src_xyz, prn_xyz, src_alpha, prn_alpha, obs, spd)
     body = f["empty_source_fraction"]
-    return {"dE": f["mean_de2000"], "S": f["mean_scielab_de2000"],
+    nc = ({} if halves is None else
+          {(k.replace("inside_source_nc_mean_de2000", "dE nc in")
+            .replace("nc_mean_de2000", "dE nc")): v for k, v in noise_corrected_figures(
+              src_xyz, *halves, src_alpha, prn_alpha, obs).items()})
+    return {**nc, "dE": f["mean_de2000"], "S": f["mean_scielab_de2000"],
             "dE in": inside_source(f, "mean_de2000") or 0.0,
             "S in": inside_source(f, "mean_scielab_de2000") or 0.0,
             "dE body": f["empty_source_de2000"] / body if body > 0 else 0.0,
@@ -192,9 +198,11 @@ def speed(args) -> None:
     ref = None
     if args.reference_spp:
         # what the reference is of: a saved one serves only the same print, view and render
+        # rendered as two halves (seeds 99, 100), as the proof is: its own noise's share of
+        # the dE2000 mean can then be taken out too (dE nc)
         key = repr((args.source, args.height_mm, args.resolution, args.reference_spp, bands.n,
                     med.cells_xyz, tuple(np.round(med.box_mm[0], 4)), view,
-                    float(med.fractions.sum())))
+                    float(med.fractions.sum()), "halves"))
         saved = args.reference_file and os.path.exists(args.reference_file)
         if saved:
             z = np.load(args.reference_file)
@@ -202,15 +210,18 @@ def speed(args) -> None:
                 raise SystemExit(f"{args.reference_file}: a reference of another print or "
                                  f"render ({z['key']}), not of {key}")
             ref, alpha, t, cpu = z["xyz"], z["alpha"], float(z["wall_s"]), float(z["cpu_s"])
+            ref_halves = (z["half_a"], z["half_b"])
         else:
-            (ref,), alpha, t, info = _print_xyz(med, bands, view, args.resolution,
-                                                args.reference_spp, (99,), faint=False)
+            (ref, *ref_halves), alpha, t, info = _print_xyz(
+                med, bands, view, args.resolution, args.reference_spp, (99,), faint=False,
+                halves=True)
             cpu = info["cpu_s"]
             if args.reference_file:
                 np.savez_compressed(args.reference_file, xyz=ref, alpha=alpha, key=key,
+                                    half_a=ref_halves[0], half_b=ref_halves[1],
                                     wall_s=t, cpu_s=cpu)
-        ref_fig = _figures(src_xyz, src_alpha, ref, alpha, bands.observer, spd)
-        print(f"reference: {args.reference_spp} spp in every pass, seed 99"
+        ref_fig = _figures(src_xyz, src_alpha, ref, alpha, bands.observer, spd, ref_halves)
+        print(f"reference: {args.reference_spp} spp in every pass (two halves), seeds 99, 100"
               f"{' (read from ' + args.reference_file + ')' if saved else ''}: {t:.1f} s, "
               f"{cpu:.1f} CPU s; figures "
               + ", ".join(f"{k} {v:.3f}" for k, v in ref_fig.items()), flush=True)
@@ -255,9 +266,11 @@ def speed(args) -> None:
                       f"{t_old / 2:.1f} s/render, {info_old['cpu_s'] / 2:.1f} CPU s/render",
                       flush=True)
             if ref is not None:
-                fig = _figures(src_xyz, src_alpha, m, alpha, bnd.observer, spd)
+                fig = _figures(src_xyz, src_alpha, m, alpha, bnd.observer, spd, (a, b))
                 print(f"{'':12s} bias against {args.reference_spp} spp: "
-                      + ", ".join(f"{k} {fig[k] - ref_fig[k]:+.3f}" for k in fig), flush=True)
+                      + ", ".join(f"{k} {fig[k] - ref_fig[k]:+.3f}" for k in fig)
+                      + f"; dE nc in against the reference's raw dE in "
+                        f"{fig['dE nc in'] - ref_fig['dE in']:+.3f}", flush=True)
     share = info["extra_pixels"] / args.resolution ** 2
     print(f"({info['variant']}, {info['passes']} Mitsuba passes per half; thick tiles "
           f"(direct transmittance < {THICK_T}) {share:.0%} of the frame; "

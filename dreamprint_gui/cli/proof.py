@@ -338,8 +338,9 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
         emit_json(table)
         return
     click.echo("inside the source (object pixels where the source has coverage); all object "
-               "pixels and the share where the source is empty (the Clear block's body) beside")
-    click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'dE p95':>8s} "
+               "pixels and the share where the source is empty (the Clear block's body) beside; "
+               "-noise: the dE2000 mean less the render's noise")
+    click.echo(f"{'method':14s} {'halftone':10s} {'dE mean':>9s} {'-noise':>6s} {'dE p95':>8s} "
                f"{'S-CIELAB':>9s} {'floor':>11s} {'coverage':>9s} | {'all: dE':>8s} "
                f"{'S-CIELAB':>9s} {'coverage':>9s} {'PSNR':>6s} {'SSIM':>6s} {'empty':>6s}")
 
@@ -353,6 +354,7 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
         click.echo(f"{r['method']:14s} {r['halftone']:10s} "
                    f"{r['inside_source_mean_de2000']:8.2f}"
                    f"{mark(r, 'inside_source_mean_de2000')} "
+                   f"{r.get('inside_source_nc_mean_de2000', float('nan')):6.2f} "
                    f"{r['inside_source_p95_de2000']:8.2f} "
                    f"{r['inside_source_mean_scielab_de2000']:8.2f}"
                    f"{mark(r, 'inside_source_mean_scielab_de2000')} {floor:>11s} "
@@ -373,7 +375,7 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
         click.echo(f"Clear: {rows[0]['clear']['origin']} ({rows[0]['clear']['note']})")
     if gfloor is not None:
         g = headline(gfloor)
-        click.echo(f"{'gamut floor':25s} {g['mean_de2000']:8.2f} {g['p95_de2000']:9.2f} "
+        click.echo(f"{'gamut floor':25s} {g['mean_de2000']:8.2f} {'-':>7s} {g['p95_de2000']:9.2f} "
                    f"{g['mean_scielab_de2000']:8.2f} {'':>12s} {g['coverage_error']:+9.3f} | "
                    f"{gfloor['mean_de2000']:7.2f}  {gfloor['mean_scielab_de2000']:8.2f}  "
                    f"{gfloor['coverage_error']:+9.3f}  (the source in the printable colours, "

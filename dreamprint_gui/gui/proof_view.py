@@ -378,7 +378,7 @@ class ProofPage(QWidget):
 
     def _on_result(self, result: dict) -> None:
         from dreamprint_gui.proof.clear_report import clear_lines
-        from dreamprint_gui.proof.compare import empty_source_note, headline
+        from dreamprint_gui.proof.compare import empty_source_note, headline, noise_corrected_text
 
         self.comparison = None
         self._set_mode(PROOF_TITLES)
@@ -392,7 +392,8 @@ class ProofPage(QWidget):
                  f"{f['mean_de2000']:.2f}, S-CIELAB {f['mean_scielab_de2000']:.2f}" if f else "")
         h = headline(o)
         self.figures.setText(
-            f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}, p95 {h['p95_de2000']:.2f}; "
+            f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}{noise_corrected_text(h)}, "
+            f"p95 {h['p95_de2000']:.2f}; "
             f"S-CIELAB dE2000 mean {h['mean_scielab_de2000']:.2f} at "
             f"{self.result['viewing']['distance_mm']:g} mm; coverage error "
             f"{h['coverage_error']:+.3f}\n"

@@ -49,7 +49,8 @@ from numpy.typing import NDArray
 from dreamprint_gui.physics.colorimetry import Observer, clip_unit, delta_E2000
 from dreamprint_gui.proof.scielab import scielab_de2000
 
-__all__ = ["compare_view", "noise_floor", "noise_floor_from_halves", "summarise",
+__all__ = ["compare_view", "noise_floor", "noise_floor_from_halves", "noise_corrected_de2000",
+           "noise_corrected_figures", "noise_corrected_text", "NC_KEYS", "summarise",
            "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "SIGNIFICANCE_KEYS", "de_heatmap",
            "to_display",
@@ -184,6 +185,39 @@ def noise_floor_from_halves(half_a_xyz: NDArray, half_b_xyz: NDArray, prn_alpha:
                        source_alpha)
 
 
+def noise_corrected_de2000(src_xyz: NDArray, half_a_xyz: NDArray, half_b_xyz: NDArray,
+                           observer: Observer) -> NDArray[np.float64]:
+    """Per-pixel dE2000 of the print ``(half_a + half_b) / 2`` against the source with the
+    render noise's share taken out (module docstring)::
+
+        sqrt(max(dE(s, x)^2 - dE(x_a, x_b)^2 / 4, 0))       x = (x_a + x_b) / 2
+
+    Equal halves (no noise) give the plain dE2000."""
+    a = np.asarray(half_a_xyz, np.float64)
+    b = np.asarray(half_b_xyz, np.float64)
+    def lab(x):
+        return observer.XYZ_to_Lab(np.maximum(x, 0.0))
+    e = delta_E2000(lab(src_xyz), lab((a + b) / 2.0))
+    n = delta_E2000(lab(a), lab(b))
+    return np.sqrt(np.maximum(e * e - 0.25 * n * n, 0.0))
+
+
+# the noise-corrected figures a view carries (:func:`noise_corrected_figures`)
+NC_KEYS = ("nc_mean_de2000", "inside_source_nc_mean_de2000")
+
+
+def noise_corrected_figures(src_xyz: NDArray, half_a_xyz: NDArray, half_b_xyz: NDArray,
+                            src_alpha: NDArray, prn_alpha: NDArray, observer: Observer,
+                            threshold: float = COVERAGE_THRESHOLD) -> dict:
+    """The mean of :func:`noise_corrected_de2000` over the object pixels and inside the source
+    (the pixels of :func:`compare_view`'s ``mean_de2000`` and ``inside_source_mean_de2000``)."""
+    dc = noise_corrected_de2000(src_xyz, half_a_xyz, half_b_xyz, observer)
+    mask = (src_alpha > threshold) | (prn_alpha > threshold)
+    inside = mask & (src_alpha > threshold)
+    return {"nc_mean_de2000": float(dc[mask].mean()) if mask.any() else 0.0,
+            "inside_source_nc_mean_de2000": float(dc[inside].mean()) if inside.any() else 0.0}
+
+
 FLOOR_KEYS = ("mean_de2000", "p95_de2000", "mean_scielab_de2000", "p95_scielab_de2000")
 
 
@@ -220,6 +254,12 @@ def summarise(views: list[dict]) -> dict:
         out.update({f"inside_source_{k}": float(np.average(
             [v[f"inside_source_{k}"] for v in views], weights=wi)) for k in INSIDE_KEYS})
         out["inside_source_pixels"] = int(sum(v["inside_source_pixels"] for v in views))
+    if views and all("nc_mean_de2000" in v for v in views):
+        out["nc_mean_de2000"] = float(np.average([v["nc_mean_de2000"] for v in views],
+                                                 weights=w))
+        if "inside_source_pixels" in out:
+            out["inside_source_nc_mean_de2000"] = float(np.average(
+                [v["inside_source_nc_mean_de2000"] for v in views], weights=wi))
     return out
 
 
@@ -228,19 +268,36 @@ def headline(figures: dict) -> dict:
     tab): inside the source, i.e. over the object pixels where the source has coverage, where
     ink placed in the object acts; ``where`` says so. A figures dict without those pixels
     (a source empty on every camera, or one from before they were recorded) gives its figures
-    over all object pixels, ``where`` "all object pixels" (NaN for a figure it lacks)."""
+    over all object pixels, ``where`` "all object pixels" (NaN for a figure it lacks).
+    ``nc_mean_de2000``: the dE2000 mean less the render's noise, where the figures have it
+    (:func:`noise_corrected_figures`)."""
     if figures.get("inside_source_pixels", 0) > 0:
-        return {"where": "inside the source", **{k: figures[f"inside_source_{k}"]
-                                                  for k in INSIDE_KEYS}}
-    return {"where": "all object pixels",
-            **{k: figures.get(k, float("nan")) for k in INSIDE_KEYS}}
+        out = {"where": "inside the source", **{k: figures[f"inside_source_{k}"]
+                                                 for k in INSIDE_KEYS}}
+        if "inside_source_nc_mean_de2000" in figures:
+            out["nc_mean_de2000"] = figures["inside_source_nc_mean_de2000"]
+        return out
+    out = {"where": "all object pixels",
+           **{k: figures.get(k, float("nan")) for k in INSIDE_KEYS}}
+    if "nc_mean_de2000" in figures:
+        out["nc_mean_de2000"] = figures["nc_mean_de2000"]
+    return out
+
+
+def noise_corrected_text(h: dict) -> str:
+    """" (D less the render's noise)" after a headline's dE2000 mean (:func:`headline`), or ""
+    when it has no noise-corrected figure."""
+    if "nc_mean_de2000" not in h:
+        return ""
+    return f" ({h['nc_mean_de2000']:.2f} less the render's noise)"
 
 
 def headline_text(figures: dict) -> str:
     """One line: the headline figures (:func:`headline`), then the same over all object pixels
     and the share of the pixels where the source is empty (the Clear block's body)."""
     h = headline(figures)
-    line = (f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}, p95 {h['p95_de2000']:.2f}; "
+    line = (f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}{noise_corrected_text(h)}, "
+            f"p95 {h['p95_de2000']:.2f}; "
             f"S-CIELAB {h['mean_scielab_de2000']:.2f}; coverage error "
             f"{h['coverage_error']:+.3f}")
     if h["where"] == "all object pixels":

@@ -38,6 +38,7 @@ from dreamprint_gui.proof.compare import (
     COVERAGE_THRESHOLD,
     compare_view,
     de_heatmap,
+    noise_corrected_figures,
     noise_floor_from_halves,
     summarise,
     summarise_floor,
@@ -316,11 +317,12 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         prn_xyz = print_xyz(bands, prn_bands[i], T, s.floor, optics)
         prints.append((prn_xyz, prn_alpha))
         fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs, spd)
+        # the halves: the dE2000 mean less the render's noise, and the noise floor
+        half_xyz = [print_xyz(bands, h[i], T, s.floor, optics) for h in halves]
+        fig.update(noise_corrected_figures(src_xyz, *half_xyz, src_alpha[i], prn_alpha, obs))
         if s.noise_floor:
-            fig["noise_floor"] = noise_floor_from_halves(
-                print_xyz(bands, halves[0][i], T, s.floor, optics),
-                print_xyz(bands, halves[1][i], T, s.floor, optics), prn_alpha, obs, spd,
-                source_alpha=src_alpha[i])
+            fig["noise_floor"] = noise_floor_from_halves(*half_xyz, prn_alpha, obs, spd,
+                                                         source_alpha=src_alpha[i])
         per_view.append({"view": i, **v.describe(), **fig})
         images.append({"source": src_lin[i], "print": obs.XYZ_to_linear_sRGB(prn_xyz),
                        "de2000": de})

@@ -132,6 +132,7 @@ def _fake_proof(monkeypatch, slow: str):
                                      {"halves": {"seeds": [0, 1]}}),
              "samples_per_degree": 1.0, "print_xyz": np.zeros((2, 2, 3)),
              "compare_view": ({}, None), "noise_floor_from_halves": {}, "summarise": {},
+             "noise_corrected_figures": {},
              "clear_report": {}}
     for name, value in fakes.items():
         f = stand_in(value)
