@@ -220,12 +220,12 @@ class ProofPage(QWidget):
             "more print render)")
         self.comp_iterations = QSpinBox(minimum=1, maximum=20, value=4)
         self.comp_iterations.setToolTip("Render-compare-update iterations of the compensation "
-                                        "(each renders the print on 3 training cameras)")
+                                        "(each renders the print on the training cameras)")
         self.render_button = QPushButton("Render proof")
         self.compensate_button = QPushButton("Compensate appearance")
         self.compensate_button.setToolTip(
             "Optimise a correction of the job's colours and densities through the proof "
-            "(3 training cameras, another seed), then render the open-loop and the "
+            "(on training cameras of its own and another seed), then render the open-loop and the "
             "compensated print on this page's cameras (the paper's method; several minutes)")
         self.cancel_button = QPushButton("Cancel", enabled=False)
         self.progress = QProgressBar()
