@@ -375,7 +375,7 @@ def evaluate_methods(source, methods, iterations, comp_views, **kw) -> None:
         click.echo(f"Clear: {rows[0]['clear']['origin']} ({rows[0]['clear']['note']})")
     if gfloor is not None:
         g = headline(gfloor)
-        click.echo(f"{'gamut floor':25s} {g['mean_de2000']:8.2f} {'-':>7s} {g['p95_de2000']:9.2f} "
+        click.echo(f"{'gamut floor':25s} {g['mean_de2000']:8.2f} {'-':>6s} {g['p95_de2000']:9.2f} "
                    f"{g['mean_scielab_de2000']:8.2f} {'':>12s} {g['coverage_error']:+9.3f} | "
                    f"{gfloor['mean_de2000']:7.2f}  {gfloor['mean_scielab_de2000']:8.2f}  "
                    f"{gfloor['coverage_error']:+9.3f}  (the source in the printable colours, "

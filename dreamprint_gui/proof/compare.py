@@ -1,7 +1,8 @@
 """Source vs print: dE2000 map, mean / 95th-percentile dE2000 and S-CIELAB dE2000, PSNR, SSIM,
 coverage error; the noise floor between two renders of the same print.
 
-Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_heatmap`,
+Defines :func:`compare_view`, :func:`noise_floor`, :func:`noise_corrected_de2000`,
+:func:`noise_corrected_figures`, :func:`summarise`, :func:`de_heatmap`,
 :func:`empty_source_note`, :func:`inside_source` and :data:`COVERAGE_THRESHOLD`.
 
 - Colour: both images are XYZ relative to the white environment (D65 white = the observer's
@@ -19,6 +20,15 @@ Defines :func:`compare_view`, :func:`noise_floor`, :func:`summarise`, :func:`de_
   what the floor was until 2026-12 (the print rendered again in full at seed + 1, both figures
   between the two renders) without the second render (``bench_proof.py --floor-check``). A
   difference between two proofs smaller than a few times the floor is render noise.
+- The dE2000 mean less the render's noise (:func:`noise_corrected_de2000`,
+  ``nc_mean_de2000`` and ``inside_source_nc_mean_de2000``): the noise adds to every pixel's
+  dE2000, so the raw mean reads high at any spp. dE2000 squared is locally a quadratic form
+  ``q`` of the Lab difference; with the print's noise covariance ``C`` (each half's ``2 C``),
+  ``E dE(s, x)^2 = dE(s, E x)^2 + q(C)`` and ``E dE(x_a, x_b)^2 = 4 q(C)``, so per pixel
+  ``sqrt(max(dE(s, x)^2 - dE(x_a, x_b)^2 / 4, 0))`` estimates the noiseless error. First order
+  only (dE2000's weights depend on where the pair lies), and a root of a noisy square: per pixel
+  it reads high where the true error is below about the noise's standard deviation per Lab axis
+  and a little low above it (docs/physics.md). The raw figures keep their keys.
 - Object pixels: where either image's coverage exceeds :data:`COVERAGE_THRESHOLD`; mean and
   95th percentile of dE2000 are over those pixels.
 - Coverage: 1 - the direct (unscattered) transmittance of the pixel's rays through the volume:
@@ -254,7 +264,7 @@ def summarise(views: list[dict]) -> dict:
         out.update({f"inside_source_{k}": float(np.average(
             [v[f"inside_source_{k}"] for v in views], weights=wi)) for k in INSIDE_KEYS})
         out["inside_source_pixels"] = int(sum(v["inside_source_pixels"] for v in views))
-    if views and all("nc_mean_de2000" in v for v in views):
+    if views and all(k in v for v in views for k in NC_KEYS):
         out["nc_mean_de2000"] = float(np.average([v["nc_mean_de2000"] for v in views],
                                                  weights=w))
         if "inside_source_pixels" in out:

@@ -168,8 +168,8 @@ def test_the_noise_corrected_de2000_takes_the_render_noise_out(obs, scale):
     """A print darker than its source by ``scale`` (noiseless mean dE2000 1.65 and 3.70),
     rendered as two halves of 32 samples with the noise of the demo's proof at 64: the raw
     mean dE2000 reads the noise too (0.93 and 0.55 above the noiseless figure); the corrected
-    one is within 0.35 of it (0.02 and 0.15 off). Equal halves (no noise) give the plain
-    dE2000."""
+    one is within 0.2 of it (0.02 and 0.15 off; a factor 1/8 or 1/3 instead of 1/4 misses).
+    Equal halves (no noise) give the plain dE2000."""
     from dreamprint_gui.proof.compare import noise_corrected_de2000, noise_corrected_figures
 
     rng = np.random.default_rng(11)
@@ -182,7 +182,7 @@ def test_the_noise_corrected_de2000_takes_the_render_noise_out(obs, scale):
     ones = np.ones(truth.shape[:2])
     fig = noise_corrected_figures(src, a, b, ones, ones, obs)
     assert raw - clean > 0.5
-    assert fig["nc_mean_de2000"] == pytest.approx(clean, abs=0.35)
+    assert fig["nc_mean_de2000"] == pytest.approx(clean, abs=0.2)
     assert fig["inside_source_nc_mean_de2000"] == fig["nc_mean_de2000"]
     assert np.allclose(noise_corrected_de2000(src, truth, truth, obs),
                        delta_E2000(lab(src), lab(truth)))
