@@ -127,10 +127,10 @@ def _figures(src_xyz, src_alpha, prn_xyz, prn_alpha, obs, spd, halves=None) -> d
 
     f, _ = compare_view(src_xyz, prn_xyz, src_alpha, prn_alpha, obs, spd)
     body = f["empty_source_fraction"]
-    nc = ({} if halves is None else
-          {(k.replace("inside_source_nc_mean_de2000", "dE nc in")
-            .replace("nc_mean_de2000", "dE nc")): v for k, v in noise_corrected_figures(
-              src_xyz, *halves, src_alpha, prn_alpha, obs).items()})
+    nc = {}
+    if halves is not None:
+        g = noise_corrected_figures(src_xyz, *halves, src_alpha, prn_alpha, obs)
+        nc = {"dE nc": g["nc_mean_de2000"], "dE nc in": g["inside_source_nc_mean_de2000"]}
     return {**nc, "dE": f["mean_de2000"], "S": f["mean_scielab_de2000"],
             "dE in": inside_source(f, "mean_de2000") or 0.0,
             "S in": inside_source(f, "mean_scielab_de2000") or 0.0,

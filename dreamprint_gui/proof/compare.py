@@ -60,7 +60,8 @@ from dreamprint_gui.physics.colorimetry import Observer, clip_unit, delta_E2000
 from dreamprint_gui.proof.scielab import scielab_de2000
 
 __all__ = ["compare_view", "noise_floor", "noise_floor_from_halves", "noise_corrected_de2000",
-           "noise_corrected_figures", "noise_corrected_text", "NC_KEYS", "summarise",
+           "noise_corrected_figures", "noise_corrected_text", "NC_KEYS", "object_pixels",
+           "summarise",
            "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "SIGNIFICANCE_KEYS", "de_heatmap",
            "to_display",
@@ -97,6 +98,12 @@ def _stats(de: NDArray, mask: NDArray, prefix: str) -> dict:
             f"p95_{prefix}": float(np.percentile(de[mask], 95)) if n else 0.0}
 
 
+def object_pixels(src_alpha: NDArray, prn_alpha: NDArray,
+                  threshold: float = COVERAGE_THRESHOLD) -> NDArray[np.bool_]:
+    """The object pixels of a view: where either image's coverage exceeds ``threshold``."""
+    return (src_alpha > threshold) | (prn_alpha > threshold)
+
+
 def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alpha: NDArray,
                  observer: Observer, samples_per_degree: float,
                  threshold: float = COVERAGE_THRESHOLD, mask: NDArray | None = None
@@ -114,7 +121,7 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     de = delta_E2000(lab_s, lab_p)
     sde = scielab_de2000(src_xyz, prn_xyz, observer, samples_per_degree)
     if mask is None:
-        mask = (src_alpha > threshold) | (prn_alpha > threshold)
+        mask = object_pixels(src_alpha, prn_alpha, threshold)
     a = to_display(observer.XYZ_to_linear_sRGB(src_xyz)).astype(np.float64) / 255
     b = to_display(observer.XYZ_to_linear_sRGB(prn_xyz)).astype(np.float64) / 255
     psnr = float(peak_signal_noise_ratio(a, b, data_range=1.0))
@@ -196,20 +203,22 @@ def noise_floor_from_halves(half_a_xyz: NDArray, half_b_xyz: NDArray, prn_alpha:
 
 
 def noise_corrected_de2000(src_xyz: NDArray, half_a_xyz: NDArray, half_b_xyz: NDArray,
-                           observer: Observer) -> NDArray[np.float64]:
+                           observer: Observer, de: NDArray | None = None
+                           ) -> NDArray[np.float64]:
     """Per-pixel dE2000 of the print ``(half_a + half_b) / 2`` against the source with the
     render noise's share taken out (module docstring)::
 
         sqrt(max(dE(s, x)^2 - dE(x_a, x_b)^2 / 4, 0))       x = (x_a + x_b) / 2
 
-    Equal halves (no noise) give the plain dE2000."""
-    a = np.asarray(half_a_xyz, np.float64)
-    b = np.asarray(half_b_xyz, np.float64)
+    ``de``: ``dE(s, x)`` when the caller has it (:func:`compare_view`'s map). Equal halves (no
+    noise) give the plain dE2000."""
     def lab(x):
-        return observer.XYZ_to_Lab(np.maximum(x, 0.0))
-    e = delta_E2000(lab(src_xyz), lab((a + b) / 2.0))
-    n = delta_E2000(lab(a), lab(b))
-    return np.sqrt(np.maximum(e * e - 0.25 * n * n, 0.0))
+        return observer.XYZ_to_Lab(np.maximum(np.asarray(x, np.float64), 0.0))
+    if de is None:
+        de = delta_E2000(lab(src_xyz), lab((np.asarray(half_a_xyz, np.float64) + half_b_xyz)
+                                           / 2.0))
+    n = delta_E2000(lab(half_a_xyz), lab(half_b_xyz))
+    return np.sqrt(np.maximum(de * de - 0.25 * n * n, 0.0))
 
 
 # the noise-corrected figures a view carries (:func:`noise_corrected_figures`)
@@ -218,11 +227,13 @@ NC_KEYS = ("nc_mean_de2000", "inside_source_nc_mean_de2000")
 
 def noise_corrected_figures(src_xyz: NDArray, half_a_xyz: NDArray, half_b_xyz: NDArray,
                             src_alpha: NDArray, prn_alpha: NDArray, observer: Observer,
-                            threshold: float = COVERAGE_THRESHOLD) -> dict:
+                            threshold: float = COVERAGE_THRESHOLD, de: NDArray | None = None
+                            ) -> dict:
     """The mean of :func:`noise_corrected_de2000` over the object pixels and inside the source
-    (the pixels of :func:`compare_view`'s ``mean_de2000`` and ``inside_source_mean_de2000``)."""
-    dc = noise_corrected_de2000(src_xyz, half_a_xyz, half_b_xyz, observer)
-    mask = (src_alpha > threshold) | (prn_alpha > threshold)
+    (the pixels of :func:`compare_view`'s ``mean_de2000`` and ``inside_source_mean_de2000``);
+    ``de`` as there."""
+    dc = noise_corrected_de2000(src_xyz, half_a_xyz, half_b_xyz, observer, de)
+    mask = object_pixels(src_alpha, prn_alpha, threshold)
     inside = mask & (src_alpha > threshold)
     return {"nc_mean_de2000": float(dc[mask].mean()) if mask.any() else 0.0,
             "inside_source_nc_mean_de2000": float(dc[inside].mean()) if inside.any() else 0.0}

@@ -319,7 +319,8 @@ def render_proof(s: ProofSettings, cancel: threading.Event | None = None
         fig, de = compare_view(src_xyz, prn_xyz, src_alpha[i], prn_alpha, obs, spd)
         # the halves: the dE2000 mean less the render's noise, and the noise floor
         half_xyz = [print_xyz(bands, h[i], T, s.floor, optics) for h in halves]
-        fig.update(noise_corrected_figures(src_xyz, *half_xyz, src_alpha[i], prn_alpha, obs))
+        fig.update(noise_corrected_figures(src_xyz, *half_xyz, src_alpha[i], prn_alpha, obs,
+                                           de=de))
         if s.noise_floor:
             fig["noise_floor"] = noise_floor_from_halves(*half_xyz, prn_alpha, obs, spd,
                                                          source_alpha=src_alpha[i])
