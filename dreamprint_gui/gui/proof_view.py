@@ -50,19 +50,26 @@ COMPENSATION_TITLES = ("source (emission-absorption)", "open-loop print (paper's
 def compensation_text(result: dict) -> str:
     """The figures of a compensation (:func:`..proof.compensated.compare_compensation`):
     open loop and compensated on the proof's cameras, the gamut floor, the optimiser's own."""
-    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline
+    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline, noise_corrected_text
     rows = []
     for key, name in (("open_loop", "open loop"), ("compensated", "compensated")):
         o = headline(result[key]["report"]["overall"])
-        rows.append(f"{name}, {o['where']}: dE2000 mean {o['mean_de2000']:.2f}, p95 "
+        rows.append(f"{name}, {o['where']}: dE2000 mean {o['mean_de2000']:.2f}"
+                    f"{noise_corrected_text(o)}, p95 "
                     f"{o['p95_de2000']:.2f}; S-CIELAB {o['mean_scielab_de2000']:.2f}; coverage "
                     f"error {o['coverage_error']:+.3f}")
     a = result["open_loop"]["report"]["overall"]
     b = result["compensated"]["report"]["overall"]
     ha, hb = headline(a), headline(b)
-    rows.append(f"change: dE2000 {100 * (hb['mean_de2000'] / ha['mean_de2000'] - 1):+.0f} %, "
-                f"S-CIELAB "
-                f"{100 * (hb['mean_scielab_de2000'] / ha['mean_scielab_de2000'] - 1):+.0f} %")
+
+    def change(k: str) -> str:
+        return f"{100 * (hb[k] / ha[k] - 1):+.0f} %"
+
+    # the render's noise raises both raw means alike and so shrinks their change
+    nc = f" ({change('nc_mean_de2000')} less the render's noise)" \
+        if "nc_mean_de2000" in ha and "nc_mean_de2000" in hb else ""
+    rows.append(f"change: dE2000 {change('mean_de2000')}{nc}, "
+                f"S-CIELAB {change('mean_scielab_de2000')}")
     if a.get("empty_source_fraction", 0.0) >= EMPTY_NOTE_MIN:
         rows.append(f"all object pixels: dE2000 mean {a['mean_de2000']:.2f} -> "
                     f"{b['mean_de2000']:.2f}, S-CIELAB {a['mean_scielab_de2000']:.2f} -> "

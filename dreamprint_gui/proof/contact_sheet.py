@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image, ImageDraw
 
-from dreamprint_gui.proof.compare import DE_MAP_MAX, headline
+from dreamprint_gui.proof.compare import DE_MAP_MAX, headline, noise_corrected_text
 
 __all__ = ["contact_sheet"]
 
@@ -15,7 +15,7 @@ def contact_sheet(rows: list[tuple[np.ndarray, np.ndarray, np.ndarray]], report:
     """One image: a header line, then a row per view (three images and its figures)."""
     res = rows[0][0].shape[0]
     pad = 6
-    head = 44
+    head = 58
     text_w = 230
     w = 3 * res + 4 * pad + text_w
     h = head + len(rows) * (res + pad) + pad
@@ -26,12 +26,13 @@ def contact_sheet(rows: list[tuple[np.ndarray, np.ndarray, np.ndarray]], report:
               f"{' x '.join(f'{x:.1f}' for x in report['print_size_mm'])} mm  "
               f"spp {report['renderer']['spp']}", fill=(0, 0, 0))
     h = headline(o)
-    draw.text((pad, 18), f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}  p95 "
+    draw.text((pad, 18), f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}"
+              f"{noise_corrected_text(h)}  p95 "
               f"{h['p95_de2000']:.2f}  S-CIELAB {h['mean_scielab_de2000']:.2f}  coverage "
-              f"{h['coverage_error']:+.3f}   all object pixels: dE2000 mean "
-              f"{o['mean_de2000']:.2f}  PSNR {o['psnr_db']:.1f} dB  SSIM {o['ssim']:.3f}",
-              fill=(0, 0, 0))
-    draw.text((pad, 30), f"columns: source (emission-absorption) | print (Mitsuba volpath) | "
+              f"{h['coverage_error']:+.3f}", fill=(0, 0, 0))
+    draw.text((pad, 30), f"all object pixels: dE2000 mean {o['mean_de2000']:.2f}  PSNR "
+              f"{o['psnr_db']:.1f} dB  SSIM {o['ssim']:.3f}", fill=(0, 0, 0))
+    draw.text((pad, 44), f"columns: source (emission-absorption) | print (Mitsuba volpath) | "
               f"dE2000 0..{DE_MAP_MAX:g}", fill=(90, 90, 90))
     for r, (src, prn, de) in enumerate(rows):
         y = head + r * (res + pad)
