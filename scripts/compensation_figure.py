@@ -1,10 +1,11 @@
 """The README's compensation figure: source | open-loop print | compensated print per view.
 
 Runs :func:`dreamprint_gui.proof.compensated.compare_compensation` (what the proof tab's
-"Compensate appearance" runs: the correction optimised on 3 training cameras at elevation 35
-degrees with seed + 1, then the proof of the paper's open-loop job and of the compensated job on
-the proof's cameras at elevation 20 degrees with the seed), on the default printer, and writes
-one PNG with the figures of both and a JSON of the reports beside it.
+"Compensate appearance" runs: the correction optimised on the optimiser's training cameras
+(elevations 35 and 5 degrees in turn) with seed + 1, then the proof of the paper's open-loop
+job and of the compensated job on the proof's cameras at elevation 20 degrees with the seed),
+on the default printer, and writes one PNG with the figures of both and a JSON of the reports
+beside it.
 
     PYTHONPATH=. python scripts/compensation_figure.py SOURCE OUT.png [--height-mm 20]
         [--background empty] [--views 2] [--resolution 160] [--spp 64] [--cells 128]

@@ -15,6 +15,7 @@ from dreamprint_gui.proof.compensate import (
     backproject,
     pixel_log_ratios,
     run_compensate,
+    training_views,
 )
 from dreamprint_gui.proof.source_render import SourceField
 
@@ -222,3 +223,20 @@ def test_floor_alphas_are_the_clear_blocks_own_transmittance():
     np.testing.assert_allclose(
         floor_alphas(f, "clear", bands, lo, (1.0, 1.0, 1.0), views, 16)[0], 0.0, atol=1e-12)
     assert floor_alphas(f, "empty", bands, lo, (1.0, 1.0, 1.0), views, 16) == [None, None]
+
+
+def test_training_cameras_bracket_the_proofs_elevation_and_miss_its_cameras():
+    """The training cameras take 35 and 5 degrees in turn (the proof's 20 between them), none
+    at a proof camera's azimuth, all framing the same box."""
+    from dreamprint_gui.proof.cameras import orbit_views
+
+    size = (24.0, 10.7, 20.0)
+    train = training_views(size, 6)
+    assert [v.elevation_deg for v in train] == [35.0, 5.0] * 3
+    proof = orbit_views(size, 4)
+    assert {v.elevation_deg for v in proof} == {20.0}
+    assert min(abs((t.azimuth_deg - p.azimuth_deg + 180.0) % 360.0 - 180.0)
+               for t in train for p in proof) > 5.0
+    assert {(v.half_mm, v.distance_mm) for v in train} == {(proof[0].half_mm,
+                                                             proof[0].distance_mm)}
+    assert [v.elevation_deg for v in training_views(size, 1)] == [35.0]
