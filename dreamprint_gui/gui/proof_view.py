@@ -63,7 +63,7 @@ def compensation_text(result: dict) -> str:
     ha, hb = headline(a), headline(b)
 
     def change(k: str) -> str:
-        return f"{100 * (hb[k] / ha[k] - 1):+.0f} %"
+        return f"{100 * (hb[k] / ha[k] - 1):+.0f} %" if ha[k] > 0 else "n/a"
 
     # the render's noise raises both raw means alike and so shrinks their change
     nc = f" ({change('nc_mean_de2000')} less the render's noise)" \

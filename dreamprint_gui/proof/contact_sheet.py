@@ -12,7 +12,9 @@ __all__ = ["contact_sheet"]
 
 def contact_sheet(rows: list[tuple[np.ndarray, np.ndarray, np.ndarray]], report: dict
                   ) -> Image.Image:
-    """One image: a header line, then a row per view (three images and its figures)."""
+    """One image: a header (the job, the headline figures with the dE2000 mean less the
+    render's noise, all object pixels' figures, the columns), then a row per view (three
+    images and its figures)."""
     res = rows[0][0].shape[0]
     pad = 6
     head = 58

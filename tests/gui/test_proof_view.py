@@ -246,24 +246,31 @@ def test_compensation_text_names_the_share_where_the_source_is_empty():
 
 def test_compensation_text_gives_the_change_less_the_render_noise():
     """With the proofs' noise-corrected means the comparison gives them and their change."""
-    def overall(de, nc):
+    def overall(de, nc, scielab):
         return {"inside_source_pixels": 10, "inside_source_mean_de2000": de,
                 "inside_source_nc_mean_de2000": nc, "inside_source_p95_de2000": 2 * de,
-                "inside_source_mean_scielab_de2000": de / 2,
+                "inside_source_mean_scielab_de2000": scielab,
                 "inside_source_p95_scielab_de2000": de, "inside_source_coverage_error": 0.0,
                 "inside_source_coverage_abs_error": 0.0, "empty_source_fraction": 0.0}
 
-    result = {"open_loop": {"report": {"overall": overall(8.0, 6.0), "gamut_floor": None}},
-              "compensated": {"report": {"overall": overall(7.0, 4.5)}},
+    result = {"open_loop": {"report": {"overall": overall(8.0, 6.0, 5.0),
+                                       "gamut_floor": None}},
+              "compensated": {"report": {"overall": overall(7.2, 4.5, 3.0)}},
               "optimiser": {"training_views": [0], "settings": {"seed": 1}, "seconds": 3.0,
                             "figures": {"before": {"mean_de2000": 9.0},
                                         "after": {"mean_de2000": 8.0}}}}
     text = compensation_text(result)
     assert "open loop, inside the source: dE2000 mean 8.00 (6.00 less the render's noise)" \
         in text
-    assert "compensated, inside the source: dE2000 mean 7.00 (4.50 less the render's noise)" \
+    assert "compensated, inside the source: dE2000 mean 7.20 (4.50 less the render's noise)" \
         in text
-    assert "change: dE2000 -12 % (-25 % less the render's noise), S-CIELAB -12 %" in text
+    assert "change: dE2000 -10 % (-25 % less the render's noise), S-CIELAB -40 %" in text
+    # one side without the two halves (an older report): no change less the noise
+    del result["compensated"]["report"]["overall"]["inside_source_nc_mean_de2000"]
+    text = compensation_text(result)
+    assert "change: dE2000 -10 %, S-CIELAB -40 %" in text
+    assert "open loop, inside the source: dE2000 mean 8.00 (6.00 less the render's noise)" \
+        in text
 
 
 def test_proof_page_shows_the_clear_at_both_bounds(qtbot, table_size):

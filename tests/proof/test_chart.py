@@ -38,12 +38,16 @@ def test_surface_none_matches_the_rte_closed_form_and_km(geometry):
     cos 8 deg); under a beam at mu0 = cos 45 deg the reflectance factor on the normal is
     (omega / 4) H(1) H(mu0) / (1 + mu0); omega is the albedo the proof's conversion gives the
     mixture. That conversion makes the reading KM's R_inf of the mixture's K and S (Gate's
-    relation read up to 0.06 lower for light patches)."""
+    relation read up to 0.06 lower for light patches).
+
+    The render's noise at 512 spp: a patch's band reads up to 0.014 off its exact value (seeds 0-5,
+    both of Mitsuba's variants: a worker whose first test loaded the scalar one renders another
+    realisation), their mean within 0.003; so 0.02 per patch and band, 0.005 on the mean."""
     from dreamprint_gui.proof.km_to_rte import gate_coefficients, rte_coefficients
 
     p = default_profile()
     b = spectral_bands(p, 3)
-    R, info = render_chart(RECIPES, p, Optics("none"), b, geometry, spp=256)
+    R, info = render_chart(RECIPES, p, Optics("none"), b, geometry, spp=512)
     K, S = mix(RECIPES, b.K, b.S)
     sa, ss = rte_coefficients(K, S, 0.0, geometry)
     om = ss / (sa + ss)
@@ -55,9 +59,11 @@ def test_surface_none_matches_the_rte_closed_form_and_km(geometry):
         exact = np.vectorize(lambda o: o / 4 * _chandrasekhar_h(o, 1.0)
                              * _chandrasekhar_h(o, mu0) / (1 + mu0))(om)
     assert R.shape == exact.shape == (4, 3)
-    np.testing.assert_allclose(R, exact, atol=0.012)
+    np.testing.assert_allclose(R, exact, atol=0.02)
+    assert abs(float(np.mean(R - exact))) < 0.005
     km = reflectance_infinite(K, S)
-    np.testing.assert_allclose(R, km, atol=0.012)
+    np.testing.assert_allclose(R, km, atol=0.02)
+    assert abs(float(np.mean(R - km))) < 0.005
     ga, gs = gate_coefficients(K, S)
     assert np.abs(om - gs / (ga + gs)).max() > 0.005      # the conversion is not Gate's
 

@@ -240,3 +240,5 @@ def test_training_cameras_bracket_the_proofs_elevation_and_miss_its_cameras():
     assert {(v.half_mm, v.distance_mm) for v in train} == {(proof[0].half_mm,
                                                              proof[0].distance_mm)}
     assert [v.elevation_deg for v in training_views(size, 1)] == [35.0]
+    assert [v.elevation_deg for v in training_views(size, 3)] == [35.0, 5.0, 35.0]
+    assert [v.elevation_deg for v in training_views(size, 16)] == [35.0, 5.0] * 8
