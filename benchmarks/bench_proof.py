@@ -125,11 +125,11 @@ def _figures(src_xyz, src_alpha, prn_xyz, prn_alpha, obs, spd, halves=None) -> d
     the dE2000 mean less the render's noise too (``dE nc``, overall and inside the source)."""
     from dreamprint_gui.proof.compare import compare_view, inside_source, noise_corrected_figures
 
-    f, _ = compare_view(src_xyz, prn_xyz, src_alpha, prn_alpha, obs, spd)
+    f, de = compare_view(src_xyz, prn_xyz, src_alpha, prn_alpha, obs, spd)
     body = f["empty_source_fraction"]
     nc = {}
     if halves is not None:
-        g = noise_corrected_figures(src_xyz, *halves, src_alpha, prn_alpha, obs)
+        g = noise_corrected_figures(src_xyz, *halves, src_alpha, prn_alpha, obs, de=de)
         nc = {"dE nc": g["nc_mean_de2000"], "dE nc in": g["inside_source_nc_mean_de2000"]}
     return {**nc, "dE": f["mean_de2000"], "S": f["mean_scielab_de2000"],
             "dE in": inside_source(f, "mean_de2000") or 0.0,

@@ -50,14 +50,10 @@ COMPENSATION_TITLES = ("source (emission-absorption)", "open-loop print (paper's
 def compensation_text(result: dict) -> str:
     """The figures of a compensation (:func:`..proof.compensated.compare_compensation`):
     open loop and compensated on the proof's cameras, the gamut floor, the optimiser's own."""
-    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline, noise_corrected_text
+    from dreamprint_gui.proof.compare import EMPTY_NOTE_MIN, headline, headline_figures_text
     rows = []
     for key, name in (("open_loop", "open loop"), ("compensated", "compensated")):
-        o = headline(result[key]["report"]["overall"])
-        rows.append(f"{name}, {o['where']}: dE2000 mean {o['mean_de2000']:.2f}"
-                    f"{noise_corrected_text(o)}, p95 "
-                    f"{o['p95_de2000']:.2f}; S-CIELAB {o['mean_scielab_de2000']:.2f}; coverage "
-                    f"error {o['coverage_error']:+.3f}")
+        rows.append(f"{name}, {headline_figures_text(headline(result[key]['report']['overall']))}")
     a = result["open_loop"]["report"]["overall"]
     b = result["compensated"]["report"]["overall"]
     ha, hb = headline(a), headline(b)

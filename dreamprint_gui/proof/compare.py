@@ -61,6 +61,7 @@ from dreamprint_gui.proof.scielab import scielab_de2000
 
 __all__ = ["compare_view", "noise_floor", "noise_floor_from_halves", "noise_corrected_de2000",
            "noise_corrected_figures", "noise_corrected_text", "NC_KEYS", "object_pixels",
+           "headline_figures_text",
            "summarise",
            "summarise_floor", "FLOOR_KEYS",
            "mark_significance", "SIGNIFICANCE_FACTOR", "SIGNIFICANCE_KEYS", "de_heatmap",
@@ -104,6 +105,17 @@ def object_pixels(src_alpha: NDArray, prn_alpha: NDArray,
     return (src_alpha > threshold) | (prn_alpha > threshold)
 
 
+def _inside(mask: NDArray, src_alpha: NDArray, threshold: float) -> NDArray[np.bool_]:
+    """The pixels of ``mask`` inside the source (its coverage above ``threshold``): the
+    headline's pixels; the rest of ``mask`` is where the source is empty."""
+    return mask & (src_alpha > threshold)
+
+
+def _lab(observer: Observer, xyz: NDArray) -> NDArray:
+    """CIELAB of an XYZ image relative to the white environment, negative values clipped."""
+    return observer.XYZ_to_Lab(np.maximum(xyz, 0.0))
+
+
 def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alpha: NDArray,
                  observer: Observer, samples_per_degree: float,
                  threshold: float = COVERAGE_THRESHOLD, mask: NDArray | None = None
@@ -116,9 +128,7 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 
-    lab_s = observer.XYZ_to_Lab(np.maximum(src_xyz, 0.0))
-    lab_p = observer.XYZ_to_Lab(np.maximum(prn_xyz, 0.0))
-    de = delta_E2000(lab_s, lab_p)
+    de = delta_E2000(_lab(observer, src_xyz), _lab(observer, prn_xyz))
     sde = scielab_de2000(src_xyz, prn_xyz, observer, samples_per_degree)
     if mask is None:
         mask = object_pixels(src_alpha, prn_alpha, threshold)
@@ -129,8 +139,8 @@ def compare_view(src_xyz: NDArray, prn_xyz: NDArray, src_alpha: NDArray, prn_alp
     n = int(mask.sum())
     d_alpha = prn_alpha - src_alpha
     cov = d_alpha[mask]
-    empty = mask & (src_alpha <= threshold)
-    inside = mask & ~empty
+    inside = _inside(mask, src_alpha, threshold)
+    empty = mask & ~inside
     share = 1.0 / n if n else 0.0
     figures = {
         "object_pixels": n,
@@ -171,14 +181,13 @@ def noise_floor(prn_xyz: NDArray, prn_xyz2: NDArray, prn_alpha: NDArray, observe
     """Per-pixel and S-CIELAB dE2000 (mean, p95) between two renders of the same print, over
     the print's object pixels (coverage > ``threshold``); with ``source_alpha``, also over
     those where the source has coverage (``inside_source_*``, the headline's pixels)."""
-    de = delta_E2000(observer.XYZ_to_Lab(np.maximum(prn_xyz, 0.0)),
-                     observer.XYZ_to_Lab(np.maximum(prn_xyz2, 0.0)))
+    de = delta_E2000(_lab(observer, prn_xyz), _lab(observer, prn_xyz2))
     sde = scielab_de2000(prn_xyz, prn_xyz2, observer, samples_per_degree)
     mask = prn_alpha > threshold
     out = {"object_pixels": int(mask.sum()), **_stats(de, mask, "de2000"),
            **_stats(sde, mask, "scielab_de2000")}
     if source_alpha is not None:
-        inside = mask & (source_alpha > threshold)
+        inside = _inside(mask, source_alpha, threshold)
         out["inside_source_pixels"] = int(inside.sum())
         for k, v in {**_stats(de, inside, "de2000"),
                      **_stats(sde, inside, "scielab_de2000")}.items():
@@ -212,12 +221,12 @@ def noise_corrected_de2000(src_xyz: NDArray, half_a_xyz: NDArray, half_b_xyz: ND
 
     ``de``: ``dE(s, x)`` when the caller has it (:func:`compare_view`'s map). Equal halves (no
     noise) give the plain dE2000."""
-    def lab(x):
-        return observer.XYZ_to_Lab(np.maximum(np.asarray(x, np.float64), 0.0))
+    a = np.asarray(half_a_xyz, np.float64)
+    b = np.asarray(half_b_xyz, np.float64)
     if de is None:
-        de = delta_E2000(lab(src_xyz), lab((np.asarray(half_a_xyz, np.float64) + half_b_xyz)
-                                           / 2.0))
-    n = delta_E2000(lab(half_a_xyz), lab(half_b_xyz))
+        de = delta_E2000(_lab(observer, np.asarray(src_xyz, np.float64)),
+                         _lab(observer, (a + b) / 2.0))
+    n = delta_E2000(_lab(observer, a), _lab(observer, b))
     return np.sqrt(np.maximum(de * de - 0.25 * n * n, 0.0))
 
 
@@ -234,7 +243,7 @@ def noise_corrected_figures(src_xyz: NDArray, half_a_xyz: NDArray, half_b_xyz: N
     ``de`` as there."""
     dc = noise_corrected_de2000(src_xyz, half_a_xyz, half_b_xyz, observer, de)
     mask = object_pixels(src_alpha, prn_alpha, threshold)
-    inside = mask & (src_alpha > threshold)
+    inside = _inside(mask, src_alpha, threshold)
     return {"nc_mean_de2000": float(dc[mask].mean()) if mask.any() else 0.0,
             "inside_source_nc_mean_de2000": float(dc[inside].mean()) if inside.any() else 0.0}
 
@@ -313,14 +322,20 @@ def noise_corrected_text(h: dict) -> str:
     return f" ({h['nc_mean_de2000']:.2f} less the render's noise)"
 
 
+def headline_figures_text(h: dict) -> str:
+    """A headline's (:func:`headline`) figures: where, the dE2000 mean (and less the render's
+    noise), p95, S-CIELAB and the coverage error."""
+    return (f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}{noise_corrected_text(h)}, "
+            f"p95 {h['p95_de2000']:.2f}; S-CIELAB {h['mean_scielab_de2000']:.2f}; coverage "
+            f"error {h['coverage_error']:+.3f}")
+
+
 def headline_text(figures: dict) -> str:
-    """One line: the headline figures (:func:`headline`), then the same over all object pixels
-    and the share of the pixels where the source is empty (the Clear block's body)."""
+    """One line: the headline figures (:func:`headline_figures_text`), then the same over all
+    object pixels and the share of the pixels where the source is empty (the Clear block's
+    body)."""
     h = headline(figures)
-    line = (f"{h['where']}: dE2000 mean {h['mean_de2000']:.2f}{noise_corrected_text(h)}, "
-            f"p95 {h['p95_de2000']:.2f}; "
-            f"S-CIELAB {h['mean_scielab_de2000']:.2f}; coverage error "
-            f"{h['coverage_error']:+.3f}")
+    line = headline_figures_text(h)
     if h["where"] == "all object pixels":
         return line
     return (line + f" (all object pixels: dE2000 mean {figures['mean_de2000']:.2f}, S-CIELAB "
