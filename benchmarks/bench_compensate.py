@@ -16,11 +16,14 @@ since the wall time depends on it.
         [--backgrounds clear,empty] [--only knight] [--seed 0] [--step 1.0]
         [--judge-spp 512[,1024]] [--judge-views 4] [--judge-cells 128] [--judge-layers 0]
         [--intent relative] [--fine-cells 0] [--coverage-floor] [--edge-split]
+        [--profile P] [--clear-low-bound]
 
 Every figure is the proof's headline, inside the source (``compare.headline``; all object
 pixels and the share where the source is empty on a second line), against the source as the
 jobs' ``--intent`` maps it (``proof/reference.py``). ``--fine-cells 0``: the coarse field
-alone (``proof/fine_field.py``). docs/proof-measurements.md has the figures (2026-12-03:
+alone (``proof/fine_field.py``). ``--clear-low-bound``: the optimisation and both proofs with
+the profile's Clear at its plausible low bound (``physics/clear_bounds.py``), what of a row
+rests on the modelled Clear. docs/proof-measurements.md has the figures (2026-12-03:
 ``--intent relative``, the judge at 512 spp; 2026-12-02: ``--judge-spp 128``).
 
 The held-out proofs are rendered finer than the optimisation's (defaults: 512 spp, 128 cells,
@@ -55,6 +58,21 @@ def drive(gen):
                 print(f"    {p.message} ({p.elapsed_s:.0f} s)", file=sys.stderr, flush=True)
     except StopIteration as stop:
         return stop.value
+
+
+def low_bound_profile(path: str | None) -> str:
+    """A temporary profile file: ``path`` (None: the built-in profile) with its Clear at the
+    plausible low bound (:func:`..physics.clear_bounds.clear_low_bound`); removed at exit."""
+    import atexit
+
+    from dreamprint_gui.core.profile import load_profile, save_profile
+    from dreamprint_gui.physics.clear_bounds import clear_low_bound
+
+    fd, out = tempfile.mkstemp(suffix=".json")
+    os.close(fd)
+    save_profile(clear_low_bound(load_profile(path)), out)
+    atexit.register(os.unlink, out)
+    return out
 
 
 def job_cost(a) -> None:
@@ -126,7 +144,7 @@ def floor_only(a) -> None:
             t0 = time.perf_counter()
             ps = ProofSettings(source=SOURCES[name], height_mm=a.height_mm, views=4,
                                resolution=a.resolution, background=bg,
-                               max_cells=a.cells, intent=a.intent)
+                               max_cells=a.cells, intent=a.intent, profile=a.profile)
             lab = EngineLabels(ConvertSettings.from_spec(ps.spec))
             size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
             block = block_for_cell(lab.voxel_mm, size, a.cells)
@@ -170,7 +188,7 @@ def coverage_floor(a, src: str, bg: str) -> float | None:
         return None
     ps = ProofSettings(source=src, height_mm=a.height_mm, views=a.judge_views,
                        resolution=a.resolution, background=bg, max_cells=a.judge_cells,
-                       intent=a.intent)
+                       intent=a.intent, profile=a.profile)
     lab = EngineLabels(ConvertSettings.from_spec(ps.spec))
     size = tuple(n * v for n, v in zip(lab.shape_xyz, lab.voxel_mm, strict=True))
     block = block_for_cell(lab.voxel_mm, size, a.judge_cells)
@@ -209,7 +227,7 @@ def edge_split(a) -> None:
     the rest."""
     import numpy as np
 
-    from dreamprint_gui.core.profile import default_profile
+    from dreamprint_gui.core.profile import load_profile
     from dreamprint_gui.physics.colorimetry import delta_E2000
     from dreamprint_gui.proof.runner import ProofSettings, render_proof
     from dreamprint_gui.proof.spectral import spectral_bands
@@ -221,9 +239,10 @@ def edge_split(a) -> None:
                                views=a.judge_views, resolution=a.resolution,
                                spp=int(str(a.judge_spp).split(",")[0]), seed=a.seed,
                                background=bg, max_cells=a.judge_cells,
-                               layers_per_block=a.judge_layers, intent=a.intent)
+                               layers_per_block=a.judge_layers, intent=a.intent,
+                               profile=a.profile)
             res = drive(render_proof(ps))
-            obs = spectral_bands(default_profile(), 12).observer
+            obs = spectral_bands(load_profile(a.profile), 12).observer
             to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
             des, nbs = [], []
             for im in res["images"]:
@@ -295,6 +314,13 @@ def main() -> None:
                     help="The jobs' rendering intent (default: the profile's); the judge's "
                          "reference is the source as it maps it.")
     ap.add_argument("--only", default="knight,smoke,splat")
+    ap.add_argument("--profile", default=None,
+                    help="The ink profile of the optimisation and of both held-out proofs "
+                         "(default: the built-in one).")
+    ap.add_argument("--clear-low-bound", action="store_true",
+                    help="The profile (--profile or the built-in one) with its Clear at the "
+                         "plausible low bound (physics/clear_bounds.py), for the optimisation "
+                         "and both proofs: what of a row rests on the modelled Clear.")
     ap.add_argument("--json", default=None, help="Also write the rows to this file.")
     ap.add_argument("--coverage-floor", action="store_true",
                     help="Only the least coverage error inside the source any ink in the "
@@ -309,6 +335,8 @@ def main() -> None:
                     help="Only the conversion's speed without and with a correction (the "
                          "general sampling path), one worker.")
     a = ap.parse_args()
+    if a.clear_low_bound:
+        a.profile = low_bound_profile(a.profile)
     if a.job_cost:
         job_cost(a)
         return
@@ -340,7 +368,7 @@ def main() -> None:
             t0 = time.perf_counter()
             cs = CompensateSettings(source=src, output=corr, height_mm=a.height_mm,
                                     iterations=a.iterations, seed=a.seed + 1,
-                                    max_cells=a.cells,
+                                    max_cells=a.cells, profile=a.profile,
                                     background=bg, overwrite=True, step=a.step,
                                     intent=a.intent, **{k: v for k, v in (
                                         ("fine_cells", a.fine_cells), ("occlusion", a.occlusion),
@@ -377,7 +405,7 @@ def judge(a, name: str, bg: str, src: str, corr: str, spp: int, rep: dict, t_opt
                            resolution=a.resolution, spp=spp, seed=a.seed,
                            background=bg, max_cells=a.judge_cells,
                            layers_per_block=a.judge_layers, compensation=comp,
-                           intent=a.intent)
+                           intent=a.intent, profile=a.profile)
         rep_m = drive(render_proof(ps))["report"]
         res[method] = rep_m["overall"]
         floor = rep_m["gamut_floor"] or floor
