@@ -62,16 +62,22 @@ def drive(gen):
 
 def low_bound_profile(path: str | None) -> str:
     """A temporary profile file: ``path`` (None: the built-in profile) with its Clear at the
-    plausible low bound (:func:`..physics.clear_bounds.clear_low_bound`); removed at exit."""
+    plausible low bound (:func:`..physics.clear_bounds.clear_low_bound`); removed at exit. A
+    profile whose Clear is measured is used as it is (as ``proof --clear-low-bound`` does)."""
     import atexit
 
     from dreamprint_gui.core.profile import load_profile, save_profile
-    from dreamprint_gui.physics.clear_bounds import clear_low_bound
+    from dreamprint_gui.physics.clear_bounds import clear_is_modelled, clear_low_bound
 
+    profile = load_profile(path)
+    if not clear_is_modelled(profile):
+        print(f"{path}: its Clear is measured; --clear-low-bound changes nothing",
+              file=sys.stderr)
+        return str(path)
     fd, out = tempfile.mkstemp(suffix=".json")
     os.close(fd)
-    save_profile(clear_low_bound(load_profile(path)), out)
-    atexit.register(os.unlink, out)
+    atexit.register(lambda: os.path.exists(out) and os.unlink(out))
+    save_profile(clear_low_bound(profile), out)
     return out
 
 
@@ -365,19 +371,17 @@ def main() -> None:
             cpu0 = time.process_time()
             fd, corr = tempfile.mkstemp(suffix=".npz")
             os.close(fd)
-            t0 = time.perf_counter()
-            cs = CompensateSettings(source=src, output=corr, height_mm=a.height_mm,
-                                    iterations=a.iterations, seed=a.seed + 1,
-                                    max_cells=a.cells, profile=a.profile,
-                                    background=bg, overwrite=True, step=a.step,
-                                    intent=a.intent, **{k: v for k, v in (
-                                        ("fine_cells", a.fine_cells), ("occlusion", a.occlusion),
-                                        ("views", a.views), ("spp", a.spp),
-                                        ("resolution", a.train_resolution),
-                                        ("occlusion_mm", a.occlusion_mm)) if v is not None})
-            rep = drive(run_compensate(cs))
-            t_opt = time.perf_counter() - t0
             try:
+                t0 = time.perf_counter()
+                cs = CompensateSettings(
+                    source=src, output=corr, height_mm=a.height_mm, iterations=a.iterations,
+                    seed=a.seed + 1, max_cells=a.cells, profile=a.profile, background=bg,
+                    overwrite=True, step=a.step, intent=a.intent, **{k: v for k, v in (
+                        ("fine_cells", a.fine_cells), ("occlusion", a.occlusion),
+                        ("views", a.views), ("spp", a.spp), ("resolution", a.train_resolution),
+                        ("occlusion_mm", a.occlusion_mm)) if v is not None})
+                rep = drive(run_compensate(cs))
+                t_opt = time.perf_counter() - t0
                 for spp in (int(v) for v in str(a.judge_spp).split(",")):
                     rows.append(judge(a, name, bg, src, corr, spp, rep, t_opt, cpu0, load0))
                     cpu0 = time.process_time()

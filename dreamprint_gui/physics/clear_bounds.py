@@ -8,7 +8,7 @@ clear acrylic absorbs 0.001-0.008 /mm over 400-730 nm (Plexiglas, the floor) and
 VeroClear plausibly 0.002-0.1 /mm over 450-730 nm, a photopolymer's edge rising steeply below
 420 nm (a clear resin with its UV absorber: 26, 12 and 1.9 /mm at 380, 400 and 420 nm, a fall
 by e every 11 nm between 400 and 420). The low bound is 0.002 /mm with the modelled Clear's
-0.25 /mm at 380 nm falling by e every 10 nm, so that it is 0.002-0.0023 over 450-730 nm::
+0.25 /mm at 380 nm falling by e every 10 nm, so that it is 0.002-0.0022 over 450-730 nm::
 
     K_low(lambda) = 0.002 + 0.25 exp(-(lambda - 380 nm) / 10 nm)   [1/mm]
 

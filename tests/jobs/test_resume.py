@@ -4,6 +4,7 @@
 import hashlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -103,10 +104,16 @@ def test_kill_9_then_resume_gives_the_uninterrupted_slices(uninterrupted, tmp_pa
 
 def test_ctrl_c_keeps_the_finished_layers_and_resume_finishes(uninterrupted, tmp_path):
     out = tmp_path / "JOB"
-    proc = _start(out)
-    _wait_for_slabs(proc, tmp_path, 20)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=120)
+    # the job takes a second or two: on a loaded machine it may finish before the signal
+    # lands (a fresh-clone CI run, 2026-12-03: exit 0, the job written); then run it again
+    for _ in range(3):
+        proc = _start(out)
+        _wait_for_slabs(proc, tmp_path, 10)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+        if proc.returncode != 0:
+            break
+        shutil.rmtree(out)
     assert proc.returncode == 130, err
     assert b"--resume" in err and not out.exists()
     [kept] = _partials(tmp_path)
