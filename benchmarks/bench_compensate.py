@@ -238,6 +238,8 @@ def edge_split(a) -> None:
     from dreamprint_gui.proof.runner import ProofSettings, render_proof
     from dreamprint_gui.proof.spectral import spectral_bands
 
+    obs = spectral_bands(load_profile(a.profile), 12).observer
+    to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
     for name in a.only.split(","):
         for bg in a.backgrounds.split(","):
             t0, c0 = time.perf_counter(), time.process_time()
@@ -248,8 +250,6 @@ def edge_split(a) -> None:
                                layers_per_block=a.judge_layers, intent=a.intent,
                                profile=a.profile)
             res = drive(render_proof(ps))
-            obs = spectral_bands(load_profile(a.profile), 12).observer
-            to_xyz = np.linalg.inv(obs.xyz_to_linear_srgb)
             des, nbs = [], []
             for im in res["images"]:
                 de = im["de2000"]
